@@ -1,0 +1,43 @@
+#include "atomic_file.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+namespace snow {
+
+namespace fs = std::filesystem;
+
+std::string temporaryPathFor(const std::string& finalPath) {
+  const fs::path p(finalPath);
+  const std::string name = "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + p.extension().string();
+  return (p.parent_path() / name).string();
+}
+
+void writeAtomically(const std::string& finalPath, const std::function<void(const std::string&)>& write) {
+  const std::string temp = temporaryPathFor(finalPath);
+  try {
+    write(temp);
+    std::error_code ec;
+    fs::rename(temp, finalPath, ec);
+    if (ec) throw std::runtime_error("cannot rename " + temp + " to " + finalPath + ": " + ec.message());
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(temp, ignored);
+    throw;
+  }
+}
+
+void writeTextAtomically(const std::string& finalPath, const std::string& bytes) {
+  writeAtomically(finalPath, [&](const std::string& temp) {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + temp);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.flush();
+    if (!out) throw std::runtime_error("write failed: " + temp);
+  });
+}
+
+}  // namespace snow

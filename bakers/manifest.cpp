@@ -1,0 +1,51 @@
+#include "manifest.h"
+
+#include <nlohmann/json.hpp>
+
+namespace snow {
+
+std::string manifestToJson(const Manifest& m) {
+  using nlohmann::ordered_json;
+  ordered_json j;
+  j["snowbake_manifest_version"] = 1;
+  j["program"] = {{"name", "snowbake"}, {"version", m.programVersion}};
+  j["scene"] = {{"source", m.sceneSource}, {"name", m.sceneName}, {"hash_fnv1a64", m.sceneHash}};
+  j["terrain"] = {{"source", m.terrainSource},
+                  {"hash_fnv1a64", m.terrainHash},
+                  {"coordinate_system", m.coordinateSystem},
+                  {"width", m.grid.width},
+                  {"height", m.grid.height},
+                  {"cell_size_x_m", m.grid.cellSizeXM},
+                  {"cell_size_y_m", m.grid.cellSizeYM},
+                  {"origin_x", m.grid.originX},
+                  {"origin_y", m.grid.originY},
+                  {"row_order", "north to south"}};
+  j["run"] = {{"seed", m.seed},
+              {"backend", m.backend},
+              {"latitude_deg", m.latitudeDeg},
+              {"season_start", m.seasonStartDate},
+              {"season_days", m.seasonDays},
+              {"events", m.events}};
+  ordered_json phenomena = ordered_json::array();
+  for (const auto& p : m.phenomena)
+    phenomena.push_back({{"name", p.name}, {"starts", p.starts}, {"steps", p.steps}, {"stops", p.stops}, {"skipped_steps", p.skippedSteps}});
+  j["run"]["phenomena"] = phenomena;
+  j["mass_balance_m3"] = {{"initial_snow", m.initialSnowM3},
+                          {"snowfall_added", m.snowfallAddedM3},
+                          {"melt_removed", m.meltRemovedM3},
+                          {"final_snow", m.finalSnowM3}};
+  ordered_json files = ordered_json::array();
+  for (const auto& f : m.files) {
+    ordered_json e = {{"path", f.path}, {"content", f.content}, {"unit", f.unit}, {"format", f.format}};
+    if (f.day >= 0) e["day"] = f.day; else e["day"] = "final";
+    e["min"] = f.minValue;
+    e["max"] = f.maxValue;
+    e["width"] = m.grid.width;
+    e["height"] = m.grid.height;
+    files.push_back(e);
+  }
+  j["files"] = files;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace snow

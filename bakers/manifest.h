@@ -1,0 +1,48 @@
+// DIR/manifest.json: every file a bake wrote, with its content, unit, range and grid, and what
+// produced it (program version, scene, seed, input hashes). No time stamps or timings: the same
+// bake gives the same bytes.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/grid.h"
+
+namespace snow {
+
+struct ManifestFile {
+  std::string path;      // relative to the output folder
+  std::string content;   // e.g. "snow layer: powder"
+  std::string unit;      // e.g. "m"
+  std::string format;    // e.g. "OpenEXR, 1 channel float32, linear"
+  double day = -1.0;     // season day of the frame; -1 for the end of the season
+  float minValue = 0.f, maxValue = 0.f;
+};
+
+struct ManifestPhenomenon {
+  std::string name;
+  unsigned long long starts = 0, steps = 0, stops = 0, skippedSteps = 0;
+};
+
+struct Manifest {
+  std::string programVersion;
+  std::string sceneSource;
+  std::string sceneName;
+  std::string sceneHash;
+  std::string terrainSource;
+  std::string terrainHash;
+  std::string coordinateSystem;
+  unsigned long long seed = 0;
+  std::string backend;
+  GridSpec grid;
+  double latitudeDeg = 0.0;
+  double seasonDays = 0.0;
+  std::string seasonStartDate;
+  unsigned long long events = 0;
+  double snowfallAddedM3 = 0, meltRemovedM3 = 0, finalSnowM3 = 0, initialSnowM3 = 0;
+  std::vector<ManifestPhenomenon> phenomena;
+  std::vector<ManifestFile> files;
+};
+
+std::string manifestToJson(const Manifest& manifest);
+
+}  // namespace snow

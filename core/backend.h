@@ -1,0 +1,47 @@
+// The season's view of a compute backend. The CPU backend (TBB, core/cpu_backend.cpp) and the
+// CUDA backend (cuda/) both implement it with ExecBackend<Exec> (core/exec_backend.h), which
+// runs the same kernel bodies through each backend's forEachCell / forEachCellOfColour.
+// This header is plain C++ so that host code never needs CUDA headers.
+#pragma once
+#include <memory>
+#include <string>
+
+#include "kernels/melt.h"
+#include "kernels/powder_diffusion.h"
+#include "kernels/snowfall.h"
+#include "snow_state.h"
+
+namespace snow {
+
+// Totals in cubic metres of snow, summed in double in a fixed order (identical for any thread
+// count and on both backends).
+struct LayerTotals {
+  double compactedM3 = 0, stableM3 = 0, unstableM3 = 0, powderM3 = 0;
+  double totalM3() const { return compactedM3 + stableM3 + unstableM3 + powderM3; }
+};
+
+class SnowBackend {
+ public:
+  virtual ~SnowBackend() = default;
+  virtual std::string name() const = 0;
+
+  // Copies the whole state (layers and static fields) in.
+  virtual void upload(const SnowState& state) = 0;
+  // Copies the evolving fields (snow layers and the moving flag) out.
+  virtual void download(SnowState& state) = 0;
+  // Replaces the static fields (exposure, temperature base, wind) only.
+  virtual void uploadStaticFields(const SnowState& state) = 0;
+
+  // Each step returns the snow volume it added (positive) or removed (negative), in m^3.
+  virtual double snowfall(const SnowfallArgs& args) = 0;
+  virtual double melt(const MeltArgs& args) = 0;
+  // Transport: conserves mass; runs its own substeps (see powderDiffusionSubsteps).
+  virtual void powderDiffusion(const PowderDiffusionArgs& args) = 0;
+
+  virtual LayerTotals totals() = 0;
+  // Highest temperature (degC) of any valid cell for a sea-level temperature of 0: lets the
+  // season skip melt kernels on days when no cell can melt.
+  virtual float maxTemperatureBaseC() = 0;
+};
+
+}  // namespace snow

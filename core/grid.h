@@ -1,0 +1,93 @@
+// 2D grids: a host-owned Grid<T> and a plain GridView<T> (pointer + size + cell size) that
+// kernels receive by value on either backend.
+//
+// Layout: row-major, x (column) increases eastward, y (row) increases southward, as in images
+// and in ESRI ASCII / GeoTIFF north-up rasters. Cell sizes are in metres and may differ in x
+// and y (DEMs in geographic coordinates have non-square cells).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "hd.h"
+
+namespace snow {
+
+struct GridSpec {
+  int width = 0;
+  int height = 0;
+  double cellSizeXM = 1.0;  // metres between cell centres along x (east)
+  double cellSizeYM = 1.0;  // metres between cell centres along y (south)
+  // World position of the north-west corner of cell (0, 0), in the terrain's own units
+  // (metres for projected data; kept for georeferencing outputs, never used by kernels).
+  double originX = 0.0;
+  double originY = 0.0;
+
+  size_t cellCount() const { return static_cast<size_t>(width) * static_cast<size_t>(height); }
+  double cellAreaM2() const { return cellSizeXM * cellSizeYM; }
+  bool operator==(const GridSpec& o) const {
+    return width == o.width && height == o.height && cellSizeXM == o.cellSizeXM &&
+           cellSizeYM == o.cellSizeYM && originX == o.originX && originY == o.originY;
+  }
+};
+
+template <class T>
+struct GridView {
+  T* data = nullptr;
+  int width = 0;
+  int height = 0;
+
+  SNOW_HD SNOW_INLINE bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
+  SNOW_HD SNOW_INLINE size_t index(int x, int y) const {
+    return static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
+  }
+  SNOW_HD SNOW_INLINE T& operator()(int x, int y) const { return data[index(x, y)]; }
+  // Clamped read: edge cells repeat outward (zero-gradient boundary).
+  SNOW_HD SNOW_INLINE T clamped(int x, int y) const {
+    return data[index(clampi(x, width), clampi(y, height))];
+  }
+
+ private:
+  SNOW_HD SNOW_INLINE static int clampi(int v, int n) { return v < 0 ? 0 : (v >= n ? n - 1 : v); }
+};
+
+template <class T>
+class Grid {
+ public:
+  Grid() = default;
+  Grid(int width, int height, T fill = T{}) { resize(width, height, fill); }
+
+  void resize(int width, int height, T fill = T{}) {
+    if (width < 0 || height < 0) throw std::invalid_argument("Grid: negative size");
+    width_ = width;
+    height_ = height;
+    values_.assign(static_cast<size_t>(width) * static_cast<size_t>(height), fill);
+  }
+  void fill(T v) { values_.assign(values_.size(), v); }
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  size_t size() const { return values_.size(); }
+  bool empty() const { return values_.empty(); }
+
+  T& operator()(int x, int y) { return values_[static_cast<size_t>(y) * width_ + x]; }
+  const T& operator()(int x, int y) const { return values_[static_cast<size_t>(y) * width_ + x]; }
+  T* data() { return values_.data(); }
+  const T* data() const { return values_.data(); }
+  std::vector<T>& values() { return values_; }
+  const std::vector<T>& values() const { return values_; }
+
+  GridView<T> view() { return GridView<T>{values_.data(), width_, height_}; }
+  GridView<const T> view() const { return GridView<const T>{values_.data(), width_, height_}; }
+
+  bool operator==(const Grid& o) const { return width_ == o.width_ && height_ == o.height_ && values_ == o.values_; }
+
+ private:
+  int width_ = 0;
+  int height_ = 0;
+  std::vector<T> values_;
+};
+
+}  // namespace snow

@@ -1,0 +1,32 @@
+// Every season step a backend runs, by name. The GPU test binary runs each of them on the serial
+// CPU reference and on CUDA from the same state and compares the results, so a kernel added here
+// is checked on both backends without writing a new test.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "backend.h"
+#include "step_args.h"
+
+namespace snow {
+
+struct RegisteredStep {
+  std::string name;
+  // Runs the step once; returns its mass-ledger value (m^3) where it has one, else 0.
+  std::function<double(SnowBackend&)> run;
+};
+
+inline std::vector<RegisteredStep> registeredSteps(const ModelParameters& p, const WeatherState& weather) {
+  return {
+      {"snowfall", [p, weather](SnowBackend& b) { return b.snowfall(makeSnowfallArgs(p, 0.5, weather)); }},
+      {"melt", [p, weather](SnowBackend& b) { return b.melt(makeMeltArgs(p, 0.5, weather)); }},
+      {"powder diffusion",
+       [p](SnowBackend& b) {
+         b.powderDiffusion(makePowderDiffusionArgs(p, 0.5));
+         return 0.0;
+       }},
+  };
+}
+
+}  // namespace snow

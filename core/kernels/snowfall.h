@@ -1,0 +1,63 @@
+// Snowfall step (paper §5.1). Per cell, no neighbour writes.
+//   depth added   = dt * k_snow * max(0, A - A_0precip)                        (Foehn relation)
+//   powder share  x_p = clamp(k_powdery * (|grad A| - s_c), 0, 1)
+//                 s_c = s_c0 + k_sc * max(0, T_0powdery - T)
+//   of the rest, unstable share x_U = clamp(k_unstable * (|grad A| - s_U), 0, 1), stable the remainder.
+#pragma once
+#include "../hd.h"
+#include "../snow_state.h"
+#include "surface.h"
+
+namespace snow {
+
+struct SnowfallArgs {
+  float dtDays = 0.5f;
+  float seaLevelTemperatureC = 0.f;
+  float intensity = 1.f;  // multiplier on k_snow from the weather timeline
+  float snowfallRatePerDay = 1e-4f;
+  float rainSnowLimitM = 1000.f;
+  float powderFromPrecipitation = 5.f;
+  float powderCriticalSlopeMin = 0.5f;
+  float powderCriticalSlopePerC = 0.05f;
+  float powderSlopeTemperatureC = -10.f;
+  float unstableFromPrecipitation = 1.f;
+  float unstableCriticalSlope = 0.3f;
+};
+
+struct SnowfallKernel {
+  SnowFieldsView v;
+  SnowfallArgs a;
+
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    if (!v.valid[i]) {
+      v.delta[i] = 0.f;
+      return;
+    }
+    const float altitude = v.surface(i);
+    const float added = a.dtDays * a.intensity * a.snowfallRatePerDay * maxf(0.f, altitude - a.rainSnowLimitM);
+    if (!(added > 0.f)) {
+      v.delta[i] = 0.f;
+      return;
+    }
+    const float slope = surfaceSlope(v, x, y);
+    const float temperature = a.seaLevelTemperatureC + v.temperatureBase[i];
+    const float criticalSlope =
+        a.powderCriticalSlopeMin + a.powderCriticalSlopePerC * maxf(0.f, a.powderSlopeTemperatureC - temperature);
+    const float powderShare = clampf(a.powderFromPrecipitation * (slope - criticalSlope), 0.f, 1.f);
+    const float unstableShare = clampf(a.unstableFromPrecipitation * (slope - a.unstableCriticalSlope), 0.f, 1.f);
+    const float toPowder = powderShare * added;
+    const float normal = added - toPowder;
+    const float toUnstable = unstableShare * normal;
+    const float toStable = normal - toUnstable;
+    // Record what the layers actually gained (float sums round), so the mass ledger is exact.
+    const float p0 = v.powder[i], u0 = v.unstable[i], s0 = v.stable[i];
+    const float p1 = p0 + toPowder, u1 = u0 + toUnstable, s1 = s0 + toStable;
+    v.powder[i] = p1;
+    v.unstable[i] = u1;
+    v.stable[i] = s1;
+    v.delta[i] = (p1 - p0) + (u1 - u0) + (s1 - s0);
+  }
+};
+
+}  // namespace snow

@@ -1,0 +1,63 @@
+#include "parameters.h"
+
+
+namespace snow {
+
+namespace {
+using P = ModelParameters;
+}  // namespace
+
+const std::vector<ParameterInfo>& parameterTable() {
+  static const std::vector<ParameterInfo> table = {
+      {"lapse_rate_c_per_m", &P::lapseRateCPerM, "degC/m", -0.1, 0.1, "k_t: temperature change per metre of altitude"},
+      {"sun_warming_c_per_hour", &P::sunWarmingCPerHour, "degC/h", 0.0, 10.0, "k_i: warming per hour of direct sun"},
+      {"direct_sun_weight_hours", &P::directSunWeightHours, "h", 0.0, 24.0, "k_sun"},
+      {"sky_ambient_weight_hours", &P::skyAmbientWeightHours, "h", 0.0, 24.0, "k_sky"},
+      {"indirect_sun_weight_hours", &P::indirectSunWeightHours, "h", 0.0, 24.0, "k_ind"},
+      {"venturi_per_m", &P::venturiPerM, "1/m", 0.0, 0.1, "k_venturi: wind speed-up per metre of altitude"},
+      {"terrain_wind_effect", &P::terrainWindEffect, "-", 0.0, 1.0, "k_terrain: wind redirection along slopes"},
+      {"sea_level_wind_speed_mps", &P::seaLevelWindSpeedMps, "m/s", 0.0, 100.0, "|W|: default wind speed at sea level"},
+      {"wind_cap_deceleration_mps2", &P::windCapDecelerationMps2, "m/s^2", 1e-4, 100.0, "c: wind-shadow cap curvature"},
+      {"snowfall_rate_per_day", &P::snowfallRatePerDay, "1/day", 0.0, 1.0, "k_snow: snow depth per metre above the rain-snow limit per day"},
+      {"rain_snow_limit_m", &P::rainSnowLimitM, "m", -500.0, 9000.0, "A_0precip: altitude where rain turns to snow"},
+      {"powder_from_precipitation", &P::powderFromPrecipitation, "-", 0.0, 1000.0, "k_powdery"},
+      {"powder_critical_slope_min", &P::powderCriticalSlopeMin, "-", 0.0, 100.0, "s_c0"},
+      {"powder_critical_slope_per_c", &P::powderCriticalSlopePerC, "1/degC", 0.0, 10.0, "k_sc,powdery"},
+      {"powder_slope_temperature_c", &P::powderSlopeTemperatureC, "degC", -80.0, 40.0, "T_0powdery"},
+      {"unstable_from_precipitation", &P::unstableFromPrecipitation, "-", 0.0, 1000.0, "k_unstable"},
+      {"unstable_critical_slope", &P::unstableCriticalSlope, "-", 0.0, 100.0, "s_U"},
+      {"melt_rate_m_per_day_per_c", &P::meltRateMPerDayPerC, "m/(day degC)", 0.0, 1.0, "k_melt"},
+      {"melt_threshold_c", &P::meltThresholdC, "degC", -40.0, 40.0, "T_0melt"},
+      {"warm_temperature_c", &P::warmTemperatureC, "degC", -80.0, 60.0, "T_warm"},
+      {"cool_temperature_c", &P::coolTemperatureC, "degC", -80.0, 60.0, "T_cool"},
+      {"freeze_temperature_c", &P::freezeTemperatureC, "degC", -80.0, 60.0, "T_freeze"},
+      {"instability_by_warmth_m_per_day", &P::instabilityByWarmthMPerDay, "m/day", 0.0, 1e6, "k_w"},
+      {"stability_by_cold_m_per_day", &P::stabilityByColdMPerDay, "m/day", 0.0, 1e6, "k_c"},
+      {"diffusion_rest_slope", &P::diffusionRestSlope, "-", 0.0, 100.0, "s_d0: rest slope of powder"},
+      {"diffusion_rate_per_day", &P::diffusionRatePerDay, "1/day", 0.0, 1000.0, "k_m: powder shift rate (at 10 m cells)"},
+      {"wind_erosion_rate_m_per_s_per_day", &P::windErosionRateMPerSPerDay, "m/s/day", 0.0, 100.0, "k_erosion"},
+      {"snow_density_kg_per_m3", &P::snowDensityKgPerM3, "kg/m^3", 10.0, 1000.0, "rho"},
+      {"gravity_mps2", &P::gravityMps2, "m/s^2", 0.1, 100.0, "g"},
+      {"avalanche_rest_angle_deg", &P::avalancheRestAngleDeg, "deg", 0.0, 89.0, "theta_c"},
+      {"snow_viscosity_per_s2", &P::snowViscosityPerS2, "1/s^2", 0.0, 10.0, "k_viscous"},
+      {"skier_target_slope_deg", &P::skierTargetSlopeDeg, "deg", 1.0, 80.0, "s_t"},
+      {"track_amplitude_m", &P::trackAmplitudeM, "m", 0.0, 100.0, "a"},
+      {"track_frequency_per_m", &P::trackFrequencyPerM, "1/m", 1e-5, 10.0, "f"},
+      {"snowfall_starts_per_day", &P::snowfallStartsPerDay, "1/day", 0.0, 100.0, "mean frequency of snowfall starts"},
+      {"snowfall_mean_duration_days", &P::snowfallMeanDurationDays, "day", 1e-3, 365.0, "mean duration of a snowfall"},
+      {"snowfall_steps_per_day", &P::snowfallStepsPerDay, "1/day", 0.01, 1000.0, "snowfall step events per day"},
+      {"state_change_steps_per_day", &P::stateChangeStepsPerDay, "1/day", 0.01, 1000.0, "melt and stability step events per day"},
+      {"diffusion_steps_per_day", &P::diffusionStepsPerDay, "1/day", 0.01, 1000.0, "powder diffusion step events per day"},
+      {"wind_transport_steps_per_day", &P::windTransportStepsPerDay, "1/day", 0.01, 1000.0, "wind transport step events per day"},
+      {"reference_cell_size_m", &P::referenceCellSizeM, "m", 0.01, 1000.0, "cell size at which per-step transport rates are defined"},
+  };
+  return table;
+}
+
+const ParameterInfo* findParameter(const std::string& key) {
+  for (const auto& p : parameterTable())
+    if (key == p.key) return &p;
+  return nullptr;
+}
+
+}  // namespace snow

@@ -1,0 +1,77 @@
+// Every constant of the model paper's Table 2 (Cordonnier et al. 2018), in SI-style units named
+// in the member names, with the paper's defaults; plus the event frequencies of §3.2 and §7.4.
+// The scene file overrides any of them under [parameters] by the snake_case key listed in
+// parameterTable() (core/parameters.cpp), which also holds each one's valid range.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace snow {
+
+struct ModelParameters {
+  // --- §4.1 temperature and sun exposure
+  double lapseRateCPerM = -0.01;             // k_t (k_r in the text): temperature change with altitude
+  double sunWarmingCPerHour = 0.41;          // k_i: temperature rise per hour of direct daylight
+  double directSunWeightHours = 0.9;         // k_sun
+  double skyAmbientWeightHours = 0.1;        // k_sky
+  double indirectSunWeightHours = 0.9;       // k_ind
+  // --- §4.2 wind
+  double venturiPerM = 1e-3;                 // k_venturi: wind speed-up per metre of altitude
+  double terrainWindEffect = 0.5;            // k_terrain: redirection along the slope (dimensionless)
+  double seaLevelWindSpeedMps = 10.0;        // |W|: default when the weather timeline gives none
+  double windCapDecelerationMps2 = 0.7;      // c: fall of the wind-effect surface's vertical speed
+  // --- §5.1 snowfall
+  double snowfallRatePerDay = 1e-4;          // k_snow: metres of snow per metre above A_0precip per day
+  double rainSnowLimitM = 1000.0;            // A_0precip (site dependent; the paper leaves it to the user)
+  double powderFromPrecipitation = 5.0;      // k_powdery
+  double powderCriticalSlopeMin = 0.5;       // s_c0 (slope as rise over run)
+  double powderCriticalSlopePerC = 5e-2;     // k_sc,powdery (per degree C below T_0powdery)
+  double powderSlopeTemperatureC = -10.0;    // T_0powdery
+  double unstableFromPrecipitation = 1.0;    // k_unstable
+  double unstableCriticalSlope = 0.3;        // s_U
+  // --- §5.2 state changes
+  double meltRateMPerDayPerC = 0.01;         // k_melt
+  double meltThresholdC = 0.0;               // T_0melt
+  double warmTemperatureC = 5.0;             // T_warm
+  double coolTemperatureC = -5.0;            // T_cool
+  double freezeTemperatureC = -20.0;         // T_freeze
+  double instabilityByWarmthMPerDay = 1e4;   // k_w, as printed in Table 2
+  double stabilityByColdMPerDay = 1e4;       // k_c, as printed in Table 2
+  // --- §5.3 powder diffusion and §5.4 wind transport
+  double diffusionRestSlope = 0.5;           // s_d0
+  double diffusionRatePerDay = 0.5;          // k_m, defined at the paper's 10 m cells (see powder_diffusion.h)
+  double windErosionRateMPerSPerDay = 0.1;   // k_erosion
+  // --- §6.1 avalanches
+  double snowDensityKgPerM3 = 500.0;         // rho (0.5 g cm^-3)
+  double gravityMps2 = 9.8;                  // g
+  double avalancheRestAngleDeg = 30.0;       // theta_c
+  double snowViscosityPerS2 = 5e-4;          // k_viscous
+  // --- §6.2 ski tracks
+  double skierTargetSlopeDeg = 30.0;         // s_t
+  double trackAmplitudeM = 5.0;              // a
+  double trackFrequencyPerM = 0.01;          // f
+  // --- §3.2 / §7.4 event frequencies (mean events per simulated day) and durations
+  double snowfallStartsPerDay = 1.0 / 7.0;   // a snowfall starts once a week on average
+  double snowfallMeanDurationDays = 3.0;     // and lasts three days on average
+  double snowfallStepsPerDay = 2.0;
+  double stateChangeStepsPerDay = 2.0;       // delta t_m = 0.5 day
+  double diffusionStepsPerDay = 2.0;
+  double windTransportStepsPerDay = 2.0;
+  // Reference cell size at which the paper's per-step transport rates were set (10 m, §8).
+  double referenceCellSizeM = 10.0;
+};
+
+// One row per parameter: the scene-file key, its member, its unit and its valid range.
+struct ParameterInfo {
+  const char* key;
+  double ModelParameters::*member;
+  const char* unit;
+  double minValue;
+  double maxValue;
+  const char* description;
+};
+
+const std::vector<ParameterInfo>& parameterTable();
+const ParameterInfo* findParameter(const std::string& key);
+
+}  // namespace snow

@@ -1,0 +1,53 @@
+// The season: the phenomena of the paper's §5 registered with the Poisson scheduler and run on
+// a SnowBackend. Phenomena of later stages (wind transport, avalanches, skiers) plug in here.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "backend.h"
+#include "parameters.h"
+#include "weather.h"
+
+namespace snow {
+
+struct SeasonConfig {
+  double days = 120.0;
+  uint64_t seed = 1;
+  ModelParameters params;
+  WeatherTimeline weather;
+  std::vector<SnowfallPeriod> userSnowfalls;  // storms requested as user events
+  std::vector<double> frameDays;              // days at which to hand the state to onFrame
+};
+
+struct PhenomenonReport {
+  std::string name;
+  uint64_t starts = 0, steps = 0, stops = 0;
+  uint64_t skippedSteps = 0;  // steps whose kernels were not needed (e.g. melt below freezing)
+  double seconds = 0.0;
+};
+
+struct SeasonReport {
+  std::vector<PhenomenonReport> phenomena;
+  LayerTotals initial, final;
+  double snowfallAddedM3 = 0.0;   // ledger, summed in double
+  double meltRemovedM3 = 0.0;     // positive
+  uint64_t events = 0;
+  double seconds = 0.0;
+  // |final - (initial + added - melted)| relative to the snow that passed through.
+  double massBalanceRelativeError() const;
+};
+
+using FrameCallback = std::function<void(double day, const SnowState& state)>;
+using ProgressCallback = std::function<void(double fraction)>;
+
+// Runs the season on `backend`, starting from `state` (uploaded here), and leaves the final
+// layers in `state`. Frames are downloaded into a copy of `state` at each frame day.
+SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfig& config,
+                       const ProgressCallback& progress = {}, const FrameCallback& onFrame = {});
+
+// Fills temperatureBaseC = k_t * B + k_i * exposure (T = T0 + base; paper §4.1).
+void computeTemperatureBase(SnowState& state, const ModelParameters& params);
+
+}  // namespace snow

@@ -1,0 +1,80 @@
+// The reference executor: every kernel body called in a plain loop, in row order, on one thread.
+// The TBB executor must give the same bytes (each cell is written by exactly one call per pass),
+// and the GPU test binary uses this one as the CPU reference because it links no TBB.
+#pragma once
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "tiling.h"
+
+namespace snow {
+
+template <class T>
+class HostBuffer {
+ public:
+  T* data() { return values_.data(); }
+  const T* data() const { return values_.data(); }
+  std::vector<T>& values() { return values_; }
+
+ private:
+  std::vector<T> values_;
+};
+
+// Fixed-order reductions shared by the host executors: each row is summed left to right in
+// double, then the row sums top to bottom. The CUDA executor computes row sums the same way.
+inline double rowSum(const float* values, const uint8_t* valid, int width, int y) {
+  double s = 0.0;
+  const size_t base = static_cast<size_t>(y) * width;
+  for (int x = 0; x < width; ++x)
+    if (valid[base + x]) s += static_cast<double>(values[base + x]);
+  return s;
+}
+inline float rowMax(const float* values, const uint8_t* valid, int width, int y) {
+  float m = -std::numeric_limits<float>::infinity();
+  const size_t base = static_cast<size_t>(y) * width;
+  for (int x = 0; x < width; ++x)
+    if (valid[base + x] && values[base + x] > m) m = values[base + x];
+  return m;
+}
+
+class SerialExec {
+ public:
+  template <class T>
+  using Buffer = HostBuffer<T>;
+
+  std::string name() const { return "serial"; }
+
+  template <class T>
+  void upload(Buffer<T>& b, const std::vector<T>& host) { b.values() = host; }
+  template <class T>
+  void download(Buffer<T>& b, std::vector<T>& host) { host = b.values(); }
+
+  template <class K>
+  void forEachCell(int width, int height, const K& kernel) {
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) kernel(x, y);
+  }
+  template <class K>
+  void forEachCellOfColour(int width, int height, int colour, const K& kernel) {
+    for (int y = 0; y < height; ++y)
+      for (int x = firstColumnOfColour(y, colour); x < width; x += 5) kernel(x, y);
+  }
+  void finish() {}
+  double sum(const float* values, const uint8_t* valid, int width, int height) {
+    double s = 0.0;
+    for (int y = 0; y < height; ++y) s += rowSum(values, valid, width, y);
+    return s;
+  }
+  float maxValue(const float* values, const uint8_t* valid, int width, int height) {
+    float m = -std::numeric_limits<float>::infinity();
+    for (int y = 0; y < height; ++y) {
+      const float r = rowMax(values, valid, width, y);
+      if (r > m) m = r;
+    }
+    return m;
+  }
+};
+
+}  // namespace snow

@@ -1,0 +1,45 @@
+// Kernel arguments built from the model parameters and the weather of the moment.
+#pragma once
+#include "kernels/melt.h"
+#include "kernels/powder_diffusion.h"
+#include "kernels/snowfall.h"
+#include "parameters.h"
+#include "weather.h"
+
+namespace snow {
+
+inline SnowfallArgs makeSnowfallArgs(const ModelParameters& p, double dtDays, const WeatherState& w) {
+  SnowfallArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.seaLevelTemperatureC = static_cast<float>(w.seaLevelTemperatureC);
+  a.intensity = static_cast<float>(w.snowfallIntensity);
+  a.snowfallRatePerDay = static_cast<float>(p.snowfallRatePerDay);
+  a.rainSnowLimitM = static_cast<float>(p.rainSnowLimitM);
+  a.powderFromPrecipitation = static_cast<float>(p.powderFromPrecipitation);
+  a.powderCriticalSlopeMin = static_cast<float>(p.powderCriticalSlopeMin);
+  a.powderCriticalSlopePerC = static_cast<float>(p.powderCriticalSlopePerC);
+  a.powderSlopeTemperatureC = static_cast<float>(p.powderSlopeTemperatureC);
+  a.unstableFromPrecipitation = static_cast<float>(p.unstableFromPrecipitation);
+  a.unstableCriticalSlope = static_cast<float>(p.unstableCriticalSlope);
+  return a;
+}
+
+inline MeltArgs makeMeltArgs(const ModelParameters& p, double dtDays, const WeatherState& w) {
+  MeltArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.seaLevelTemperatureC = static_cast<float>(w.seaLevelTemperatureC);
+  a.meltRateMPerDayPerC = static_cast<float>(p.meltRateMPerDayPerC);
+  a.meltThresholdC = static_cast<float>(p.meltThresholdC);
+  return a;
+}
+
+inline PowderDiffusionArgs makePowderDiffusionArgs(const ModelParameters& p, double dtDays) {
+  PowderDiffusionArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.diffusionRatePerDay = static_cast<float>(p.diffusionRatePerDay);
+  a.restSlope = static_cast<float>(p.diffusionRestSlope);
+  a.referenceCellSizeM = static_cast<float>(p.referenceCellSizeM);
+  return a;
+}
+
+}  // namespace snow

@@ -1,0 +1,18 @@
+// Built instead of cuda_backend.cu when no CUDA compiler was found at configure time.
+#include <stdexcept>
+
+#include "cuda_backend.h"
+
+namespace snow::cuda {
+
+bool compiledWithCuda() { return false; }
+DeviceInfo probeDevice() {
+  DeviceInfo info;
+  info.reason = "snowbake was built without CUDA (no nvcc at configure time)";
+  return info;
+}
+std::unique_ptr<SnowBackend> createCudaBackend() {
+  throw std::runtime_error("CUDA backend unavailable: " + probeDevice().reason);
+}
+
+}  // namespace snow::cuda

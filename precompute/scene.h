@@ -1,0 +1,60 @@
+// A scene as snowbake understood it: what the scene file (TOML) and the command line asked for,
+// validated and in world units. Parsing lives in scene_file.cpp; the format is documented in
+// README.md ("Scene files").
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/default_terrain.h"
+#include "core/parameters.h"
+#include "core/weather.h"
+
+namespace snow {
+
+struct TerrainSource {
+  std::string file;          // path (resolved against the scene file's folder); empty for builtin
+  bool builtin = false;      // the embedded ridged-noise range
+  DefaultTerrainOptions builtinOptions;
+  std::string declaredAt;    // "scene.toml:4" for error messages
+};
+
+struct OutputRequest {
+  std::vector<std::string> layers{"compacted", "stable", "unstable", "powder", "depth"};
+  std::string format = "exr";      // "exr" or "tiff": 32-bit float, one channel, metres
+  std::vector<double> frameDays;   // also write the layers at these days (0 = season start)
+};
+
+struct Scene {
+  std::string sourceName;   // the scene file path, or "preset:default"
+  std::string baseDir;      // folder relative terrain paths are resolved against
+  std::string name = "snowbake scene";
+  TerrainSource terrain;
+  std::optional<double> latitudeDeg;  // site latitude; defaults to the DEM's when it has one
+  std::optional<double> longitudeDeg;
+  int startYear = 2025, startMonth = 11, startDay = 1;
+  double days = 120.0;
+  WeatherTimeline weather;
+  std::vector<SnowfallPeriod> userSnowfalls;
+  ModelParameters params;
+  OutputRequest outputs;
+  uint64_t seed = 1;
+  std::string backend = "auto";  // cpu | cuda | auto
+  int threads = 0;               // 0 = all cores
+  std::string canonicalToml;     // the merged, validated document (hashed into the manifest)
+
+  int startDayOfYear() const;
+};
+
+// Loads and validates a scene file. `overrides` are "dotted.key=VALUE" strings from --set,
+// applied before validation with the same rules. Throws InputError naming the file (or the
+// --set argument), the line and the key.
+Scene loadSceneFile(const std::string& path, const std::vector<std::string>& overrides = {});
+// Same, from text: `sourceName` names it in messages, `baseDir` resolves relative paths.
+Scene loadSceneText(const std::string& text, const std::string& sourceName, const std::string& baseDir,
+                    const std::vector<std::string>& overrides = {});
+// "preset:NAME" or a path.
+Scene loadScene(const std::string& pathOrPreset, const std::vector<std::string>& overrides = {});
+
+}  // namespace snow

@@ -1,0 +1,451 @@
+// Scene files: TOML, validated against one table of rules (kSceneRules below, and the parameter
+// table of core/parameters.cpp). Every error names the file (or the --set argument), the line
+// and the dotted key.
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include "core/errors.h"
+#include "embedded_presets.h"
+#include "scene.h"
+
+namespace snow {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+enum class Kind { Table, TableArray, String, Number, Integer, Bool, Date, NumberArray, StringArray };
+
+const char* kindName(Kind k) {
+  switch (k) {
+    case Kind::Table: return "a table";
+    case Kind::TableArray: return "an array of tables ([[...]])";
+    case Kind::String: return "a string";
+    case Kind::Number: return "a number";
+    case Kind::Integer: return "an integer";
+    case Kind::Bool: return "true or false";
+    case Kind::Date: return "a date (YYYY-MM-DD)";
+    case Kind::NumberArray: return "an array of numbers";
+    case Kind::StringArray: return "an array of strings";
+  }
+  return "?";
+}
+
+struct Rule {
+  std::string path;
+  Kind kind;
+  double minValue = -kInf;
+  double maxValue = kInf;
+  std::vector<std::string> choices = {};
+};
+
+const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface"};
+
+const std::vector<Rule>& sceneRules() {
+  static const std::vector<Rule> rules = {
+      {"name", Kind::String},
+      {"terrain", Kind::Table},
+      {"terrain.file", Kind::String},
+      {"terrain.builtin", Kind::String, -kInf, kInf, {"ridged"}},
+      {"terrain.size", Kind::Integer, 8, 16384},
+      {"terrain.cell_size_m", Kind::Number, 0.01, 10000},
+      {"terrain.seed", Kind::Integer, 0, 4294967295.0},
+      {"terrain.min_altitude_m", Kind::Number, -500, 9000},
+      {"terrain.max_altitude_m", Kind::Number, -500, 9000},
+      {"site", Kind::Table},
+      {"site.latitude_deg", Kind::Number, -90, 90},
+      {"site.longitude_deg", Kind::Number, -180, 180},
+      {"season", Kind::Table},
+      {"season.start_date", Kind::Date},
+      {"season.days", Kind::Number, 0.01, 3650},
+      {"weather", Kind::Table},
+      {"weather.keyframe", Kind::TableArray},
+      {"weather.keyframe.day", Kind::Number, 0, 3650},
+      {"weather.keyframe.sea_level_temperature_c", Kind::Number, -80, 60},
+      {"weather.keyframe.wind_direction_deg", Kind::Number, 0, 360},
+      {"weather.keyframe.wind_speed_mps", Kind::Number, 0, 100},
+      {"weather.keyframe.snowfall_intensity", Kind::Number, 0, 100},
+      {"weather.snowfall", Kind::TableArray},
+      {"weather.snowfall.start_day", Kind::Number, 0, 3650},
+      {"weather.snowfall.end_day", Kind::Number, 0, 3650},
+      {"events", Kind::TableArray},
+      {"events.type", Kind::String, -kInf, kInf, {"snowfall"}},
+      {"events.day", Kind::Number, 0, 3650},
+      {"events.duration_days", Kind::Number, 0.001, 365},
+      {"parameters", Kind::Table},
+      {"outputs", Kind::Table},
+      {"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices},
+      {"outputs.format", Kind::String, -kInf, kInf, {"exr", "tiff"}},
+      {"outputs.frames_days", Kind::NumberArray, 0, 3650},
+      {"run", Kind::Table},
+      {"run.seed", Kind::Integer, 0, 9.007199254740992e15},
+      {"run.backend", Kind::String, -kInf, kInf, {"cpu", "cuda", "auto"}},
+      {"run.threads", Kind::Integer, 0, 4096},
+  };
+  return rules;
+}
+
+std::string where(const std::string& fallbackSource, const toml::source_region& src) {
+  std::ostringstream o;
+  o << (src.path && !src.path->empty() ? *src.path : fallbackSource);
+  if (src.begin.line > 0) o << ":" << src.begin.line;
+  return o.str();
+}
+
+[[noreturn]] void fail(const std::string& source, const toml::node& node, const std::string& key, const std::string& what) {
+  throw InputError(where(source, node.source()) + ": " + key + ": " + what);
+}
+
+// Levenshtein distance, to suggest the key the user probably meant.
+size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string suggestion(const std::string& path, const std::vector<std::string>& known) {
+  std::string best;
+  size_t bestDistance = 4;
+  for (const auto& k : known) {
+    const size_t d = editDistance(path, k);
+    if (d < bestDistance) bestDistance = d, best = k;
+  }
+  return best.empty() ? "" : " (did you mean '" + best + "'?)";
+}
+
+class Validator {
+ public:
+  explicit Validator(std::string source) : source_(std::move(source)) {
+    for (const auto& r : sceneRules()) known_.push_back(r.path);
+    for (const auto& p : parameterTable()) known_.push_back(std::string("parameters.") + p.key);
+  }
+
+  void checkTable(const toml::table& table, const std::string& prefix) {
+    for (auto&& [key, node] : table) {
+      const std::string path = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
+      if (prefix == "parameters") {
+        const ParameterInfo* info = findParameter(std::string(key.str()));
+        if (!info) fail(source_, node, path, "unknown parameter" + suggestion(path, known_));
+        checkValue(node, path, Rule{path, Kind::Number, info->minValue, info->maxValue});
+        continue;
+      }
+      const Rule* rule = findRule(path);
+      if (!rule) fail(source_, node, path, "unknown key" + suggestion(path, known_));
+      checkValue(node, path, *rule);
+      if (rule->kind == Kind::Table) checkTable(*node.as_table(), path);
+      if (rule->kind == Kind::TableArray)
+        for (auto&& element : *node.as_array()) checkTable(*element.as_table(), path);
+    }
+  }
+
+ private:
+  const Rule* findRule(const std::string& path) const {
+    for (const auto& r : sceneRules())
+      if (r.path == path) return &r;
+    return nullptr;
+  }
+
+  void checkNumber(const toml::node& node, const std::string& path, const Rule& rule, double v) {
+    if (!std::isfinite(v)) fail(source_, node, path, "must be a finite number");
+    if (v < rule.minValue || v > rule.maxValue) {
+      std::ostringstream o;
+      o << "value " << v << " is out of range [" << rule.minValue << ", " << rule.maxValue << "]";
+      fail(source_, node, path, o.str());
+    }
+  }
+  void checkChoice(const toml::node& node, const std::string& path, const Rule& rule, const std::string& v) {
+    if (rule.choices.empty() || std::find(rule.choices.begin(), rule.choices.end(), v) != rule.choices.end()) return;
+    std::string list;
+    for (const auto& c : rule.choices) list += (list.empty() ? "" : ", ") + c;
+    fail(source_, node, path, "'" + v + "' is not one of: " + list);
+  }
+
+  void checkValue(const toml::node& node, const std::string& path, const Rule& rule) {
+    auto wrongType = [&] { fail(source_, node, path, std::string("must be ") + kindName(rule.kind) + ", not " + typeName(node)); };
+    switch (rule.kind) {
+      case Kind::Table:
+        if (!node.is_table()) wrongType();
+        break;
+      case Kind::TableArray:
+        if (!node.is_array_of_tables()) wrongType();
+        break;
+      case Kind::String:
+        if (!node.is_string()) wrongType();
+        checkChoice(node, path, rule, node.as_string()->get());
+        break;
+      case Kind::Bool:
+        if (!node.is_boolean()) wrongType();
+        break;
+      case Kind::Integer:
+        if (!node.is_integer()) wrongType();
+        checkNumber(node, path, rule, static_cast<double>(node.as_integer()->get()));
+        break;
+      case Kind::Number:
+        if (!node.is_number()) wrongType();
+        checkNumber(node, path, rule, node.value<double>().value());
+        break;
+      case Kind::Date:
+        if (!node.is_date() && !(node.is_string() && parseDate(node.as_string()->get())))
+          wrongType();
+        break;
+      case Kind::NumberArray:
+        if (!node.is_array()) wrongType();
+        for (auto&& e : *node.as_array()) {
+          if (!e.is_number()) fail(source_, e, path, "every element must be a number, not " + typeName(e));
+          checkNumber(e, path, rule, e.value<double>().value());
+        }
+        break;
+      case Kind::StringArray:
+        if (!node.is_array()) wrongType();
+        for (auto&& e : *node.as_array()) {
+          if (!e.is_string()) fail(source_, e, path, "every element must be a string, not " + typeName(e));
+          checkChoice(e, path, rule, e.as_string()->get());
+        }
+        break;
+    }
+  }
+
+ public:
+  static std::string typeName(const toml::node& n) {
+    switch (n.type()) {
+      case toml::node_type::table: return "a table";
+      case toml::node_type::array: return "an array";
+      case toml::node_type::string: return "a string";
+      case toml::node_type::integer: return "an integer";
+      case toml::node_type::floating_point: return "a number";
+      case toml::node_type::boolean: return "a boolean";
+      case toml::node_type::date: return "a date";
+      case toml::node_type::time: return "a time";
+      case toml::node_type::date_time: return "a date-time";
+      default: return "nothing";
+    }
+  }
+  static std::optional<toml::date> parseDate(const std::string& s) {
+    int y, m, d;
+    char c1, c2;
+    std::istringstream in(s);
+    if (!(in >> y >> c1 >> m >> c2 >> d) || c1 != '-' || c2 != '-' || m < 1 || m > 12 || d < 1 || d > 31) return {};
+    return toml::date{y, m, d};
+  }
+
+ private:
+  std::string source_;
+  std::vector<std::string> known_;
+};
+
+// --set KEY=VALUE: VALUE is read as a TOML value; anything that is not valid TOML is a string,
+// so `--set terrain.file=dem.tif` needs no quotes.
+void applyOverride(toml::table& root, const std::string& assignment) {
+  const std::string source = "--set " + assignment;
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError(source + ": expected KEY=VALUE, e.g. --set season.days=30");
+  const std::string key = assignment.substr(0, eq);
+  const std::string value = assignment.substr(eq + 1);
+  std::vector<std::string> parts;
+  std::stringstream ss(key);
+  for (std::string part; std::getline(ss, part, '.');) {
+    if (part.empty()) throw InputError(source + ": empty part in key '" + key + "'");
+    parts.push_back(part);
+  }
+  toml::table parsed;
+  try {
+    parsed = toml::parse("value = " + value, std::string_view(source));
+  } catch (const toml::parse_error&) {
+    parsed = toml::table{};
+    parsed.insert("value", value);
+  }
+  toml::table* table = &root;
+  for (size_t i = 0; i + 1 < parts.size(); ++i) {
+    toml::node* child = table->get(parts[i]);
+    if (!child) {
+      table->insert(parts[i], toml::table{});
+      child = table->get(parts[i]);
+    }
+    if (!child->is_table())
+      throw InputError(source + ": '" + parts[i] + "' in '" + key + "' is not a table (arrays cannot be set from the command line)");
+    table = child->as_table();
+  }
+  table->insert_or_assign(parts.back(), std::move(*parsed.get("value")));
+}
+
+double number(const toml::node_view<const toml::node>& n, double fallback) { return n.value<double>().value_or(fallback); }
+
+Scene buildScene(const toml::table& root, const std::string& source, const std::string& baseDir) {
+  Scene scene;
+  scene.sourceName = source;
+  scene.baseDir = baseDir;
+  if (auto n = root["name"].value<std::string>()) scene.name = *n;
+
+  // terrain: exactly one of file / builtin
+  const toml::table* terrain = root["terrain"].as_table();
+  if (!terrain) throw InputError(source + ": terrain: missing [terrain] table (give terrain.file or terrain.builtin)");
+  const bool hasFile = terrain->contains("file"), hasBuiltin = terrain->contains("builtin");
+  if (hasFile == hasBuiltin)
+    throw InputError(where(source, terrain->source()) + ": terrain: give exactly one of terrain.file and terrain.builtin");
+  if (hasFile) {
+    const toml::node& fileNode = *terrain->get("file");
+    fs::path p = fileNode.as_string()->get();
+    if (p.is_relative() && !baseDir.empty()) p = fs::path(baseDir) / p;
+    scene.terrain.file = p.lexically_normal().string();
+    scene.terrain.declaredAt = where(source, fileNode.source());
+    for (const char* builtinOnly : {"size", "cell_size_m", "seed", "min_altitude_m", "max_altitude_m"})
+      if (terrain->contains(builtinOnly))
+        fail(source, *terrain->get(builtinOnly), std::string("terrain.") + builtinOnly, "only applies to terrain.builtin");
+    std::error_code ec;
+    if (!fs::exists(scene.terrain.file, ec))
+      fail(source, fileNode, "terrain.file", "terrain file '" + scene.terrain.file + "' does not exist");
+    if (fs::is_directory(scene.terrain.file, ec))
+      fail(source, fileNode, "terrain.file", "'" + scene.terrain.file + "' is a folder, not a terrain file");
+  } else {
+    scene.terrain.builtin = true;
+    auto& o = scene.terrain.builtinOptions;
+    o.size = static_cast<int>((*terrain)["size"].value<int64_t>().value_or(o.size));
+    o.cellSizeM = (*terrain)["cell_size_m"].value<double>().value_or(o.cellSizeM);
+    o.seed = static_cast<uint64_t>((*terrain)["seed"].value<int64_t>().value_or(static_cast<int64_t>(o.seed)));
+    o.minAltitudeM = (*terrain)["min_altitude_m"].value<double>().value_or(o.minAltitudeM);
+    o.maxAltitudeM = (*terrain)["max_altitude_m"].value<double>().value_or(o.maxAltitudeM);
+    if (!(o.maxAltitudeM > o.minAltitudeM))
+      throw InputError(where(source, terrain->source()) + ": terrain.max_altitude_m: must be above terrain.min_altitude_m");
+    scene.terrain.declaredAt = where(source, terrain->get("builtin")->source());
+  }
+
+  if (auto v = root["site"]["latitude_deg"].value<double>()) scene.latitudeDeg = *v;
+  if (auto v = root["site"]["longitude_deg"].value<double>()) scene.longitudeDeg = *v;
+
+  if (const toml::node* d = root["season"]["start_date"].node()) {
+    const auto date = d->is_date() ? std::optional<toml::date>(d->as_date()->get()) : Validator::parseDate(d->as_string()->get());
+    scene.startYear = date->year;
+    scene.startMonth = date->month;
+    scene.startDay = date->day;
+  }
+  scene.days = number(root["season"]["days"], scene.days);
+
+  if (const toml::array* keys = root["weather"]["keyframe"].as_array()) {
+    double previous = -1.0;
+    for (auto&& element : *keys) {
+      const toml::table& k = *element.as_table();
+      WeatherKeyframe kf;
+      if (!k.contains("day")) throw InputError(where(source, k.source()) + ": weather.keyframe.day: missing (each keyframe needs a day)");
+      kf.day = k["day"].value<double>().value();
+      if (kf.day <= previous)
+        fail(source, *k.get("day"), "weather.keyframe.day", "keyframes must be in increasing order of day");
+      previous = kf.day;
+      WeatherState defaults = scene.weather.keyframes.empty() ? WeatherState{} : scene.weather.keyframes.back().state;
+      kf.state.seaLevelTemperatureC = number(k["sea_level_temperature_c"], defaults.seaLevelTemperatureC);
+      kf.state.windDirectionDeg = number(k["wind_direction_deg"], defaults.windDirectionDeg);
+      kf.state.windSpeedMps = number(k["wind_speed_mps"], defaults.windSpeedMps);
+      kf.state.snowfallIntensity = number(k["snowfall_intensity"], defaults.snowfallIntensity);
+      scene.weather.keyframes.push_back(kf);
+    }
+  }
+  if (const toml::array* periods = root["weather"]["snowfall"].as_array()) {
+    for (auto&& element : *periods) {
+      const toml::table& s = *element.as_table();
+      for (const char* required : {"start_day", "end_day"})
+        if (!s.contains(required))
+          throw InputError(where(source, s.source()) + ": weather.snowfall." + required + ": missing");
+      SnowfallPeriod p{s["start_day"].value<double>().value(), s["end_day"].value<double>().value()};
+      if (!(p.endDay > p.startDay)) fail(source, *s.get("end_day"), "weather.snowfall.end_day", "must be after start_day");
+      scene.weather.snowfallPeriods.push_back(p);
+    }
+  }
+  if (const toml::array* events = root["events"].as_array()) {
+    for (auto&& element : *events) {
+      const toml::table& e = *element.as_table();
+      for (const char* required : {"type", "day", "duration_days"})
+        if (!e.contains(required)) throw InputError(where(source, e.source()) + ": events." + required + ": missing");
+      const double day = e["day"].value<double>().value();
+      scene.userSnowfalls.push_back({day, day + e["duration_days"].value<double>().value()});
+    }
+  }
+  if (const toml::table* params = root["parameters"].as_table())
+    for (auto&& [key, node] : *params) scene.params.*(findParameter(std::string(key.str()))->member) = node.value<double>().value();
+  // Ranges that depend on each other.
+  const ModelParameters& p = scene.params;
+  if (!(p.freezeTemperatureC < p.coolTemperatureC && p.coolTemperatureC < p.warmTemperatureC))
+    throw InputError(source + ": parameters: need freeze_temperature_c < cool_temperature_c < warm_temperature_c");
+
+  if (const toml::node* layers = root["outputs"]["layers"].node()) {
+    scene.outputs.layers.clear();
+    for (auto&& e : *layers->as_array()) scene.outputs.layers.push_back(e.as_string()->get());
+  }
+  if (auto f = root["outputs"]["format"].value<std::string>()) scene.outputs.format = *f;
+  if (const toml::node* frames = root["outputs"]["frames_days"].node()) {
+    for (auto&& e : *frames->as_array()) {
+      const double day = e.value<double>().value();
+      if (day > scene.days) fail(source, e, "outputs.frames_days", "day " + std::to_string(day) + " is after the season's end");
+      scene.outputs.frameDays.push_back(day);
+    }
+  }
+  scene.seed = static_cast<uint64_t>(root["run"]["seed"].value<int64_t>().value_or(1));
+  if (auto b = root["run"]["backend"].value<std::string>()) scene.backend = *b;
+  scene.threads = static_cast<int>(root["run"]["threads"].value<int64_t>().value_or(0));
+
+  std::ostringstream canonical;
+  canonical << root;
+  scene.canonicalToml = canonical.str();
+  return scene;
+}
+
+Scene parseAndBuild(toml::table root, const std::string& source, const std::string& baseDir,
+                    const std::vector<std::string>& overrides) {
+  for (const auto& o : overrides) applyOverride(root, o);
+  Validator(source).checkTable(root, "");
+  return buildScene(root, source, baseDir);
+}
+
+[[noreturn]] void rethrowParseError(const toml::parse_error& e, const std::string& source) {
+  std::ostringstream o;
+  o << source << ":" << e.source().begin.line << ": TOML syntax error: " << e.description();
+  throw InputError(o.str());
+}
+
+}  // namespace
+
+Scene loadSceneText(const std::string& text, const std::string& sourceName, const std::string& baseDir,
+                    const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, std::string_view(sourceName));
+  } catch (const toml::parse_error& e) {
+    rethrowParseError(e, sourceName);
+  }
+  return parseAndBuild(std::move(root), sourceName, baseDir, overrides);
+}
+
+Scene loadSceneFile(const std::string& path, const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path + ": scene file does not exist");
+  if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not a scene file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the scene file for reading");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  const std::string base = fs::path(path).parent_path().string();
+  return loadSceneText(buffer.str(), path, base.empty() ? "." : base, overrides);
+}
+
+Scene loadScene(const std::string& pathOrPreset, const std::vector<std::string>& overrides) {
+  const std::string prefix = "preset:";
+  if (pathOrPreset.rfind(prefix, 0) == 0) {
+    const std::string name = pathOrPreset.substr(prefix.size());
+    if (name != "default") throw InputError(pathOrPreset + ": unknown preset (available: preset:default)");
+    return loadSceneText(presets::kDefault, pathOrPreset, fs::current_path().string(), overrides);
+  }
+  return loadSceneFile(pathOrPreset, overrides);
+}
+
+}  // namespace snow

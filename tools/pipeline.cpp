@@ -1,0 +1,272 @@
+#include "pipeline.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <fstream>
+#include <iomanip>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "bakers/atomic_file.h"
+#include "bakers/grid_writer.h"
+#include "bakers/manifest.h"
+#include "core/cpu_backend.h"
+#include "core/errors.h"
+#include "core/hash.h"
+#include "cuda/cuda_backend.h"
+#include "precompute/scene.h"
+#include "progress.h"
+
+#ifndef SNOWBAKE_VERSION
+#define SNOWBAKE_VERSION "0.0.0"
+#endif
+
+namespace snow {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const char* programVersion() { return SNOWBAKE_VERSION; }
+
+namespace {
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+std::string fixed(double v, int digits) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(digits) << v;
+  return o.str();
+}
+
+std::string hashFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  Fnv1a64 h;
+  std::vector<char> buf(1 << 16);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    h.add(buf.data(), static_cast<size_t>(in.gcount()));
+  }
+  return h.hex();
+}
+
+Terrain loadTerrain(const TerrainSource& src) {
+  if (src.builtin) return makeBuiltinTerrain(src.builtinOptions);
+  return loadTerrainFile(src.file);
+}
+
+// What a layer name in [outputs].layers means, and its grid.
+Grid<float> layerGrid(const SnowState& s, const std::string& name) {
+  if (name == "compacted") return s.compactedM;
+  if (name == "stable") return s.stableM;
+  if (name == "unstable") return s.unstableM;
+  if (name == "powder") return s.powderM;
+  if (name == "bedrock") return s.bedrockM;
+  Grid<float> g(s.spec.width, s.spec.height, 0.f);
+  for (int y = 0; y < s.spec.height; ++y)
+    for (int x = 0; x < s.spec.width; ++x)
+      g(x, y) = name == "depth" ? s.depthM(x, y) : s.bedrockM(x, y) + s.depthM(x, y);  // "surface"
+  return g;
+}
+
+std::string layerContent(const std::string& name) {
+  if (name == "depth") return "total snow depth C+S+U+P";
+  if (name == "bedrock") return "terrain altitude B";
+  if (name == "surface") return "snow-surface altitude B+C+S+U+P";
+  return "snow layer: " + name;
+}
+
+std::unique_ptr<SnowBackend> chooseBackend(const std::string& wanted, std::ostream& log) {
+  if (wanted == "cpu") return createCpuBackend();
+  const cuda::DeviceInfo device = cuda::probeDevice();
+  if (wanted == "cuda") {
+    if (!device.available) throw InputError("--backend cuda: no usable CUDA device: " + device.reason);
+    return cuda::createCudaBackend();
+  }
+  if (device.available) {
+    log << "backend: cuda (auto: " << device.description << ")\n";
+    return cuda::createCudaBackend();
+  }
+  log << "backend: cpu (auto: " << device.reason << ")\n";
+  return createCpuBackend();
+}
+
+}  // namespace
+
+BakeResult runBake(const BakeOptions& options, std::ostream& log) {
+  const auto tStart = Clock::now();
+  // 1. Scene
+  Scene scene = loadScene(options.scene, options.sets);
+  if (options.terrainFile) {
+    std::error_code ec;
+    if (!fs::exists(*options.terrainFile, ec)) throw InputError(*options.terrainFile + ": terrain file does not exist (--terrain)");
+    scene.terrain = TerrainSource{};
+    scene.terrain.file = *options.terrainFile;
+    scene.terrain.declaredAt = "--terrain";
+  }
+  if (options.seed) scene.seed = *options.seed;
+  if (options.threads) scene.threads = *options.threads;
+  if (options.backend) scene.backend = *options.backend;
+  if (scene.backend != "cpu" && scene.backend != "cuda" && scene.backend != "auto")
+    throw InputError("--backend " + scene.backend + ": must be cpu, cuda or auto");
+  if (scene.threads < 0) throw InputError("--threads " + std::to_string(scene.threads) + ": must be 0 (all cores) or more");
+  const int threads = scene.threads > 0 ? scene.threads : tbb::info::default_concurrency();
+  tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  log << "snowbake " << programVersion() << ": scene " << scene.sourceName << " (" << scene.name << "), seed " << scene.seed
+      << ", " << threads << " thread" << (threads == 1 ? "" : "s") << "\n";
+
+  // 2. Terrain
+  auto t0 = Clock::now();
+  Terrain terrain = loadTerrain(scene.terrain);
+  const TerrainInfo& ti = terrain.info;
+  log << "terrain: " << ti.source << ": " << ti.spec.width << " x " << ti.spec.height << " cells of " << fixed(ti.spec.cellSizeXM, 2)
+      << " x " << fixed(ti.spec.cellSizeYM, 2) << " m, " << fixed(ti.minElevationM, 0) << "-" << fixed(ti.maxElevationM, 0)
+      << " m, " << ti.nodataCells << " NODATA cells, " << ti.coordinateSystem << " (" << fixed(since(t0), 2) << " s)\n";
+  const double latitude = scene.latitudeDeg ? *scene.latitudeDeg : (ti.latitudeKnown ? ti.centreLatitudeDeg : 45.0);
+  if (!scene.latitudeDeg)
+    log << "site: latitude " << fixed(latitude, 3) << " deg " << (ti.latitudeKnown ? "(from the DEM)" : "(default; set site.latitude_deg)") << "\n";
+
+  // 3. Precompute
+  t0 = Clock::now();
+  SnowState state;
+  state.allocate(ti.spec);
+  state.bedrockM = terrain.heightsM;
+  state.validCell = terrain.valid;
+  // Sun exposure (issue #4) and wind (issue #5) are not computed yet: exposure stays 0, so the
+  // temperature follows altitude alone (T = T0 + k_t * B).
+  computeTemperatureBase(state, scene.params);
+  log << "precompute: temperature from altitude (" << fixed(since(t0), 2) << " s); sun exposure and wind field: not implemented yet\n";
+
+  // 4. Season
+  std::unique_ptr<SnowBackend> backend = chooseBackend(scene.backend, log);
+  std::error_code ec;
+  fs::create_directories(options.outDir, ec);
+  if (ec) throw InputError(options.outDir + ": cannot create the output folder: " + ec.message());
+
+  Manifest manifest;
+  BakeResult result;
+  auto writeLayers = [&](const SnowState& s, double day) {
+    const bool frame = day >= 0.0;
+    if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
+    for (const auto& layer : scene.outputs.layers) {
+      std::string rel = layer;
+      if (frame) {
+        std::ostringstream o;
+        o << "frames/" << layer << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+        rel = o.str();
+      }
+      const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, layerGrid(s, layer), layer);
+      ManifestFile f;
+      f.path = fs::relative(img.path, options.outDir).string();
+      f.content = layerContent(layer);
+      f.unit = "m";
+      f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
+      f.day = day;
+      f.minValue = img.minValue;
+      f.maxValue = img.maxValue;
+      manifest.files.push_back(f);
+      result.files.push_back(img.path);
+    }
+  };
+
+  SeasonConfig config;
+  config.days = scene.days;
+  config.seed = scene.seed;
+  config.params = scene.params;
+  config.weather = scene.weather;
+  config.userSnowfalls = scene.userSnowfalls;
+  config.frameDays = scene.outputs.frameDays;
+  ProgressBar bar(log, "season", stderrIsTerminal() && &log == &std::cerr, options.progress);
+  const SeasonReport report = runSeason(
+      *backend, state, config, [&](double f) { bar.update(f); }, [&](double day, const SnowState& s) { writeLayers(s, day); });
+  bar.finish();
+  log << "season: " << fixed(scene.days, 0) << " days, " << report.events << " events on " << backend->name() << " ("
+      << fixed(report.seconds, 2) << " s)\n";
+  for (const auto& p : report.phenomena)
+    log << "  " << std::left << std::setw(24) << p.name << std::right << std::setw(6) << p.steps << " steps"
+        << (p.skippedSteps ? " (" + std::to_string(p.skippedSteps) + " skipped)" : std::string()) << "  " << fixed(p.seconds, 3)
+        << " s\n";
+  log << "  snow: " << std::scientific << std::setprecision(4) << report.final.totalM3() << " m^3 (added "
+      << report.snowfallAddedM3 << ", melted " << report.meltRemovedM3 << "), mass balance error " << report.massBalanceRelativeError()
+      << std::defaultfloat << "\n";
+
+  // 5. Outputs
+  t0 = Clock::now();
+  writeLayers(state, -1.0);
+  manifest.programVersion = programVersion();
+  manifest.sceneSource = scene.sourceName;
+  manifest.sceneName = scene.name;
+  manifest.sceneHash = Fnv1a64().add(scene.canonicalToml).hex();
+  manifest.terrainSource = ti.source;
+  manifest.terrainHash = scene.terrain.builtin ? Fnv1a64().add(terrain.heightsM.data(), terrain.heightsM.size() * sizeof(float)).hex()
+                                               : hashFile(scene.terrain.file);
+  manifest.coordinateSystem = ti.coordinateSystem;
+  manifest.seed = scene.seed;
+  manifest.backend = backend->name();
+  manifest.grid = ti.spec;
+  manifest.latitudeDeg = latitude;
+  manifest.seasonDays = scene.days;
+  {
+    std::ostringstream d;
+    d << std::setfill('0') << std::setw(4) << scene.startYear << "-" << std::setw(2) << scene.startMonth << "-" << std::setw(2)
+      << scene.startDay;
+    manifest.seasonStartDate = d.str();
+  }
+  manifest.events = report.events;
+  manifest.snowfallAddedM3 = report.snowfallAddedM3;
+  manifest.meltRemovedM3 = report.meltRemovedM3;
+  manifest.initialSnowM3 = report.initial.totalM3();
+  manifest.finalSnowM3 = report.final.totalM3();
+  for (const auto& p : report.phenomena) manifest.phenomena.push_back({p.name, p.starts, p.steps, p.stops, p.skippedSteps});
+  const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
+  writeTextAtomically(manifestPath, manifestToJson(manifest));
+  result.files.push_back(manifestPath);
+  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(since(t0), 2) << " s)\n";
+  log << "total: " << fixed(since(tStart), 2) << " s\n";
+  result.season = report;
+  result.backendName = backend->name();
+  return result;
+}
+
+std::string describeTerrain(const std::string& source, bool json) {
+  const Terrain t = source == "builtin:ridged" ? makeBuiltinTerrain(DefaultTerrainOptions{}) : loadTerrainFile(source);
+  const TerrainInfo& i = t.info;
+  if (json) {
+    nlohmann::ordered_json j;
+    j["source"] = i.source;
+    j["driver"] = i.driver;
+    j["width"] = i.spec.width;
+    j["height"] = i.spec.height;
+    j["cell_size_x_m"] = i.spec.cellSizeXM;
+    j["cell_size_y_m"] = i.spec.cellSizeYM;
+    j["native_cell_size_x"] = i.nativeCellSizeX;
+    j["native_cell_size_y"] = i.nativeCellSizeY;
+    j["native_unit"] = i.nativeUnit;
+    j["min_elevation_m"] = i.minElevationM;
+    j["max_elevation_m"] = i.maxElevationM;
+    j["nodata_cells"] = i.nodataCells;
+    j["coordinate_system"] = i.coordinateSystem;
+    j["coordinate_decision"] = i.coordinateDecision;
+    if (i.latitudeKnown) j["centre_latitude_deg"] = i.centreLatitudeDeg; else j["centre_latitude_deg"] = nullptr;
+    return j.dump(2) + "\n";
+  }
+  std::ostringstream o;
+  o << i.source << "\n"
+    << "  format:            " << i.driver << "\n"
+    << "  grid:              " << i.spec.width << " x " << i.spec.height << " cells\n"
+    << "  cell size:         " << fixed(i.spec.cellSizeXM, 3) << " m (x) x " << fixed(i.spec.cellSizeYM, 3) << " m (y)"
+    << "  [native " << i.nativeCellSizeX << " x " << i.nativeCellSizeY << " " << i.nativeUnit << "]\n"
+    << "  elevation:         " << fixed(i.minElevationM, 1) << " to " << fixed(i.maxElevationM, 1) << " m\n"
+    << "  NODATA cells:      " << i.nodataCells << "\n"
+    << "  coordinate system: " << i.coordinateSystem << "\n"
+    << "  decided by:        " << i.coordinateDecision << "\n";
+  if (i.latitudeKnown) o << "  centre latitude:   " << fixed(i.centreLatitudeDeg, 4) << " deg\n";
+  return o.str();
+}
+
+}  // namespace snow

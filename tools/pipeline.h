@@ -1,0 +1,40 @@
+// The bake pipeline behind `snowbake bake` and `snowbake demo`: scene -> terrain -> precompute ->
+// season -> outputs. Throws InputError for bad input (exit status 2) and other exceptions for
+// failures (exit status 1).
+#pragma once
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "core/season.h"
+#include "precompute/terrain_loader.h"
+
+namespace snow {
+
+struct BakeOptions {
+  std::string scene = "preset:default";  // a path, or preset:NAME
+  std::optional<std::string> terrainFile;  // --terrain: replaces the scene's terrain
+  std::string outDir = "snowbake-out";
+  std::optional<uint64_t> seed;
+  std::optional<int> threads;              // 0 = all cores
+  std::optional<std::string> backend;      // cpu | cuda | auto
+  std::vector<std::string> sets;           // --set KEY=VALUE
+  bool progress = true;
+};
+
+struct BakeResult {
+  std::vector<std::string> files;  // paths written, manifest last
+  SeasonReport season;
+  std::string backendName;
+};
+
+BakeResult runBake(const BakeOptions& options, std::ostream& log);
+
+// `snowbake info`: what snowbake understood of a terrain (a path or builtin:ridged).
+std::string describeTerrain(const std::string& source, bool json);
+
+const char* programVersion();
+
+}  // namespace snow
