@@ -28,6 +28,7 @@ WrittenImage writeFloatImage(const std::string& base, const std::string& format,
     spec.attribute("compression", format == "exr" ? "zip" : "zip");
     // Fixed metadata only: no time stamps, so the same bake gives the same bytes.
     spec.attribute("Software", "snowbake");
+    spec.attribute("DateTime", "");  // OIIO would stamp the current time (EXR capDate, TIFF DateTime)
     if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, grid.data()) || !out->close())
       throw std::runtime_error("cannot write " + result.path + ": " + out->geterror());
   });

@@ -30,6 +30,7 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(moving_, s.snowMoving.values());
     exec_.upload(valid_, s.validCell.values());
     exec_.upload(delta_, std::vector<float>(s.spec.cellCount(), 0.f));
+    exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
     uploadStaticFields(s);
   }
 
@@ -93,6 +94,7 @@ class ExecBackend final : public SnowBackend {
     v.windY = windY_.data();
     v.windEffectZ = windEffectZ_.data();
     v.delta = delta_.data();
+    v.surfaceSlope = surfaceSlope_.data();
     return v;
   }
 
@@ -100,7 +102,7 @@ class ExecBackend final : public SnowBackend {
   GridSpec spec_;
   typename Exec::template Buffer<float> bedrock_, compacted_, stable_, unstable_, powder_;
   typename Exec::template Buffer<uint8_t> moving_, valid_;
-  typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_;
+  typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_;
 };
 
 }  // namespace snow

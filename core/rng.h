@@ -43,8 +43,8 @@ SNOW_HD SNOW_INLINE float uniformFloat(uint32_t bits) { return static_cast<float
 
 // Uniform double in (0, 1): never 0, so -log(u) is finite.
 SNOW_HD SNOW_INLINE double uniformOpenDouble(uint32_t hi, uint32_t lo) {
-  const uint64_t m = (static_cast<uint64_t>(hi) << 21) ^ static_cast<uint64_t>(lo >> 11);  // 53 bits
-  return (static_cast<double>(m & ((1ull << 53) - 1)) + 0.5) * (1.0 / 9007199254740992.0);
+  const uint64_t m = ((static_cast<uint64_t>(hi) << 32) | lo) >> 12;  // 52 bits
+  return (static_cast<double>(m) + 0.5) * (1.0 / 4503599627370496.0);  // (m + 1/2) / 2^52: in (0, 1)
 }
 
 // Streams separate independent uses of the same (seed, event, cell).

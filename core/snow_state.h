@@ -88,6 +88,9 @@ struct SnowFieldsView {
   const float* windY = nullptr;
   const float* windEffectZ = nullptr;
   float* delta = nullptr;  // per-cell scratch: snow volume changed by the last step (for the mass ledger)
+  // Per-cell scratch: |grad A| of the snow surface, taken before a per-cell pass that changes A,
+  // so the pass never reads a neighbour that another thread is writing.
+  float* surfaceSlope = nullptr;
 
   SNOW_HD SNOW_INLINE bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
   SNOW_HD SNOW_INLINE int index(int x, int y) const { return y * width + x; }

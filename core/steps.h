@@ -18,6 +18,7 @@ namespace snow {
 
 template <class Exec>
 double runSnowfall(Exec& exec, const SnowFieldsView& v, const SnowfallArgs& a) {
+  exec.forEachCell(v.width, v.height, SurfaceSlopeKernel{v});
   exec.forEachCell(v.width, v.height, SnowfallKernel{v, a});
   return exec.sum(v.delta, v.valid, v.width, v.height) * static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
 }

@@ -1,4 +1,5 @@
-// Snowfall step (paper §5.1). Per cell, no neighbour writes.
+// Snowfall step (paper §5.1). Per cell, no neighbour writes; the slope comes from the
+// SurfaceSlopeKernel snapshot taken just before, because this pass changes A.
 //   depth added   = dt * k_snow * max(0, A - A_0precip)                        (Foehn relation)
 //   powder share  x_p = clamp(k_powdery * (|grad A| - s_c), 0, 1)
 //                 s_c = s_c0 + k_sc * max(0, T_0powdery - T)
@@ -40,7 +41,7 @@ struct SnowfallKernel {
       v.delta[i] = 0.f;
       return;
     }
-    const float slope = surfaceSlope(v, x, y);
+    const float slope = v.surfaceSlope[i];
     const float temperature = a.seaLevelTemperatureC + v.temperatureBase[i];
     const float criticalSlope =
         a.powderCriticalSlopeMin + a.powderCriticalSlopePerC * maxf(0.f, a.powderSlopeTemperatureC - temperature);

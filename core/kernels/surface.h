@@ -24,4 +24,13 @@ SNOW_HD SNOW_INLINE float surfaceSlope(const SnowFieldsView& v, int x, int y) {
   return sqrtf(gx * gx + gy * gy);
 }
 
+// Snapshot of the surface slope for the per-cell kernels that read it (snowfall).
+struct SurfaceSlopeKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    v.surfaceSlope[i] = v.valid[i] ? surfaceSlope(v, x, y) : 0.f;
+  }
+};
+
 }  // namespace snow

@@ -1,0 +1,208 @@
+// Per-cell kernels on tiny constructed cases with exact expected answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/serial_exec.h"
+#include "core/steps.h"
+#include "test_support.h"
+
+using namespace snow;
+
+namespace {
+
+SnowState plane(int w, int h, double cell, float slopeX, float base, float temperatureBase) {
+  SnowState s;
+  GridSpec spec;
+  spec.width = w;
+  spec.height = h;
+  spec.cellSizeXM = spec.cellSizeYM = cell;
+  s.allocate(spec);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      s.bedrockM(x, y) = base + slopeX * static_cast<float>(x * cell);
+      s.temperatureBaseC(x, y) = temperatureBase;
+    }
+  return s;
+}
+
+SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
+  // One buffer holds both scratch fields: delta, then the slope snapshot.
+  delta.assign(2 * s.spec.cellCount(), 0.f);
+  SnowFieldsView v;
+  v.width = s.spec.width;
+  v.height = s.spec.height;
+  v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM);
+  v.cellSizeYM = static_cast<float>(s.spec.cellSizeYM);
+  v.bedrock = s.bedrockM.data();
+  v.compacted = s.compactedM.data();
+  v.stable = s.stableM.data();
+  v.unstable = s.unstableM.data();
+  v.powder = s.powderM.data();
+  v.moving = s.snowMoving.data();
+  v.valid = s.validCell.data();
+  v.exposure = s.exposureHours.data();
+  v.temperatureBase = s.temperatureBaseC.data();
+  v.windX = s.windXMps.data();
+  v.windY = s.windYMps.data();
+  v.windEffectZ = s.windEffectZM.data();
+  v.delta = delta.data();
+  v.surfaceSlope = delta.data() + s.spec.cellCount();
+  return v;
+}
+
+double totalDepth(const SnowState& s) {
+  double t = 0;
+  for (int y = 0; y < s.spec.height; ++y)
+    for (int x = 0; x < s.spec.width; ++x) t += s.depthM(x, y);
+  return t;
+}
+
+}  // namespace
+
+TEST(SnowfallKernel, FlatPlaneGetsFoehnDepthAllStable) {
+  SnowState s = plane(6, 5, 10.0, 0.f, 2000.f, -15.f);
+  std::vector<float> delta;
+  SnowFieldsView v = viewOf(s, delta);
+  SerialExec exec;
+  SnowfallArgs a;  // paper defaults: k_snow = 1e-4 /day
+  a.dtDays = 0.5f;
+  a.rainSnowLimitM = 1000.f;
+  const double volume = runSnowfall(exec, v, a);
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 6; ++x) {
+      EXPECT_FLOAT_EQ(s.stableM(x, y), 0.05f);  // 0.5 day * 1e-4 /day * 1000 m
+      EXPECT_EQ(s.powderM(x, y), 0.f);
+      EXPECT_EQ(s.unstableM(x, y), 0.f);
+    }
+  EXPECT_NEAR(volume, 30 * 0.05 * 100.0, 1e-4);
+}
+
+TEST(SnowfallKernel, NothingBelowTheRainSnowLimitNorOnNodata) {
+  SnowState s = plane(5, 5, 10.0, 0.f, 900.f, -15.f);
+  s.bedrockM(2, 2) = 3000.f;
+  s.validCell(2, 2) = 0;
+  std::vector<float> delta;
+  SerialExec exec;
+  SnowfallArgs a;
+  a.rainSnowLimitM = 1000.f;
+  EXPECT_EQ(runSnowfall(exec, viewOf(s, delta), a), 0.0);
+  EXPECT_EQ(totalDepth(s), 0.0);
+}
+
+// On an inclined plane of slope 0.55 at T = -10 degC: s_c = 0.5, x_p = 5 * 0.05 = 0.25;
+// x_U = 1 * (0.55 - 0.3) = 0.25 of the remaining 0.75.
+TEST(SnowfallKernel, SlopeSplitsPowderUnstableStable) {
+  SnowState s = plane(7, 5, 10.0, 0.55f, 2000.f, -10.f);
+  std::vector<float> delta;
+  SerialExec exec;
+  SnowfallArgs a;
+  a.dtDays = 1.f;
+  a.rainSnowLimitM = 1000.f;
+  runSnowfall(exec, viewOf(s, delta), a);
+  const int x = 3, y = 2;  // interior: central differences are exact on a plane
+  const float added = 1e-4f * (s.bedrockM(x, y) - 1000.f);
+  EXPECT_NEAR(s.powderM(x, y), 0.25f * added, 1e-6f);
+  EXPECT_NEAR(s.unstableM(x, y), 0.75f * 0.25f * added, 1e-6f);
+  EXPECT_NEAR(s.stableM(x, y), 0.75f * 0.75f * added, 1e-6f);
+}
+
+// Colder ground raises the critical slope: at T = -20 degC s_c = 0.5 + 0.05 * 10 = 1.0 > 0.55.
+TEST(SnowfallKernel, ColdRaisesTheCriticalSlope) {
+  SnowState s = plane(7, 5, 10.0, 0.55f, 2000.f, -20.f);
+  std::vector<float> delta;
+  SerialExec exec;
+  SnowfallArgs a;
+  a.rainSnowLimitM = 1000.f;
+  runSnowfall(exec, viewOf(s, delta), a);
+  EXPECT_EQ(s.powderM(3, 2), 0.f);
+  EXPECT_GT(s.unstableM(3, 2), 0.f);
+}
+
+TEST(MeltKernel, MeltsFromTheTopDown) {
+  SnowState s = plane(3, 3, 10.0, 0.f, 500.f, 5.f);  // T = 5 degC
+  s.powderM(1, 1) = 0.01f;
+  s.unstableM(1, 1) = 0.01f;
+  s.stableM(1, 1) = 0.002f;
+  s.compactedM(1, 1) = 1.f;
+  std::vector<float> delta;
+  SerialExec exec;
+  MeltArgs a;  // k_melt = 0.01 m/day/degC, T_0melt = 0
+  a.dtDays = 0.5f;
+  const double volume = runMelt(exec, viewOf(s, delta), a);  // wants 0.025 m
+  EXPECT_EQ(s.powderM(1, 1), 0.f);
+  EXPECT_EQ(s.unstableM(1, 1), 0.f);
+  EXPECT_EQ(s.stableM(1, 1), 0.f);
+  EXPECT_NEAR(s.compactedM(1, 1), 1.f - 0.003f, 1e-6f);
+  EXPECT_NEAR(volume, -0.025 * 100.0, 1e-4);
+}
+
+TEST(MeltKernel, NothingMeltsBelowTheThreshold) {
+  SnowState s = plane(3, 3, 10.0, 0.f, 500.f, -1.f);
+  s.powderM.fill(0.3f);
+  std::vector<float> delta;
+  SerialExec exec;
+  EXPECT_EQ(runMelt(exec, viewOf(s, delta), MeltArgs{}), 0.0);
+  EXPECT_EQ(s.powderM(1, 1), 0.3f);
+}
+
+TEST(PowderDiffusion, FlatPowderStaysPut) {
+  SnowState s = plane(8, 8, 5.0, 0.f, 1000.f, -5.f);
+  s.powderM.fill(0.4f);
+  std::vector<float> delta;
+  SerialExec exec;
+  PowderDiffusionArgs a;
+  runPowderDiffusion(exec, viewOf(s, delta), a);
+  for (float p : s.powderM.values()) EXPECT_EQ(p, 0.4f);
+}
+
+// A 6 m column of powder on flat ground spreads until no slope between neighbours exceeds the
+// rest slope s_d0 = 0.5 (with a tolerance of 2 %: the spreading slows as slopes near rest).
+TEST(PowderDiffusion, PileSettlesToTheRestSlopeAndConservesMass) {
+  SnowState s = plane(31, 31, 2.0, 0.f, 1000.f, -5.f);
+  s.powderM(15, 15) = 6.f;
+  std::vector<float> delta;
+  SnowFieldsView v = viewOf(s, delta);
+  SerialExec exec;
+  PowderDiffusionArgs a;
+  const double before = totalDepth(s);
+  for (int i = 0; i < 4000; ++i) runPowderDiffusion(exec, v, a);
+  EXPECT_NEAR(totalDepth(s), before, 1e-5 * before);
+  float maxSlope = 0.f;
+  for (int y = 0; y < 31; ++y)
+    for (int x = 0; x + 1 < 31; ++x) {
+      maxSlope = std::max(maxSlope, std::abs(s.powderM(x + 1, y) - s.powderM(x, y)) / 2.f);
+      maxSlope = std::max(maxSlope, std::abs(s.powderM(y, x + 1) - s.powderM(y, x)) / 2.f);
+    }
+  EXPECT_LE(maxSlope, 0.5f * 1.02f);
+  EXPECT_LT(s.powderM(15, 15), 6.f);
+}
+
+// Transport on the rough fixture (cliffs, spike, plateau, NODATA hole): mass conserved to float
+// rounding, nothing negative or NaN, NODATA cells never receive snow.
+TEST(PowderDiffusion, RoughTerrainMassExactAndNonNegative) {
+  SnowState s = test::makeRoughState(64, 48, 11);
+  std::vector<float> delta;
+  SnowFieldsView v = viewOf(s, delta);
+  SerialExec exec;
+  PowderDiffusionArgs a;
+  a.dtDays = 5.f;  // long events: the kernel substeps
+  const double before = exec.sum(s.powderM.data(), s.validCell.data(), 64, 48);
+  for (int i = 0; i < 50; ++i) runPowderDiffusion(exec, v, a);
+  const double after = exec.sum(s.powderM.data(), s.validCell.data(), 64, 48);
+  // float rounding: about one ulp of a cell's powder per transfer
+  EXPECT_NEAR(after, before, 1e-5 * before);
+  for (size_t i = 0; i < s.powderM.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(s.powderM.values()[i]));
+    ASSERT_GE(s.powderM.values()[i], 0.f);
+    if (!s.validCell.values()[i]) {
+      ASSERT_EQ(s.powderM.values()[i], 0.f);
+    }
+  }
+}
+
+TEST(PowderDiffusion, SubstepsGrowWithEventLengthAndShrinkingCells) {
+  EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 10.f, 10.f), 1);
+  EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 10.f, 2.f), 5);
+  EXPECT_EQ(powderDiffusionSubsteps(1e9f, 1e9f, 10.f, 0.01f), 256);
+}
