@@ -31,6 +31,8 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(valid_, s.validCell.values());
     exec_.upload(delta_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
+    exec_.upload(scratchSurface_, std::vector<float>(s.spec.cellCount(), 0.f));
+    exec_.upload(scratchPowder_, std::vector<float>(s.spec.cellCount(), 0.f));
     uploadStaticFields(s);
   }
 
@@ -95,6 +97,8 @@ class ExecBackend final : public SnowBackend {
     v.windEffectZ = windEffectZ_.data();
     v.delta = delta_.data();
     v.surfaceSlope = surfaceSlope_.data();
+    v.scratchSurface = scratchSurface_.data();
+    v.scratchPowder = scratchPowder_.data();
     return v;
   }
 
@@ -102,7 +106,7 @@ class ExecBackend final : public SnowBackend {
   GridSpec spec_;
   typename Exec::template Buffer<float> bedrock_, compacted_, stable_, unstable_, powder_;
   typename Exec::template Buffer<uint8_t> moving_, valid_;
-  typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_;
+  typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
 };
 
 }  // namespace snow

@@ -91,6 +91,9 @@ struct SnowFieldsView {
   // Per-cell scratch: |grad A| of the snow surface, taken before a per-cell pass that changes A,
   // so the pass never reads a neighbour that another thread is writing.
   float* surfaceSlope = nullptr;
+  // Per-cell scratch for transport snapshots (powder diffusion: A and P at the substep's start).
+  float* scratchSurface = nullptr;
+  float* scratchPowder = nullptr;
 
   SNOW_HD SNOW_INLINE bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
   SNOW_HD SNOW_INLINE int index(int x, int y) const { return y * width + x; }

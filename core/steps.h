@@ -36,6 +36,7 @@ void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusi
   PowderDiffusionArgs sub = a;
   sub.dtDays = a.dtDays / static_cast<float>(substeps);
   for (int s = 0; s < substeps; ++s) {
+    exec.forEachCell(v.width, v.height, PowderSnapshotKernel{v});
     for (int colour = 0; colour < 5; ++colour) {
       sub.colour = colour;
       exec.forEachCellOfColour(v.width, v.height, colour, PowderDiffusionKernel{v, sub});

@@ -27,8 +27,8 @@ SnowState plane(int w, int h, double cell, float slopeX, float base, float tempe
 }
 
 SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
-  // One buffer holds both scratch fields: delta, then the slope snapshot.
-  delta.assign(2 * s.spec.cellCount(), 0.f);
+  // One buffer holds the four scratch fields: delta, slope, surface and powder snapshots.
+  delta.assign(4 * s.spec.cellCount(), 0.f);
   SnowFieldsView v;
   v.width = s.spec.width;
   v.height = s.spec.height;
@@ -48,6 +48,8 @@ SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   v.windEffectZ = s.windEffectZM.data();
   v.delta = delta.data();
   v.surfaceSlope = delta.data() + s.spec.cellCount();
+  v.scratchSurface = delta.data() + 2 * s.spec.cellCount();
+  v.scratchPowder = delta.data() + 3 * s.spec.cellCount();
   return v;
 }
 
@@ -205,4 +207,47 @@ TEST(PowderDiffusion, SubstepsGrowWithEventLengthAndShrinkingCells) {
   EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 10.f, 10.f), 1);
   EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 10.f, 2.f), 5);
   EXPECT_EQ(powderDiffusionSubsteps(1e9f, 1e9f, 10.f, 0.01f), 256);
+}
+
+namespace {
+// Powder that leaves a thin layer on one cell of a plane of gradient (gx, gy) in one event.
+float powderLeaving(float gx, float gy) {
+  SnowState s = plane(9, 9, 10.0, 0.f, 2000.f, -5.f);
+  for (int y = 0; y < 9; ++y)
+    for (int x = 0; x < 9; ++x) s.bedrockM(x, y) = 2000.f - gx * 10.f * x - gy * 10.f * y;
+  s.powderM(4, 4) = 1e-3f;
+  std::vector<float> delta;
+  SerialExec exec;
+  PowderDiffusionArgs a;  // dt 0.5 day, k_m 0.5 /day, s_d0 0.5, 10 m reference: one substep
+  runPowderDiffusion(exec, viewOf(s, delta), a);
+  return 1e-3f - s.powderM(4, 4);
+}
+}  // namespace
+
+// On a slope along an axis the share that leaves is the paper's m_d = dt k_m (s - s_d0):
+// 0.5 * 0.5 * (0.7 - 0.5) = 0.05 of the powder.
+TEST(PowderDiffusion, AxisSlopeMovesThePapersShare) {
+  EXPECT_NEAR(powderLeaving(0.7f, 0.f), 0.05f * 1e-3f, 0.002f * 0.05f * 1e-3f);
+}
+
+// The same slope along a diagonal moves the same share (the literal per-direction threshold
+// would move nothing: each axis component is 0.49 < 0.5).
+TEST(PowderDiffusion, DiagonalSlopeMovesLikeAnAxisSlope) {
+  const float axis = powderLeaving(0.7f, 0.f);
+  const float diagonal = powderLeaving(0.7f / std::sqrt(2.f), 0.7f / std::sqrt(2.f));
+  EXPECT_NEAR(diagonal, axis, 0.002f * axis);
+  EXPECT_EQ(powderLeaving(0.45f, 0.f), 0.f);  // below the rest slope nothing moves
+}
+
+// A lone heap spreads even though central differences at its top read zero.
+TEST(PowderDiffusion, LonePeakSpreads) {
+  SnowState s = plane(5, 5, 1.0, 0.f, 1000.f, -5.f);
+  s.powderM(2, 2) = 3.f;
+  std::vector<float> delta;
+  SerialExec exec;
+  runPowderDiffusion(exec, viewOf(s, delta), PowderDiffusionArgs{});
+  EXPECT_LT(s.powderM(2, 2), 3.f);
+  EXPECT_GT(s.powderM(1, 2), 0.f);
+  EXPECT_FLOAT_EQ(s.powderM(1, 2), s.powderM(3, 2));  // symmetric
+  EXPECT_FLOAT_EQ(s.powderM(2, 1), s.powderM(2, 3));
 }

@@ -2,13 +2,16 @@
 //   snowbake bake SCENE [--terrain FILE] [--out DIR] [--seed N] [--threads N] [--backend cpu|cuda|auto] [--set KEY=VALUE]...
 //   snowbake demo [--out DIR]
 //   snowbake info FILE [--json]
+//   snowbake bench [--sizes 256,512,...] [--days D] [--backend cpu|cuda|auto] [--threads N] [--csv FILE]
 // Exit status: 0 success, 2 usage or input error (one line naming the file and the problem),
 // 1 any other failure.
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <sstream>
 
 #include "core/errors.h"
+#include "tools/bench.h"
 #include "tools/pipeline.h"
 
 int main(int argc, char** argv) {
@@ -44,6 +47,16 @@ int main(int argc, char** argv) {
   infoCmd->add_option("FILE", infoFile, "Terrain file (any GDAL raster), or builtin:ridged")->required();
   infoCmd->add_flag("--json", infoJson, "Print JSON");
 
+  BenchOptions benchOptions;
+  std::string benchSizes;
+  CLI::App* benchCmd = app.add_subcommand("bench", "Time the season stage on the reference scenario for several grid sizes.");
+  benchCmd->add_option("--sizes", benchSizes, "Comma-separated grid sizes (default 256,512,1024,2048)");
+  benchCmd->add_option("--days", benchOptions.days, "Season length in days")->capture_default_str();
+  benchCmd->add_option("--backend", benchOptions.backend, "cpu, cuda or auto")->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+      ->capture_default_str();
+  benchCmd->add_option("--threads", benchOptions.threads, "CPU threads, 0 = all cores");
+  benchCmd->add_option("--csv", benchOptions.csvPath, "CSV output (empty: none)")->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -71,6 +84,19 @@ int main(int argc, char** argv) {
       demo.outDir = demoOut;
       runBake(demo, std::cerr);
       std::cerr << "demo: outputs and manifest.json are in " << demoOut << "\n";
+    } else if (*benchCmd) {
+      if (!benchSizes.empty()) {
+        benchOptions.sizes.clear();
+        std::stringstream list(benchSizes);
+        for (std::string item; std::getline(list, item, ',');) {
+          try {
+            benchOptions.sizes.push_back(std::stoi(item));
+          } catch (const std::exception&) {
+            throw InputError("--sizes: '" + item + "' is not a whole number");
+          }
+        }
+      }
+      std::cout << runBench(benchOptions, std::cerr);
     } else if (*infoCmd) {
       std::cout << describeTerrain(infoFile, infoJson);
     }

@@ -3,16 +3,26 @@
 // (itself and its four neighbours), and crosses of one colour never overlap, so no two threads
 // write the same cell and no atomics are needed.
 //
-// For each 4-neighbour n of p, the slope s_d = (A(p) - A(n)) / |p - n| and the share of p's
-// powder shifted toward n is m_d = dt * k_m * (L_ref / |p - n|) * max(0, s_d - s_d0).
-// The paper sets k_m per event at 10 m cells; the factor L_ref / |p - n| (L_ref = 10 m by
-// default) turns it into a creep speed so that a 2 m and a 10 m run move the same distance of
-// snow per day. Each cell pushes only outward (downhill): the uphill neighbour's own pass
-// pushes toward it, which is the paper's incoming term. Two limits keep it stable:
-//  - no shift brings n's surface above the rest slope from p (half the excess height), so
-//    snow never overshoots and oscillates;
-//  - the outflows are scaled so their sum never exceeds P (the paper's rescaling: no cell
-//    goes negative).
+// Each substep first snapshots the surface A and the powder P (PowderSnapshotKernel). Every
+// cell's outflows are computed from the snapshot alone, so the result does not depend on the
+// order of the colour passes: without it, snow moved right in pass c could move right again in
+// pass c + 1 of the same substep, a directional bias that draws streaks.
+//
+// The paper shifts toward each 4-neighbour n the share m_d = dt * k_m * max(0, s_d - s_d0),
+// s_d = (A(p) - A(n)) / |p - n|. Read literally, that threshold is anisotropic: a slope of 0.7
+// along a diagonal has axis components of 0.49 and never moves at s_d0 = 0.5, while the same
+// slope along an axis does, and powder runs in axis-aligned streaks. We threshold the slope's
+// magnitude instead: with S = |(max(s_+x, s_-x), max(s_+y, s_-y))| (downhill components only),
+// the share leaving p is dt * k_m * (L_ref / dx_min) * max(0, S - s_d0), split among the downhill
+// neighbours in proportion to s_d. On a slope along an axis this is exactly the paper's m_d.
+// The paper sets k_m per event at 10 m cells; the factor L_ref / dx (L_ref = 10 m by default)
+// turns it into a creep speed so that a 2 m and a 10 m run move the same distance of snow per
+// day. Each cell pushes only outward (downhill): the uphill neighbour's own pass pushes toward
+// it, which is the paper's incoming term. Two limits keep it stable:
+//  - no single shift exceeds a fifth of the height difference, so even a cell shedding to all
+//    four neighbours cannot end below them: no overshoot, no oscillation;
+//  - the outflows are scaled so their sum never exceeds the snapshot P (the paper's rescaling:
+//    no cell goes negative; a cell only gains snow before its own pass).
 // Snow never enters NODATA cells or leaves the grid, so the step conserves mass exactly up to
 // float rounding.
 #pragma once
@@ -29,6 +39,16 @@ struct PowderDiffusionArgs {
   int colour = 0;                // which of the five colour passes
 };
 
+// Copies A and P before the colour passes of a substep (per cell, no neighbour reads).
+struct PowderSnapshotKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    v.scratchSurface[i] = v.surface(i);
+    v.scratchPowder[i] = v.powder[i];
+  }
+};
+
 struct PowderDiffusionKernel {
   SnowFieldsView v;
   PowderDiffusionArgs a;
@@ -36,23 +56,34 @@ struct PowderDiffusionKernel {
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
     if (!v.valid[i]) return;
-    const float powder = v.powder[i];
+    const float powder = v.scratchPowder[i];
     if (!(powder > 0.f)) return;
-    const float ap = v.surface(i);
+    const float ap = v.scratchSurface[i];
     const int dxs[4] = {1, -1, 0, 0};
     const int dys[4] = {0, 0, 1, -1};
-    float out[4] = {0.f, 0.f, 0.f, 0.f};
-    float total = 0.f;
+    float drop[4] = {0.f, 0.f, 0.f, 0.f};   // height above each downhill neighbour
+    float slope[4] = {0.f, 0.f, 0.f, 0.f};  // s_d where positive (downhill)
     for (int d = 0; d < 4; ++d) {
       const int nx = x + dxs[d], ny = y + dys[d];
       if (!v.isValid(nx, ny)) continue;
       const float dist = dxs[d] != 0 ? v.cellSizeXM : v.cellSizeYM;
-      const int n = v.index(nx, ny);
-      const float drop = ap - v.surface(n);
-      const float excess = drop - a.restSlope * dist;  // height above the rest slope
-      if (!(excess > 0.f)) continue;
-      const float share = a.dtDays * a.diffusionRatePerDay * (a.referenceCellSizeM / dist) * (excess / dist);
-      out[d] = minf(share * powder, 0.5f * excess);
+      drop[d] = maxf(0.f, ap - v.scratchSurface[v.index(nx, ny)]);
+      slope[d] = drop[d] / dist;
+    }
+    // Steepest descent, one component per axis: an isotropic measure of the slope that also
+    // sees a lone peak (where central differences would read zero).
+    const float sx = maxf(slope[0], slope[1]), sy = maxf(slope[2], slope[3]);
+    const float steepest = sqrtf(sx * sx + sy * sy);
+    const float excess = steepest - a.restSlope;
+    const float weightSum = slope[0] + slope[1] + slope[2] + slope[3];
+    if (!(excess > 0.f) || !(weightSum > 0.f)) return;
+    const float minCell = minf(v.cellSizeXM, v.cellSizeYM);
+    const float shareTotal = a.dtDays * a.diffusionRatePerDay * (a.referenceCellSizeM / minCell) * excess;
+    float out[4] = {0.f, 0.f, 0.f, 0.f};
+    float total = 0.f;
+    for (int d = 0; d < 4; ++d) {
+      if (!(slope[d] > 0.f)) continue;
+      out[d] = minf(shareTotal * powder * (slope[d] / weightSum), 0.2f * drop[d]);
       total += out[d];
     }
     if (!(total > 0.f)) return;
@@ -65,7 +96,7 @@ struct PowderDiffusionKernel {
       v.powder[n] = v.powder[n] + amount;
       moved += amount;
     }
-    v.powder[i] = maxf(0.f, powder - moved);
+    v.powder[i] = maxf(0.f, v.powder[i] - moved);
   }
 };
 

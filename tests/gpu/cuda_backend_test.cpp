@@ -12,8 +12,10 @@
 #include <chrono>
 #include <cstdio>
 
+#include "core/reference_scenario.h"
 #include "core/exec_backend.h"
 #include "core/kernel_registry.h"
+#include "core/season.h"
 #include "core/serial_exec.h"
 #include "cuda/cuda_backend.h"
 #include "tests/test_support.h"
@@ -110,5 +112,46 @@ TEST(CudaBackend, StepTimesOn1024Squared) {
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / repeats;
     std::printf("[ timing ] %-18s %8.3f ms per step (1024 x 1024, including its fixed-order reduction)\n", step.name.c_str(), ms);
     EXPECT_GT(ms, 0.0);
+  }
+}
+
+
+// The whole season (scheduler, snowfall, melt, diffusion) on CUDA equals the serial CPU run.
+TEST(CudaBackend, WholeSeasonMatchesTheCpuBitForBit) {
+  SKIP_WITHOUT_CUDA();
+  SnowState a = referenceRangeState(256, 5120.0), b;
+  const SeasonConfig c = referenceWinter(90);
+  computeTemperatureBase(a, c.params);
+  b = a;
+  ExecBackend<SerialExec> cpu;
+  auto gpu = cuda::createCudaBackend();
+  const SeasonReport ra = runSeason(cpu, a, c), rb = runSeason(*gpu, b, c);
+  EXPECT_EQ(ra.events, rb.events);
+  EXPECT_EQ(ra.snowfallAddedM3, rb.snowfallAddedM3);
+  EXPECT_EQ(ra.meltRemovedM3, rb.meltRemovedM3);
+  EXPECT_GT(ra.meltRemovedM3, 0.0);
+  expectSameBytes(a, b);
+  EXPECT_LT(rb.massBalanceRelativeError(), 1e-6);
+}
+
+// Prints the time of the reference 120-day season (core/reference_scenario.h, the same work as
+// `snowbake bench` on the CPU) on 1024^2 and 4096^2 cells. Phenomena so far: snowfall, melt and
+// powder diffusion; wind transport, avalanches and skiers arrive with later issues.
+TEST(CudaBackend, SeasonTimes) {
+  SKIP_WITHOUT_CUDA();
+  for (int size : {1024, 4096}) {
+    SnowState s = referenceRangeState(size);
+    const SeasonConfig c = referenceWinter(120);
+    computeTemperatureBase(s, c.params);
+    auto gpu = cuda::createCudaBackend();
+    const auto t0 = std::chrono::steady_clock::now();
+    const SeasonReport r = runSeason(*gpu, s, c);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("[ timing ] season 120 days, %d x %d: %.3f s total (%llu events; upload+download included)\n", size, size, seconds,
+                static_cast<unsigned long long>(r.events));
+    for (const auto& p : r.phenomena)
+      std::printf("[ timing ]   %-18s %6llu steps (%llu skipped) %8.3f s\n", p.name.c_str(),
+                  static_cast<unsigned long long>(p.steps), static_cast<unsigned long long>(p.skippedSteps), p.seconds);
+    EXPECT_LT(r.massBalanceRelativeError(), 1e-6);
   }
 }

@@ -1,0 +1,22 @@
+// `snowbake bench`: times the season stage on the reference scenario (core/reference_scenario.h)
+// for a list of grid sizes and prints a Markdown table (and writes CSV). The accuracy-against-
+// time tables of the other stages join it as those stages land (the benchmark-suite issue).
+#pragma once
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace snow {
+
+struct BenchOptions {
+  std::vector<int> sizes{256, 512, 1024, 2048};
+  double days = 120.0;
+  std::string backend = "cpu";  // cpu | cuda | auto
+  int threads = 0;              // 0 = all cores
+  std::string csvPath = "snowbake-bench/season.csv";
+};
+
+// Returns the table as printed.
+std::string runBench(const BenchOptions& options, std::ostream& log);
+
+}  // namespace snow

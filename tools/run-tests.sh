@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# README command 2: install what is missing, build, and run the whole test suite with ctest.
+# GPU tests skip with a message where no CUDA device works; tests on ../shared/data skip when
+# that folder is absent.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash tools/build.sh
+cd build
+ctest --output-on-failure -j"$(nproc)" --timeout 900

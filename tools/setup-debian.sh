@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs what snowbake needs on Debian 12, if it is missing. Idempotent: does nothing (and
+# needs no network) when every package is already there. Runs apt-get as root, or through sudo.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libembree-dev libopenvdb-dev libnanovdb-dev libboost-iostreams-dev libassimp-dev
+  libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
+  libtomlplusplus-dev libgdal-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: all ${#packages[@]} Debian packages present"
+  exit 0
+fi
+
+if [ "$(id -u)" -eq 0 ]; then as_root=(); elif command -v sudo >/dev/null; then as_root=(sudo); else
+  echo "setup: missing packages (${missing[*]}) and not root: run this script as root" >&2
+  exit 1
+fi
+echo "setup: installing ${missing[*]}"
+"${as_root[@]}" apt-get update -qq
+DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
