@@ -10,15 +10,9 @@
 #include "core/default_terrain.h"
 #include "core/parameters.h"
 #include "core/weather.h"
+#include "terrain_source.h"
 
 namespace snow {
-
-struct TerrainSource {
-  std::string file;          // path (resolved against the scene file's folder); empty for builtin
-  bool builtin = false;      // the embedded ridged-noise range
-  DefaultTerrainOptions builtinOptions;
-  std::string declaredAt;    // "scene.toml:4" for error messages
-};
 
 struct OutputRequest {
   std::vector<std::string> layers{"compacted", "stable", "unstable", "powder", "depth"};
@@ -31,6 +25,7 @@ struct Scene {
   std::string baseDir;      // folder relative terrain paths are resolved against
   std::string name = "snowbake scene";
   TerrainSource terrain;
+  std::vector<OccluderSource> occluders;
   std::optional<double> latitudeDeg;  // site latitude; defaults to the DEM's when it has one
   std::optional<double> longitudeDeg;
   int startYear = 2025, startMonth = 11, startDay = 1;

@@ -45,7 +45,8 @@ struct Rule {
   std::vector<std::string> choices = {};
 };
 
-const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface"};
+const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface",
+                                                "valid_mask"};
 
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {
@@ -53,6 +54,23 @@ const std::vector<Rule>& sceneRules() {
       {"terrain", Kind::Table},
       {"terrain.file", Kind::String},
       {"terrain.builtin", Kind::String, -kInf, kInf, {"ridged"}},
+      {"terrain.format", Kind::String, -kInf, kInf, {"auto", "dem", "heightmap", "raw", "mesh"}},
+      {"terrain.coordinates", Kind::String, -kInf, kInf, {"auto", "geographic", "metres"}},
+      {"terrain.fill_nodata", Kind::Bool},
+      {"terrain.height_range_m", Kind::NumberArray, -12000, 12000},
+      {"terrain.height_scale_m", Kind::Number, -1e6, 1e6},
+      {"terrain.height_offset_m", Kind::Number, -1e6, 1e6},
+      {"terrain.raw_width", Kind::Integer, 1, 1 << 20},
+      {"terrain.raw_height", Kind::Integer, 1, 1 << 20},
+      {"terrain.byte_order", Kind::String, -kInf, kInf, {"little", "big"}},
+      {"terrain.up_axis", Kind::String, -kInf, kInf, {"z", "y"}},
+      {"terrain.resample_cell_size_m", Kind::Number, 0.01, 100000},
+      {"terrain.resample_size", Kind::NumberArray, 3, 1 << 20},
+      {"occluders", Kind::TableArray},
+      {"occluders.file", Kind::String},
+      {"occluders.up_axis", Kind::String, -kInf, kInf, {"z", "y"}},
+      {"occluders.offset_m", Kind::NumberArray, -1e7, 1e7},
+      {"occluders.scale", Kind::Number, 1e-6, 1e6},
       {"terrain.size", Kind::Integer, 8, 16384},
       {"terrain.cell_size_m", Kind::Number, 0.01, 10000},
       {"terrain.seed", Kind::Integer, 0, 4294967295.0},
@@ -295,31 +313,91 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   const bool hasFile = terrain->contains("file"), hasBuiltin = terrain->contains("builtin");
   if (hasFile == hasBuiltin)
     throw InputError(where(source, terrain->source()) + ": terrain: give exactly one of terrain.file and terrain.builtin");
+  auto& src = scene.terrain;
+  auto arrayOf = [&](const char* key, size_t n) -> std::vector<double> {
+    const toml::node* node = terrain->get(key);
+    std::vector<double> values;
+    for (auto&& e : *node->as_array()) values.push_back(e.value<double>().value());
+    if (values.size() != n)
+      fail(source, *node, std::string("terrain.") + key, "needs " + std::to_string(n) + " numbers, has " + std::to_string(values.size()));
+    return values;
+  };
+  if (auto f = (*terrain)["format"].value<std::string>()) src.format = *f;
+  if (auto c = (*terrain)["coordinates"].value<std::string>()) src.coordinates = *c;
+  if (auto b = (*terrain)["fill_nodata"].value<bool>()) src.fillNodata = *b;
+  if (auto c = (*terrain)["cell_size_m"].value<double>()) src.cellSizeM = *c;
+  if (terrain->contains("height_range_m")) {
+    const auto r = arrayOf("height_range_m", 2);
+    if (!(r[1] > r[0])) fail(source, *terrain->get("height_range_m"), "terrain.height_range_m", "needs [lowest, highest] with highest > lowest");
+    src.heightRangeM = std::array<double, 2>{r[0], r[1]};
+  }
+  if (auto v = (*terrain)["height_scale_m"].value<double>()) src.heightScaleM = *v;
+  if (auto v = (*terrain)["height_offset_m"].value<double>()) src.heightOffsetM = *v;
+  if (src.heightRangeM && (src.heightScaleM || src.heightOffsetM))
+    fail(source, *terrain->get("height_range_m"), "terrain.height_range_m", "give either height_range_m or height_scale_m/height_offset_m, not both");
+  if (auto v = (*terrain)["raw_width"].value<int64_t>()) src.rawWidth = static_cast<int>(*v);
+  if (auto v = (*terrain)["raw_height"].value<int64_t>()) src.rawHeight = static_cast<int>(*v);
+  if (auto v = (*terrain)["byte_order"].value<std::string>()) src.byteOrder = *v;
+  if (auto v = (*terrain)["up_axis"].value<std::string>()) src.upAxis = *v;
+  if (auto v = (*terrain)["resample_cell_size_m"].value<double>()) src.resampleCellSizeM = *v;
+  if (terrain->contains("resample_size")) {
+    const auto r = arrayOf("resample_size", 2);
+    for (double v : r)
+      if (v != std::floor(v)) fail(source, *terrain->get("resample_size"), "terrain.resample_size", "needs whole numbers [width, height]");
+    src.resampleSize = std::array<int, 2>{static_cast<int>(r[0]), static_cast<int>(r[1])};
+  }
+  if (src.resampleCellSizeM && src.resampleSize)
+    fail(source, *terrain->get("resample_size"), "terrain.resample_size", "give either resample_size or resample_cell_size_m, not both");
+
   if (hasFile) {
     const toml::node& fileNode = *terrain->get("file");
     fs::path p = fileNode.as_string()->get();
     if (p.is_relative() && !baseDir.empty()) p = fs::path(baseDir) / p;
-    scene.terrain.file = p.lexically_normal().string();
-    scene.terrain.declaredAt = where(source, fileNode.source());
-    for (const char* builtinOnly : {"size", "cell_size_m", "seed", "min_altitude_m", "max_altitude_m"})
+    src.file = p.lexically_normal().string();
+    src.declaredAt = where(source, fileNode.source());
+    for (const char* builtinOnly : {"size", "seed", "min_altitude_m", "max_altitude_m"})
       if (terrain->contains(builtinOnly))
         fail(source, *terrain->get(builtinOnly), std::string("terrain.") + builtinOnly, "only applies to terrain.builtin");
     std::error_code ec;
-    if (!fs::exists(scene.terrain.file, ec))
-      fail(source, fileNode, "terrain.file", "terrain file '" + scene.terrain.file + "' does not exist");
-    if (fs::is_directory(scene.terrain.file, ec))
-      fail(source, fileNode, "terrain.file", "'" + scene.terrain.file + "' is a folder, not a terrain file");
+    if (!fs::exists(src.file, ec))
+      fail(source, fileNode, "terrain.file", "terrain file '" + src.file + "' does not exist");
+    if (fs::is_directory(src.file, ec))
+      fail(source, fileNode, "terrain.file", "'" + src.file + "' is a folder, not a terrain file");
   } else {
-    scene.terrain.builtin = true;
-    auto& o = scene.terrain.builtinOptions;
+    src.builtin = true;
+    auto& o = src.builtinOptions;
     o.size = static_cast<int>((*terrain)["size"].value<int64_t>().value_or(o.size));
-    o.cellSizeM = (*terrain)["cell_size_m"].value<double>().value_or(o.cellSizeM);
+    o.cellSizeM = src.cellSizeM.value_or(o.cellSizeM);
     o.seed = static_cast<uint64_t>((*terrain)["seed"].value<int64_t>().value_or(static_cast<int64_t>(o.seed)));
     o.minAltitudeM = (*terrain)["min_altitude_m"].value<double>().value_or(o.minAltitudeM);
     o.maxAltitudeM = (*terrain)["max_altitude_m"].value<double>().value_or(o.maxAltitudeM);
     if (!(o.maxAltitudeM > o.minAltitudeM))
       throw InputError(where(source, terrain->source()) + ": terrain.max_altitude_m: must be above terrain.min_altitude_m");
-    scene.terrain.declaredAt = where(source, terrain->get("builtin")->source());
+    src.declaredAt = where(source, terrain->get("builtin")->source());
+  }
+
+  if (const toml::array* occluders = root["occluders"].as_array()) {
+    for (auto&& element : *occluders) {
+      const toml::table& o = *element.as_table();
+      if (!o.contains("file")) throw InputError(where(source, o.source()) + ": occluders.file: missing");
+      OccluderSource occ;
+      const toml::node& fileNode = *o.get("file");
+      fs::path p = fileNode.as_string()->get();
+      if (p.is_relative() && !baseDir.empty()) p = fs::path(baseDir) / p;
+      occ.file = p.lexically_normal().string();
+      occ.declaredAt = where(source, fileNode.source());
+      std::error_code ec;
+      if (!fs::exists(occ.file, ec)) fail(source, fileNode, "occluders.file", "occluder file '" + occ.file + "' does not exist");
+      if (auto v = o["up_axis"].value<std::string>()) occ.upAxis = *v;
+      if (auto v = o["scale"].value<double>()) occ.scale = *v;
+      if (const toml::node* off = o.get("offset_m")) {
+        std::vector<double> values;
+        for (auto&& e : *off->as_array()) values.push_back(e.value<double>().value());
+        if (values.size() != 3) fail(source, *off, "occluders.offset_m", "needs 3 numbers [x, y, z]");
+        occ.offsetM = {values[0], values[1], values[2]};
+      }
+      scene.occluders.push_back(occ);
+    }
   }
 
   if (auto v = root["site"]["latitude_deg"].value<double>()) scene.latitudeDeg = *v;

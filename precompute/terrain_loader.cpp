@@ -2,12 +2,14 @@
 
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <mutex>
+#include <iomanip>
 #include <sstream>
 
 #include "core/errors.h"
@@ -17,7 +19,9 @@ namespace snow {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kMinCellsPerSide = 3;
-constexpr double kMaxCells = 1.0e9;  // 4 GB per float field: more would not fit a bake in memory
+// What a bake holds per cell: about 14 float fields and 2 byte fields, plus the frames and
+// writers' copies. A grid needing more than 80% of physical memory is refused up front.
+constexpr double kBytesPerCell = 96.0;
 
 void registerGdal() {
   static std::once_flag once;
@@ -46,7 +50,44 @@ double metresPerDegreeLongitude(double lat) {
   return 111412.84 * std::cos(p) - 93.5 * std::cos(3 * p) + 0.118 * std::cos(5 * p);
 }
 
-Terrain loadTerrainFile(const std::string& path) {
+void checkGridSize(const std::string& what, int64_t w, int64_t h) {
+  if (w < kMinCellsPerSide || h < kMinCellsPerSide)
+    throw InputError(what + ": grid " + std::to_string(w) + " x " + std::to_string(h) + " is too small to simulate (need at least " +
+                     std::to_string(kMinCellsPerSide) + " x " + std::to_string(kMinCellsPerSide) + ")");
+  const double pages = static_cast<double>(::sysconf(_SC_PHYS_PAGES)), pageSize = static_cast<double>(::sysconf(_SC_PAGESIZE));
+  const double available = pages > 0 && pageSize > 0 ? 0.8 * pages * pageSize : 16.0 * (1ull << 30);
+  const double needed = static_cast<double>(w) * static_cast<double>(h) * kBytesPerCell;
+  if (needed > available || w > (1 << 24) || h > (1 << 24)) {
+    std::ostringstream o;
+    o << what << ": grid " << w << " x " << h << " needs about " << std::fixed << std::setprecision(1) << needed / (1ull << 30)
+      << " GiB to bake; this machine has " << available / 0.8 / (1ull << 30)
+      << " GiB: resample it (terrain.resample_cell_size_m) or crop it";
+    throw InputError(o.str());
+  }
+}
+
+void updateTerrainStatistics(Terrain& t) {
+  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  size_t nodata = 0;
+  for (size_t i = 0; i < t.heightsM.size(); ++i) {
+    if (!t.valid.values()[i]) {
+      ++nodata;
+      continue;
+    }
+    lo = std::min(lo, t.heightsM.values()[i]);
+    hi = std::max(hi, t.heightsM.values()[i]);
+  }
+  if (nodata == t.heightsM.size()) throw InputError(t.info.source + ": every cell is NODATA");
+  for (size_t i = 0; i < t.heightsM.size(); ++i)
+    if (!t.valid.values()[i]) t.heightsM.values()[i] = lo;
+  t.info.nodataCells = nodata;
+  t.info.minElevationM = lo;
+  t.info.maxElevationM = hi;
+  t.info.spec.width = t.heightsM.width();
+  t.info.spec.height = t.heightsM.height();
+}
+
+Terrain loadDem(const std::string& path, const std::string& coordinates) {
   registerGdal();
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": terrain file does not exist");
@@ -56,15 +97,14 @@ Terrain loadTerrainFile(const std::string& path) {
   if (!ds) throw InputError(path + ": cannot read as a terrain: " + lastGdalError());
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
   const int w = ds->GetRasterXSize(), h = ds->GetRasterYSize();
-  if (w < kMinCellsPerSide || h < kMinCellsPerSide)
-    throw InputError(path + ": grid " + std::to_string(w) + " x " + std::to_string(h) + " is too small to simulate (need at least " +
-                     std::to_string(kMinCellsPerSide) + " x " + std::to_string(kMinCellsPerSide) + ")");
-  if (static_cast<double>(w) * h > kMaxCells)
-    throw InputError(path + ": grid " + std::to_string(w) + " x " + std::to_string(h) + " has more than 1e9 cells; resample it first");
+  checkGridSize(path, w, h);
 
   Terrain t;
   TerrainInfo& info = t.info;
   info.source = path;
+  info.format = "dem";
+  info.nativeWidth = w;
+  info.nativeHeight = h;
   info.driver = ds->GetDriver() ? ds->GetDriver()->GetDescription() : "?";
 
   double gt[6] = {0, 1, 0, 0, 0, -1};
@@ -83,7 +123,12 @@ Terrain loadTerrainFile(const std::string& path) {
 
   const OGRSpatialReference* srs = ds->GetSpatialRef();
   bool geographic = false;
-  if (srs && !srs->IsEmpty()) {
+  const bool hasSrs = srs && !srs->IsEmpty();
+  if (hasSrs && coordinates != "auto")
+    throw InputError(path + ": terrain.coordinates = \"" + coordinates +
+                     "\" only applies to files without a coordinate system; this one has " +
+                     (srs->GetName() ? srs->GetName() : "one"));
+  if (hasSrs) {
     if (srs->IsGeographic()) {
       geographic = true;
       info.coordinateSystem = std::string("geographic (") + (srs->GetName() ? srs->GetName() : "degrees") + ")";
@@ -112,12 +157,22 @@ Terrain loadTerrainFile(const std::string& path) {
     const double east = west + sizeX * w, south = north - sizeY * h;
     const bool looksLikeDegrees = sizeX < 0.1 && sizeY < 0.1 && west >= -180.0 && east <= 180.0 && south >= -90.0 &&
                                   north <= 90.0 && hasTransform;
-    if (looksLikeDegrees) {
+    if (coordinates == "geographic") {
+      geographic = true;
+      info.coordinateSystem = "none in the file; geographic (degrees) as the scene says";
+      info.coordinateDecision = "terrain.coordinates = \"geographic\"";
+    } else if (coordinates == "metres") {
+      info.coordinateSystem = "none in the file; metres as the scene says";
+      info.coordinateDecision = "terrain.coordinates = \"metres\"";
+      info.nativeUnit = "metre";
+      info.spec.cellSizeXM = sizeX;
+      info.spec.cellSizeYM = sizeY;
+    } else if (looksLikeDegrees) {
       geographic = true;
       info.coordinateSystem = "none in the file; treated as geographic (degrees)";
       std::ostringstream o;
       o << "no coordinate system, but a cell size of " << sizeX << " and an extent inside longitude/latitude bounds only make "
-        << "sense as degrees";
+        << "sense as degrees (set terrain.coordinates = \"metres\" if they are metres)";
       info.coordinateDecision = o.str();
     } else {
       info.coordinateSystem = "none in the file; treated as metres";
@@ -143,7 +198,6 @@ Terrain loadTerrainFile(const std::string& path) {
   GDALRasterBand* band = ds->GetRasterBand(1);
   t.heightsM.resize(w, h);
   t.valid.resize(w, h, 1);
-  // Read north-up: when the transform is south-up (gt[5] > 0), flip rows.
   std::vector<float> rows(static_cast<size_t>(w) * h);
   CPLErrorReset();
   if (band->RasterIO(GF_Read, 0, 0, w, h, rows.data(), w, h, GDT_Float32, 0, 0) != CE_None)
@@ -151,40 +205,25 @@ Terrain loadTerrainFile(const std::string& path) {
   int hasNodata = 0;
   const double nodata = band->GetNoDataValue(&hasNodata);
   const float nodataF = static_cast<float>(nodata);
-  float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+  // Vertical unit of projected data (e.g. US feet) when the file declares one.
+  const double verticalToMetre = hasSrs && !srs->IsGeographic() && srs->GetLinearUnits() > 0.0 ? srs->GetLinearUnits() : 1.0;
   for (int y = 0; y < h; ++y) {
-    const int srcY = gt[5] > 0 ? h - 1 - y : y;
+    const int srcY = gt[5] > 0 ? h - 1 - y : y;  // north-up: flip south-up rasters
     for (int x = 0; x < w; ++x) {
       const float v = rows[static_cast<size_t>(srcY) * w + x];
       if (hasNodata && (v == nodataF || (std::isnan(nodata) && std::isnan(v)))) {
         t.valid(x, y) = 0;
-        ++info.nodataCells;
         continue;
       }
       if (!std::isfinite(v)) {
         std::ostringstream o;
-        o << path << ": height at column " << x << ", row " << srcY << " is " << v
-          << " (not finite); mark it NODATA or fix the file";
+        o << path << ": height at column " << x << ", row " << srcY << " is " << v << " (not finite); mark it NODATA or fix the file";
         throw InputError(o.str());
       }
-      t.heightsM(x, y) = v;
-      lo = std::min(lo, v);
-      hi = std::max(hi, v);
+      t.heightsM(x, y) = static_cast<float>(v * verticalToMetre);
     }
   }
-  if (info.nodataCells == t.heightsM.size()) throw InputError(path + ": every cell is NODATA");
-  for (size_t i = 0; i < t.heightsM.size(); ++i)
-    if (!t.valid.values()[i]) t.heightsM.values()[i] = lo;
-  // Vertical unit of projected data (e.g. US feet) when the file declares one.
-  if (srs && !srs->IsGeographic() && !srs->IsEmpty()) {
-    const double toMetre = srs->GetLinearUnits();
-    if (toMetre != 1.0 && toMetre > 0.0)
-      for (auto& v : t.heightsM.values()) v = static_cast<float>(v * toMetre);
-    lo = static_cast<float>(lo * toMetre);
-    hi = static_cast<float>(hi * toMetre);
-  }
-  info.minElevationM = lo;
-  info.maxElevationM = hi;
+  updateTerrainStatistics(t);
   return t;
 }
 
@@ -193,6 +232,8 @@ Terrain makeBuiltinTerrain(const DefaultTerrainOptions& options) {
   t.heightsM = generateDefaultTerrain(options, &t.info.spec);
   t.valid.resize(options.size, options.size, 1);
   t.info.source = "builtin:ridged";
+  t.info.format = "builtin";
+  t.info.nativeWidth = t.info.nativeHeight = options.size;
   t.info.driver = "builtin";
   t.info.coordinateSystem = "local (metres)";
   t.info.coordinateDecision = "generated by snowbake";
@@ -201,6 +242,48 @@ Terrain makeBuiltinTerrain(const DefaultTerrainOptions& options) {
   const auto [lo, hi] = std::minmax_element(t.heightsM.values().begin(), t.heightsM.values().end());
   t.info.minElevationM = *lo;
   t.info.maxElevationM = *hi;
+  return t;
+}
+
+}  // namespace snow
+
+namespace snow {
+
+std::string detectTerrainFormat(const TerrainSource& src) {
+  if (src.builtin) return "builtin";
+  if (src.format != "auto") return src.format;
+  std::string ext = std::filesystem::path(src.file).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".r16" || ext == ".r32" || ext == ".raw") return "raw";
+  if (ext == ".png" || ext == ".exr") return "heightmap";
+  if (ext == ".obj" || ext == ".gltf" || ext == ".glb" || ext == ".fbx" || ext == ".ply" || ext == ".stl" || ext == ".dae")
+    return "mesh";
+  if ((ext == ".tif" || ext == ".tiff") && src.hasHeightmapKeys()) return "heightmap";
+  return "dem";
+}
+
+Terrain loadTerrain(const TerrainSource& src) {
+  const std::string format = detectTerrainFormat(src);
+  Terrain t;
+  if (format == "builtin") {
+    t = makeBuiltinTerrain(src.builtinOptions);
+  } else if (format == "dem") {
+    if (src.cellSizeM)
+      throw InputError(src.file + ": a DEM carries its own cell size: use terrain.resample_cell_size_m to bake at another one");
+    if (src.hasHeightmapKeys())
+      throw InputError(src.file + ": terrain.height_range_m/height_scale_m apply to heightmaps; set terrain.format = \"heightmap\"");
+    t = loadDem(src.file, src.coordinates);
+  } else if (format == "heightmap") {
+    t = loadHeightmapImage(src);
+  } else if (format == "raw") {
+    t = loadRawHeightmap(src);
+  } else if (format == "mesh") {
+    t = loadMeshTerrain(src);
+  } else {
+    throw InputError(src.file + ": unknown terrain.format '" + format + "'");
+  }
+  if (src.fillNodata && t.info.nodataCells > 0) fillNodata(t);
+  if (src.resampleCellSizeM || src.resampleSize) t = resampleTerrain(t, src);
   return t;
 }
 

@@ -33,7 +33,7 @@ std::string writeAsc(const fs::path& dir, const std::string& name, const std::st
 
 std::string inputErrorOf(const std::string& path) {
   try {
-    loadTerrainFile(path);
+    loadDem(path);
   } catch (const InputError& e) {
     return e.what();
   }
@@ -51,7 +51,7 @@ TEST(TerrainLoader, ProjectedAsciiGridKeepsMetresAndNodata) {
       writeAsc(dir, "hill.asc", "xllcorner 1000\nyllcorner 2000\ncellsize 5\nNODATA_value -9999\n", 6, 4, [](int x, int y) {
         return x == 0 && y == 0 ? std::string("-9999") : std::to_string(100 + 10 * x + y);
       });
-  const Terrain t = loadTerrainFile(path);
+  const Terrain t = loadDem(path);
   EXPECT_EQ(t.info.spec.width, 6);
   EXPECT_EQ(t.info.spec.height, 4);
   EXPECT_DOUBLE_EQ(t.info.spec.cellSizeXM, 5.0);
@@ -69,7 +69,7 @@ TEST(TerrainLoader, DegreesWithoutCoordinateSystemBecomeMetresAtTheLatitude) {
   const fs::path dir = tempDir();
   const std::string path = writeAsc(dir, "geo.asc", "xllcorner -105.7\nyllcorner 40.0\ncellsize 0.000833333\nNODATA_value 0\n", 5,
                                     5, [](int x, int y) { return std::to_string(2000 + x + y); });
-  const Terrain t = loadTerrainFile(path);
+  const Terrain t = loadDem(path);
   EXPECT_NEAR(t.info.spec.cellSizeXM, 71.0, 0.5);  // cos(40 deg) shrinks longitude
   EXPECT_NEAR(t.info.spec.cellSizeYM, 92.5, 0.5);
   EXPECT_TRUE(t.info.latitudeKnown);
@@ -103,7 +103,7 @@ TEST(TerrainLoader, BadFilesGiveOneLineErrorsNamingTheFile) {
 TEST(TerrainLoader, RealFrontRangeDemIsGeographic) {
   const std::string path = kSharedDem + "front_range_small_srtm3.asc";
   if (!fs::exists(path)) GTEST_SKIP() << "shared data not found: " << path;
-  const Terrain t = loadTerrainFile(path);
+  const Terrain t = loadDem(path);
   EXPECT_EQ(t.info.spec.width, 240);
   EXPECT_EQ(t.info.spec.height, 144);
   EXPECT_NEAR(t.info.spec.cellSizeXM, 71.0, 1.5);
@@ -115,7 +115,7 @@ TEST(TerrainLoader, RealFrontRangeDemIsGeographic) {
 TEST(TerrainLoader, RealTyrolDemHasFiveMetreCellsAndMaskedOutline) {
   const std::string path = kSharedDem + "tyrol_avaWog_5m.asc";
   if (!fs::exists(path)) GTEST_SKIP() << "shared data not found: " << path;
-  const Terrain t = loadTerrainFile(path);
+  const Terrain t = loadDem(path);
   EXPECT_NEAR(t.info.spec.cellSizeXM, 5.0, 0.01);  // the file says 4.997678
   EXPECT_NEAR(t.info.spec.cellSizeYM, 5.0, 0.01);
   EXPECT_GT(t.info.nodataCells, t.heightsM.size() / 5);  // about a third of the cells

@@ -44,8 +44,11 @@ int main(int argc, char** argv) {
   std::string infoFile;
   bool infoJson = false;
   CLI::App* infoCmd = app.add_subcommand("info", "Show what snowbake understands of a terrain file.");
-  infoCmd->add_option("FILE", infoFile, "Terrain file (any GDAL raster), or builtin:ridged")->required();
+  std::vector<std::string> infoSets;
+  infoCmd->add_option("FILE", infoFile, "A DEM (any GDAL raster), a scene file or preset:NAME (for heightmaps, raw files and "
+                                        "meshes, whose reading options live in the scene), or builtin:ridged")->required();
   infoCmd->add_flag("--json", infoJson, "Print JSON");
+  infoCmd->add_option("--set", infoSets, "Override a scene key (as for bake)");
 
   BenchOptions benchOptions;
   std::string benchSizes;
@@ -98,7 +101,7 @@ int main(int argc, char** argv) {
       }
       std::cout << runBench(benchOptions, std::cerr);
     } else if (*infoCmd) {
-      std::cout << describeTerrain(infoFile, infoJson);
+      std::cout << describeTerrain(infoFile, infoJson, infoSets);
     }
   } catch (const InputError& e) {
     std::cerr << "snowbake: error: " << e.what() << "\n";

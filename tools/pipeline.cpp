@@ -3,6 +3,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -20,6 +21,7 @@
 #include "core/errors.h"
 #include "core/hash.h"
 #include "cuda/cuda_backend.h"
+#include "precompute/mesh.h"
 #include "precompute/scene.h"
 #include "progress.h"
 
@@ -55,22 +57,24 @@ std::string hashFile(const std::string& path) {
   return h.hex();
 }
 
-Terrain loadTerrain(const TerrainSource& src) {
-  if (src.builtin) return makeBuiltinTerrain(src.builtinOptions);
-  return loadTerrainFile(src.file);
-}
-
 // What a layer name in [outputs].layers means, and its grid.
 Grid<float> layerGrid(const SnowState& s, const std::string& name) {
-  if (name == "compacted") return s.compactedM;
-  if (name == "stable") return s.stableM;
-  if (name == "unstable") return s.unstableM;
-  if (name == "powder") return s.powderM;
-  if (name == "bedrock") return s.bedrockM;
+  // NODATA cells are written as zero; the valid_mask layer says which they are.
   Grid<float> g(s.spec.width, s.spec.height, 0.f);
   for (int y = 0; y < s.spec.height; ++y)
-    for (int x = 0; x < s.spec.width; ++x)
-      g(x, y) = name == "depth" ? s.depthM(x, y) : s.bedrockM(x, y) + s.depthM(x, y);  // "surface"
+    for (int x = 0; x < s.spec.width; ++x) {
+      if (!s.validCell(x, y)) continue;
+      float v = 0.f;
+      if (name == "compacted") v = s.compactedM(x, y);
+      else if (name == "stable") v = s.stableM(x, y);
+      else if (name == "unstable") v = s.unstableM(x, y);
+      else if (name == "powder") v = s.powderM(x, y);
+      else if (name == "bedrock") v = s.bedrockM(x, y);
+      else if (name == "depth") v = s.depthM(x, y);
+      else if (name == "surface") v = s.bedrockM(x, y) + s.depthM(x, y);
+      else if (name == "valid_mask") v = 1.f;
+      g(x, y) = v;
+    }
   return g;
 }
 
@@ -78,6 +82,7 @@ std::string layerContent(const std::string& name) {
   if (name == "depth") return "total snow depth C+S+U+P";
   if (name == "bedrock") return "terrain altitude B";
   if (name == "surface") return "snow-surface altitude B+C+S+U+P";
+  if (name == "valid_mask") return "1 where the terrain has data, 0 at NODATA cells (written as 0 in every layer)";
   return "snow layer: " + name;
 }
 
@@ -105,7 +110,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   if (options.terrainFile) {
     std::error_code ec;
     if (!fs::exists(*options.terrainFile, ec)) throw InputError(*options.terrainFile + ": terrain file does not exist (--terrain)");
-    scene.terrain = TerrainSource{};
+    // The scene's reading options (cell size, height range, resampling...) still apply.
+    scene.terrain.builtin = false;
     scene.terrain.file = *options.terrainFile;
     scene.terrain.declaredAt = "--terrain";
   }
@@ -124,9 +130,19 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   auto t0 = Clock::now();
   Terrain terrain = loadTerrain(scene.terrain);
   const TerrainInfo& ti = terrain.info;
-  log << "terrain: " << ti.source << ": " << ti.spec.width << " x " << ti.spec.height << " cells of " << fixed(ti.spec.cellSizeXM, 2)
-      << " x " << fixed(ti.spec.cellSizeYM, 2) << " m, " << fixed(ti.minElevationM, 0) << "-" << fixed(ti.maxElevationM, 0)
-      << " m, " << ti.nodataCells << " NODATA cells, " << ti.coordinateSystem << " (" << fixed(since(t0), 2) << " s)\n";
+  log << "terrain: " << ti.source << " (" << ti.format << "): " << ti.spec.width << " x " << ti.spec.height << " cells of "
+      << fixed(ti.spec.cellSizeXM, 2) << " x " << fixed(ti.spec.cellSizeYM, 2) << " m, " << fixed(ti.minElevationM, 0) << "-"
+      << fixed(ti.maxElevationM, 0) << " m, " << ti.nodataCells << " NODATA cells"
+      << (ti.filledCells ? ", " + std::to_string(ti.filledCells) + " filled" : std::string()) << ", " << ti.coordinateSystem << " ("
+      << fixed(since(t0), 2) << " s)\n";
+  if (!ti.resampling.empty()) log << "  resampled: " << ti.resampling << "\n";
+  if (!scene.occluders.empty()) {
+    t0 = Clock::now();
+    size_t triangles = 0;
+    for (const auto& mesh : loadOccluders(scene.occluders)) triangles += mesh.triangles.size();
+    log << "occluders: " << scene.occluders.size() << " meshes, " << triangles << " triangles (" << fixed(since(t0), 2)
+        << " s); they shade the sun-exposure precompute, which is not implemented yet\n";
+  }
   const double latitude = scene.latitudeDeg ? *scene.latitudeDeg : (ti.latitudeKnown ? ti.centreLatitudeDeg : 45.0);
   if (!scene.latitudeDeg)
     log << "site: latitude " << fixed(latitude, 3) << " deg " << (ti.latitudeKnown ? "(from the DEM)" : "(default; set site.latitude_deg)") << "\n";
@@ -150,10 +166,13 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
 
   Manifest manifest;
   BakeResult result;
+  std::vector<std::string> layers = scene.outputs.layers;
+  if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
   auto writeLayers = [&](const SnowState& s, double day) {
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
-    for (const auto& layer : scene.outputs.layers) {
+    for (const auto& layer : layers) {
+      if (frame && layer == "valid_mask") continue;
       std::string rel = layer;
       if (frame) {
         std::ostringstream o;
@@ -164,7 +183,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       ManifestFile f;
       f.path = fs::relative(img.path, options.outDir).string();
       f.content = layerContent(layer);
-      f.unit = "m";
+      f.unit = layer == "valid_mask" ? "1" : "m";
       f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
       f.day = day;
       f.minValue = img.minValue;
@@ -233,12 +252,32 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   return result;
 }
 
-std::string describeTerrain(const std::string& source, bool json) {
-  const Terrain t = source == "builtin:ridged" ? makeBuiltinTerrain(DefaultTerrainOptions{}) : loadTerrainFile(source);
+std::string describeTerrain(const std::string& source, bool json, const std::vector<std::string>& sets) {
+  // A scene (file or preset) describes the terrain with its reading options; anything else is a
+  // terrain file read with the defaults.
+  std::string ext = fs::path(source).extension().string();
+  Terrain t;
+  if (source == "builtin:ridged") {
+    t = makeBuiltinTerrain(DefaultTerrainOptions{});
+  } else if (source.rfind("preset:", 0) == 0 || ext == ".toml") {
+    t = loadTerrain(loadScene(source, sets).terrain);
+  } else {
+    if (!sets.empty()) throw InputError("--set applies to scene files; " + source + " is a terrain file");
+    TerrainSource src;
+    src.file = source;
+    std::error_code ec;
+    if (!fs::exists(source, ec)) throw InputError(source + ": terrain file does not exist");
+    const std::string format = detectTerrainFormat(src);
+    if (format != "dem")
+      throw InputError(source + ": a " + format + " file needs its cell size (and height mapping) from a scene: run "
+                       "`snowbake info SCENE.toml` with a scene whose [terrain] names it");
+    t = loadTerrain(src);
+  }
   const TerrainInfo& i = t.info;
   if (json) {
     nlohmann::ordered_json j;
     j["source"] = i.source;
+    j["format"] = i.format;
     j["driver"] = i.driver;
     j["width"] = i.spec.width;
     j["height"] = i.spec.height;
@@ -249,7 +288,12 @@ std::string describeTerrain(const std::string& source, bool json) {
     j["native_unit"] = i.nativeUnit;
     j["min_elevation_m"] = i.minElevationM;
     j["max_elevation_m"] = i.maxElevationM;
+    j["native_width"] = i.nativeWidth;
+    j["native_height"] = i.nativeHeight;
     j["nodata_cells"] = i.nodataCells;
+    j["filled_cells"] = i.filledCells;
+    j["height_mapping"] = i.heightMapping;
+    j["resampling"] = i.resampling;
     j["coordinate_system"] = i.coordinateSystem;
     j["coordinate_decision"] = i.coordinateDecision;
     if (i.latitudeKnown) j["centre_latitude_deg"] = i.centreLatitudeDeg; else j["centre_latitude_deg"] = nullptr;
@@ -257,15 +301,18 @@ std::string describeTerrain(const std::string& source, bool json) {
   }
   std::ostringstream o;
   o << i.source << "\n"
-    << "  format:            " << i.driver << "\n"
+    << "  format:            " << i.format << " (" << i.driver << ")\n"
     << "  grid:              " << i.spec.width << " x " << i.spec.height << " cells\n"
     << "  cell size:         " << fixed(i.spec.cellSizeXM, 3) << " m (x) x " << fixed(i.spec.cellSizeYM, 3) << " m (y)"
     << "  [native " << i.nativeCellSizeX << " x " << i.nativeCellSizeY << " " << i.nativeUnit << "]\n"
     << "  elevation:         " << fixed(i.minElevationM, 1) << " to " << fixed(i.maxElevationM, 1) << " m\n"
-    << "  NODATA cells:      " << i.nodataCells << "\n"
+    << "  NODATA cells:      " << i.nodataCells << (i.filledCells ? " (" + std::to_string(i.filledCells) + " filled)" : std::string())
+    << "\n"
     << "  coordinate system: " << i.coordinateSystem << "\n"
     << "  decided by:        " << i.coordinateDecision << "\n";
   if (i.latitudeKnown) o << "  centre latitude:   " << fixed(i.centreLatitudeDeg, 4) << " deg\n";
+  if (!i.heightMapping.empty()) o << "  heights:           " << i.heightMapping << "\n";
+  if (!i.resampling.empty()) o << "  resampled:         " << i.resampling << "\n";
   return o.str();
 }
 

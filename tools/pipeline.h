@@ -32,8 +32,9 @@ struct BakeResult {
 
 BakeResult runBake(const BakeOptions& options, std::ostream& log);
 
-// `snowbake info`: what snowbake understood of a terrain (a path or builtin:ridged).
-std::string describeTerrain(const std::string& source, bool json);
+// `snowbake info`: what snowbake understood of a terrain: a DEM file, builtin:ridged, or a scene
+// (file or preset:NAME, with --set overrides) whose [terrain] says how to read its file.
+std::string describeTerrain(const std::string& source, bool json, const std::vector<std::string>& sets = {});
 
 const char* programVersion();
 

@@ -1,0 +1,47 @@
+// Where a terrain comes from and how to read it: what the scene's [terrain] table (or --terrain)
+// says. Documented in README.md, "Terrain input".
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/default_terrain.h"
+
+namespace snow {
+
+struct TerrainSource {
+  std::string file;          // path (resolved against the scene file's folder); empty for builtin
+  bool builtin = false;      // the embedded ridged-noise range
+  DefaultTerrainOptions builtinOptions;
+  std::string declaredAt;    // "scene.toml:4" for error messages
+
+  // "auto" picks by extension: .r16/.r32/.raw raw, .png/.exr heightmap, .obj/.gltf/.glb/.fbx/.ply
+  // mesh, anything else a DEM through GDAL (a .tif with heightmap keys is read as a heightmap).
+  std::string format = "auto";        // auto | dem | heightmap | raw | mesh
+  std::string coordinates = "auto";   // DEMs without a coordinate system: auto | geographic | metres
+  bool fillNodata = false;            // fill NODATA holes instead of masking them out
+  std::optional<double> cellSizeM;    // heightmaps, raw files and meshes (and builtin)
+  std::optional<std::array<double, 2>> heightRangeM;  // pixel value 0..1 -> [min, max] metres
+  std::optional<double> heightScaleM;   // height = offset + scale * value
+  std::optional<double> heightOffsetM;
+  int rawWidth = 0, rawHeight = 0;      // raw files
+  std::string byteOrder = "little";     // raw files: little | big
+  std::string upAxis = "z";             // meshes: z | y (glTF is y-up)
+  std::optional<double> resampleCellSizeM;        // bake at another cell size ...
+  std::optional<std::array<int, 2>> resampleSize; // ... or another grid size [width, height]
+
+  bool hasHeightmapKeys() const { return heightRangeM || heightScaleM || heightOffsetM; }
+};
+
+// A mesh that blocks the sun (rocks, buildings, trees), placed in the terrain's local frame:
+// x east from the west edge, y north from the south edge, z altitude, metres.
+struct OccluderSource {
+  std::string file;
+  std::string upAxis = "z";
+  std::array<double, 3> offsetM{0.0, 0.0, 0.0};
+  double scale = 1.0;
+  std::string declaredAt;
+};
+
+}  // namespace snow
