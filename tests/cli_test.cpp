@@ -9,6 +9,8 @@
 #include <map>
 #include <sstream>
 
+#include "bakers/grid_writer.h"
+
 using namespace std::string_literals;
 namespace fs = std::filesystem;
 
@@ -144,5 +146,127 @@ TEST(Cli, AutoBackendSaysWhichItPicked) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("backend: "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("(auto: "), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// Bakes `scene` into an output folder that already holds an earlier bake's file; expects exit 2,
+// a one-line message containing every `expected` string, and the folder untouched.
+void expectRefused(const fs::path& dir, const std::string& scene, const std::vector<std::string>& expected) {
+  const fs::path out = dir / "out";
+  fs::remove_all(out);
+  fs::create_directories(out);
+  std::ofstream(out / "manifest.json") << "earlier bake";
+  const ProcessResult r = snowbake(dir, "bake " + scene + " --quiet --out " + out.string());
+  EXPECT_EQ(r.status, 2) << r.err;
+  // The log may have begun; the error is its last line, and one line.
+  const auto at = r.err.find("snowbake: error: ");
+  ASSERT_NE(at, std::string::npos) << r.err;
+  const std::string line = r.err.substr(at);
+  EXPECT_EQ(std::count(line.begin(), line.end(), '\n'), 1) << line;
+  for (const auto& e : expected) EXPECT_NE(line.find(e), std::string::npos) << "missing '" << e << "' in: " << line;
+  const auto files = filesIn(out);
+  EXPECT_EQ(files.size(), 1u);
+  EXPECT_EQ(files.at("manifest.json"), "earlier bake");
+}
+
+std::string sceneFor(const fs::path& dir, const std::string& terrainTable) {
+  const std::string path = (dir / "scene.toml").string();
+  std::ofstream(path) << "[terrain]\n" << terrainTable << "\n[season]\ndays = 5\n";
+  return path;
+}
+
+}  // namespace
+
+TEST(Cli, BadTerrainInputIsRefusedBeforeAnythingIsWritten) {
+  const fs::path dir = workDir();
+  const std::string garbage = (dir / "garbage.tif").string();
+  std::ofstream(garbage) << "not a GeoTIFF at all";
+  expectRefused(dir, sceneFor(dir, "file = \"garbage.tif\""), {garbage, "cannot read"});
+
+  const std::string empty = (dir / "empty.asc").string();
+  std::ofstream(empty).close();
+  expectRefused(dir, sceneFor(dir, "file = \"empty.asc\""), {empty, "empty"});
+
+  // A truncated ESRI grid: the header promises 10 rows, the file has 3.
+  const std::string truncated = (dir / "truncated.asc").string();
+  std::ofstream(truncated) << "ncols 10\nnrows 10\nxllcorner 0\nyllcorner 0\ncellsize 5\n"
+                           << "1.5 1 1 1 1 1 1 1 1 1\n1 1 1 1 1 1 1 1 1 1\n1 1 1 1 1 1 1 1 1 1\n";
+  expectRefused(dir, sceneFor(dir, "file = \"truncated.asc\""), {truncated});
+
+  const std::string raw = (dir / "short.r16").string();
+  std::ofstream(raw, std::ios::binary) << std::string(100, '\0');
+  expectRefused(dir, sceneFor(dir, "file = \"short.r16\"\nraw_width = 16\nraw_height = 16\ncell_size_m = 2\nheight_range_m = [0, 100]"),
+                {raw, "has 100 bytes", "need 512"});
+
+  const std::string nan = (dir / "nan.asc").string();
+  std::ofstream(nan) << "ncols 4\nnrows 4\nxllcorner 0\nyllcorner 0\ncellsize 5\n"
+                     << "1.5 1 1 1\n1 nan 1 1\n1 1 1 1\n1 1 1 1\n";
+  expectRefused(dir, sceneFor(dir, "file = \"nan.asc\""), {nan, "not finite"});
+
+  const std::string tiny = (dir / "tiny.asc").string();
+  std::ofstream(tiny) << "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 5\n1.5 1\n1 1\n";
+  expectRefused(dir, sceneFor(dir, "file = \"tiny.asc\""), {tiny, "too small"});
+
+  const std::string huge = (dir / "huge.r32").string();
+  std::ofstream(huge, std::ios::binary) << std::string(16, '\0');
+  expectRefused(dir, sceneFor(dir, "file = \"huge.r32\"\nraw_width = 900000\nraw_height = 900000\ncell_size_m = 1"),
+                {huge, "GiB"});
+  fs::remove_all(dir);
+}
+
+TEST(Cli, InfoJsonReportsWhatTheSimulationWillUse) {
+  const fs::path dir = workDir();
+  // A 12 x 10 float heightmap at 2.5 m, resampled to 5 m.
+  const std::string r32 = (dir / "hm.r32").string();
+  {
+    std::ofstream out(r32, std::ios::binary);
+    for (int i = 0; i < 120; ++i) {
+      const float v = 500.f + static_cast<float>(i);
+      out.write(reinterpret_cast<const char*>(&v), 4);
+    }
+  }
+  const std::string scene = sceneFor(dir, "file = \"hm.r32\"\nraw_width = 12\nraw_height = 10\ncell_size_m = 2.5\nresample_cell_size_m = 5");
+  const ProcessResult r = snowbake(dir, "info " + scene + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("\"format\": \"raw\""), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"width\": 6"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"height\": 5"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"cell_size_x_m\": 5.0"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"native_width\": 12"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"min_elevation_m\": 506.5"), std::string::npos) << r.out;  // mean of the first 2 x 2 block
+  EXPECT_NE(r.out.find("box filter"), std::string::npos) << r.out;
+  // A heightmap given directly has no cell size: info says to use a scene.
+  const ProcessResult direct = snowbake(dir, "info " + r32);
+  EXPECT_EQ(direct.status, 2);
+  EXPECT_NE(direct.err.find("scene"), std::string::npos) << direct.err;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, RealDemWithNodataBakesWithAMaskAndNoSnowInTheHoles) {
+  const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaWog_5m.asc";
+  if (!fs::exists(dem)) GTEST_SKIP() << "shared data not found: " << dem;
+  const fs::path dir = workDir();
+  const std::string scene = (dir / "tyrol.toml").string();
+  std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n[site]\nlatitude_deg = 47.2\n[season]\ndays = 60\n"
+                       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 2.0\n"
+                       << "[parameters]\nrain_snow_limit_m = 1000\n[outputs]\nlayers = [\"depth\", \"bedrock\"]\n";
+  const ProcessResult r = snowbake(dir, "bake " + scene + " --quiet --backend cpu --out " + (dir / "o").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const snow::Grid<float> mask = snow::readFloatImage((dir / "o" / "valid_mask.exr").string());
+  const snow::Grid<float> depth = snow::readFloatImage((dir / "o" / "depth.exr").string());
+  ASSERT_EQ(mask.width(), 490);
+  size_t holes = 0, snowy = 0;
+  for (size_t i = 0; i < mask.size(); ++i) {
+    if (mask.values()[i] == 0.f) {
+      ++holes;
+      ASSERT_EQ(depth.values()[i], 0.f);
+    } else if (depth.values()[i] > 0.f) {
+      ++snowy;
+    }
+  }
+  EXPECT_EQ(holes, 94079u);
+  EXPECT_GT(snowy, (mask.size() - holes) / 2);
   fs::remove_all(dir);
 }

@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
+#include <functional>
 
 #include "core/errors.h"
 #include "precompute/terrain_loader.h"
@@ -127,4 +129,37 @@ TEST(TerrainLoader, MetresPerDegree) {
   EXPECT_NEAR(metresPerDegreeLatitude(0.0), 110574.0, 2.0);
   EXPECT_NEAR(metresPerDegreeLongitude(0.0), 111320.0, 2.0);
   EXPECT_NEAR(metresPerDegreeLongitude(60.0), 55800.0, 20.0);
+}
+
+TEST(TerrainLoader, RealLargeFrontRangeDem) {
+  const std::string path = kSharedDem + "front_range_srtm3.asc";
+  if (!fs::exists(path)) GTEST_SKIP() << "shared data not found: " << path;
+  const Terrain t = loadDem(path);
+  EXPECT_EQ(t.info.spec.width, 758);
+  EXPECT_EQ(t.info.spec.height, 758);
+  EXPECT_NEAR(t.info.spec.cellSizeXM, 71.0, 1.0);
+  EXPECT_NEAR(t.info.spec.cellSizeYM, 92.5, 0.5);
+  EXPECT_NEAR(t.info.minElevationM, 1547.f, 1.f);
+  EXPECT_NEAR(t.info.maxElevationM, 4320.f, 1.f);
+  EXPECT_EQ(t.info.nodataCells, 0u);  // NODATA_value 0 is declared but never used
+}
+
+TEST(TerrainLoader, RealTyrolOutlineIsMaskedWhereTheFileSaysNodata) {
+  const std::string path = kSharedDem + "tyrol_avaKot_5m.asc";
+  if (!fs::exists(path)) GTEST_SKIP() << "shared data not found: " << path;
+  const Terrain t = loadDem(path);
+  // Count -9999 tokens in the file itself and compare.
+  std::ifstream in(path);
+  std::string token;
+  size_t header = 0, nodataTokens = 0;
+  while (in >> token) {
+    if (header < 12) {  // six "key value" header lines
+      ++header;
+      continue;
+    }
+    if (token == "-9999" || token == "-9999.0") ++nodataTokens;
+  }
+  EXPECT_EQ(t.info.nodataCells, nodataTokens);
+  EXPECT_GT(nodataTokens, t.heightsM.size() / 5);
+  for (size_t i = 0; i < t.heightsM.size(); ++i) ASSERT_TRUE(std::isfinite(t.heightsM.values()[i]));
 }
