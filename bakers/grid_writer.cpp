@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include "atomic_file.h"
+#include "core/atomic_file.h"
 
 namespace snow {
 

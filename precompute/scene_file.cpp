@@ -46,7 +46,8 @@ struct Rule {
 };
 
 const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface",
-                                                "valid_mask"};
+                                                "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
+                                                "wind_shadow_mask"};
 
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {

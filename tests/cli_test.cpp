@@ -57,7 +57,7 @@ std::map<std::string, std::string> filesIn(const fs::path& dir) {
 
 // A small, quick version of the default bake.
 const std::string kSmall = "--set terrain.size=96 --set terrain.cell_size_m=20 --set season.days=40 --set outputs.frames_days=[20] "
-                           "--quiet ";
+                           "--quiet --no-cache ";
 
 }  // namespace
 
@@ -158,7 +158,7 @@ void expectRefused(const fs::path& dir, const std::string& scene, const std::vec
   fs::remove_all(out);
   fs::create_directories(out);
   std::ofstream(out / "manifest.json") << "earlier bake";
-  const ProcessResult r = snowbake(dir, "bake " + scene + " --quiet --out " + out.string());
+  const ProcessResult r = snowbake(dir, "bake " + scene + " --quiet --no-cache --out " + out.string());
   EXPECT_EQ(r.status, 2) << r.err;
   // The log may have begun; the error is its last line, and one line.
   const auto at = r.err.find("snowbake: error: ");
@@ -252,7 +252,7 @@ TEST(Cli, RealDemWithNodataBakesWithAMaskAndNoSnowInTheHoles) {
   std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n[site]\nlatitude_deg = 47.2\n[season]\ndays = 60\n"
                        << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 2.0\n"
                        << "[parameters]\nrain_snow_limit_m = 1000\n[outputs]\nlayers = [\"depth\", \"bedrock\"]\n";
-  const ProcessResult r = snowbake(dir, "bake " + scene + " --quiet --backend cpu --out " + (dir / "o").string());
+  const ProcessResult r = snowbake(dir, "bake " + scene + " --quiet --no-cache --backend cpu --out " + (dir / "o").string());
   ASSERT_EQ(r.status, 0) << r.err;
   const snow::Grid<float> mask = snow::readFloatImage((dir / "o" / "valid_mask.exr").string());
   const snow::Grid<float> depth = snow::readFloatImage((dir / "o" / "depth.exr").string());

@@ -6,7 +6,7 @@
 #include <sstream>
 #include <thread>
 
-#include "bakers/atomic_file.h"
+#include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
 
 using namespace snow;

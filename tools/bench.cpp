@@ -10,11 +10,13 @@
 #include <sstream>
 #include <thread>
 
-#include "bakers/atomic_file.h"
+#include "core/atomic_file.h"
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/reference_scenario.h"
 #include "cuda/cuda_backend.h"
+#include "precompute/terrain_loader.h"
+#include "precompute/wind.h"
 
 namespace snow {
 
@@ -37,9 +39,83 @@ std::string format(const char* fmt, double v) {
 }
 }  // namespace
 
+namespace {
+
+void writeCsv(const BenchOptions& o, const std::string& name, const std::string& text, std::ostringstream& table) {
+  if (o.csvDir.empty()) return;
+  std::filesystem::create_directories(o.csvDir);
+  const std::string path = (std::filesystem::path(o.csvDir) / name).string();
+  writeTextAtomically(path, text);
+  table << "\nCSV: " << path << "\n";
+}
+
+std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string windBench(const BenchOptions& o, std::ostream& log, int threads);
+
+}  // namespace
+
 std::string runBench(const BenchOptions& o, std::ostream& log) {
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  if (o.stage != "all" && o.stage != "season" && o.stage != "wind")
+    throw InputError("--stage " + o.stage + ": must be season, wind or all");
+  std::string out;
+  if (o.stage == "all" || o.stage == "wind") out += windBench(o, log, threads) + "\n";
+  if (o.stage == "all" || o.stage == "season") out += seasonBench(o, log, threads);
+  return out;
+}
+
+namespace {
+
+std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
+  std::ostringstream table, csv;
+  table << "Wind field and wind-effect surface, one wind state (from 300 deg at 12 m/s), tolerance 1e-4, " << machineDescription()
+        << ", " << threads << " threads\n\n"
+        << "| terrain | grid | ordering | iterations | last update | residual | field (s) | surface (s) | converged |\n"
+        << "|---|---|---|---|---|---|---|---|---|\n";
+  csv << "terrain,width,height,ordering,iterations,last_update,residual,field_s,surface_s,converged\n";
+  struct Case {
+    std::string name;
+    Terrain terrain;
+  };
+  std::vector<Case> cases;
+  for (int size : {256, 1024}) {
+    DefaultTerrainOptions d;
+    d.size = size;
+    d.cellSizeM = 10240.0 / size;
+    cases.push_back({"builtin ridged, " + format("%.0f", d.cellSizeM) + " m", makeBuiltinTerrain(d)});
+  }
+  const std::string dem = o.sharedDataDir + "/dem/front_range_srtm3.asc";
+  if (std::filesystem::exists(dem)) cases.push_back({"front_range_srtm3.asc", loadDem(dem)});
+  else table << "(skipped " << dem << ": not found)\n\n";
+  ModelParameters p;
+  const WindState state{300.0, 12.0};
+  for (const auto& c : cases) {
+    for (WindOrdering ordering : {WindOrdering::UpwindSweep, WindOrdering::RedBlack}) {
+      const auto t0 = std::chrono::steady_clock::now();
+      Grid<float> wx, wy, fx, fy, wz, wsz;
+      computeWindVectors(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, state, p, wx, wy);
+      computeFreeStream(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, state, p, fx, fy);
+      const double fieldSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      WindSolverOptions so;
+      so.ordering = ordering;
+      const WindSolveStats st = solveWindEffectSurface(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, wx, wy, fx, fy,
+                                                       p.windCapDecelerationMps2, so, wz, wsz);
+      const auto& sp = c.terrain.info.spec;
+      table << "| " << c.name << " | " << sp.width << " x " << sp.height << " | " << st.ordering << " | " << st.iterations << " | "
+            << format("%.1e", st.lastUpdate) << " | " << format("%.1e", st.residual) << " | " << format("%.3f", fieldSeconds)
+            << " | " << format("%.3f", st.seconds) << " | " << (st.converged ? "yes" : "no") << " |\n";
+      csv << '"' << c.name << "\"," << sp.width << "," << sp.height << "," << st.ordering << "," << st.iterations << ","
+          << st.lastUpdate << "," << st.residual << "," << fieldSeconds << "," << st.seconds << "," << st.converged << "\n";
+      log << "  wind " << c.name << " " << st.ordering << ": " << st.iterations << " iterations, " << format("%.2f", st.seconds)
+          << " s\n";
+    }
+  }
+  writeCsv(o, "wind.csv", csv.str(), table);
+  return table.str();
+}
+
+std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads) {
   std::string backendName = o.backend;
   if (backendName == "auto") backendName = cuda::probeDevice().available ? "cuda" : "cpu";
   if (backendName == "cuda" && !cuda::probeDevice().available)
@@ -75,13 +151,10 @@ std::string runBench(const BenchOptions& o, std::ostream& log) {
         << "," << phase[2] << "," << r.events << "," << r.massBalanceRelativeError() << "\n";
     log << "  " << size << "² done in " << format("%.2f", seconds) << " s\n";
   }
-  if (!o.csvPath.empty()) {
-    const auto parent = std::filesystem::path(o.csvPath).parent_path();
-    if (!parent.empty()) std::filesystem::create_directories(parent);
-    writeTextAtomically(o.csvPath, csv.str());
-    table << "\nCSV: " << o.csvPath << "\n";
-  }
+  writeCsv(o, "season.csv", csv.str(), table);
   return table.str();
 }
+
+}  // namespace
 
 }  // namespace snow

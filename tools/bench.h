@@ -9,11 +9,13 @@
 namespace snow {
 
 struct BenchOptions {
+  std::string stage = "all";  // season | wind | all
   std::vector<int> sizes{256, 512, 1024, 2048};
   double days = 120.0;
   std::string backend = "cpu";  // cpu | cuda | auto
   int threads = 0;              // 0 = all cores
-  std::string csvPath = "snowbake-bench/season.csv";
+  std::string csvDir = "snowbake-bench";  // one CSV per stage; empty: none
+  std::string sharedDataDir = "../shared/data";  // real DEMs for the wind table (skipped when absent)
 };
 
 // Returns the table as printed.

@@ -1,8 +1,10 @@
 // snowbake: the command-line program. The only translation unit that includes CLI11.
 //   snowbake bake SCENE [--terrain FILE] [--out DIR] [--seed N] [--threads N] [--backend cpu|cuda|auto] [--set KEY=VALUE]...
+//                [--cache-dir DIR] [--no-cache] [--quiet]
 //   snowbake demo [--out DIR]
 //   snowbake info FILE [--json]
-//   snowbake bench [--sizes 256,512,...] [--days D] [--backend cpu|cuda|auto] [--threads N] [--csv FILE]
+//   snowbake bench [--stage season|wind|all] [--sizes 256,512,...] [--days D] [--backend cpu|cuda|auto] [--threads N]
+//                  [--csv-dir DIR] [--data DIR]
 // Exit status: 0 success, 2 usage or input error (one line naming the file and the problem),
 // 1 any other failure.
 #include <CLI/CLI.hpp>
@@ -36,6 +38,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
   bakeCmd->add_option("--set", bake.sets, "Override a scene key by its dotted path, e.g. --set season.days=30 (repeatable)");
   bakeCmd->add_flag("--quiet", quiet, "No progress bar");
+  std::string cacheDir;
+  bool noCache = false;
+  bakeCmd->add_option("--cache-dir", cacheDir, "Precompute cache folder (default $XDG_CACHE_HOME/snowbake or ~/.cache/snowbake)");
+  bakeCmd->add_flag("--no-cache", noCache, "Neither read nor write the precompute cache");
 
   std::string demoOut = "snowbake-demo";
   CLI::App* demoCmd = app.add_subcommand("demo", "Run the main job on the embedded default terrain (no input needed).");
@@ -52,13 +58,16 @@ int main(int argc, char** argv) {
 
   BenchOptions benchOptions;
   std::string benchSizes;
-  CLI::App* benchCmd = app.add_subcommand("bench", "Time the season stage on the reference scenario for several grid sizes.");
+  CLI::App* benchCmd = app.add_subcommand("bench", "Benchmarks: the wind precompute and the season on reference scenarios.");
   benchCmd->add_option("--sizes", benchSizes, "Comma-separated grid sizes (default 256,512,1024,2048)");
   benchCmd->add_option("--days", benchOptions.days, "Season length in days")->capture_default_str();
   benchCmd->add_option("--backend", benchOptions.backend, "cpu, cuda or auto")->check(CLI::IsMember({"cpu", "cuda", "auto"}))
       ->capture_default_str();
   benchCmd->add_option("--threads", benchOptions.threads, "CPU threads, 0 = all cores");
-  benchCmd->add_option("--csv", benchOptions.csvPath, "CSV output (empty: none)")->capture_default_str();
+  benchCmd->add_option("--stage", benchOptions.stage, "season, wind or all")->check(CLI::IsMember({"season", "wind", "all"}))
+      ->capture_default_str();
+  benchCmd->add_option("--csv-dir", benchOptions.csvDir, "Folder for the CSV files (empty: none)")->capture_default_str();
+  benchCmd->add_option("--data", benchOptions.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();
 
   try {
     app.parse(argc, argv);
@@ -81,6 +90,8 @@ int main(int argc, char** argv) {
       if (bakeCmd->count("--threads")) bake.threads = threads;
       if (!backend.empty()) bake.backend = backend;
       bake.progress = !quiet;
+      if (!cacheDir.empty()) bake.cacheDir = cacheDir;
+      bake.useCache = !noCache;
       runBake(bake, std::cerr);
     } else if (*demoCmd) {
       BakeOptions demo;

@@ -14,7 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "bakers/atomic_file.h"
+#include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
 #include "bakers/manifest.h"
 #include "core/cpu_backend.h"
@@ -23,6 +23,7 @@
 #include "cuda/cuda_backend.h"
 #include "precompute/mesh.h"
 #include "precompute/scene.h"
+#include "precompute/wind_timeline.h"
 #include "progress.h"
 
 #ifndef SNOWBAKE_VERSION
@@ -37,6 +38,8 @@ using Clock = std::chrono::steady_clock;
 const char* programVersion() { return SNOWBAKE_VERSION; }
 
 namespace {
+
+constexpr double kWindShadowThresholdM = 0.1;
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -78,7 +81,36 @@ Grid<float> layerGrid(const SnowState& s, const std::string& name) {
   return g;
 }
 
+bool isWindLayer(const std::string& name) { return name.rfind("wind_", 0) == 0; }
+
+// Wind layers for the day of an output, from the precomputed fields.
+Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double day, const std::string& name) {
+  const WindFieldsAtDay f = wind.at(day);
+  Grid<float> g(s.spec.width, s.spec.height, 0.f);
+  for (int y = 0; y < s.spec.height; ++y)
+    for (int x = 0; x < s.spec.width; ++x) {
+      if (!s.validCell(x, y)) continue;
+      const double wx = f.windXMps(x, y), wy = f.windYMps(x, y), depth = f.windEffectZM(x, y) - s.bedrockM(x, y);
+      if (name == "wind_speed") g(x, y) = static_cast<float>(std::hypot(wx, wy));
+      else if (name == "wind_direction") g(x, y) = wx == 0 && wy == 0 ? 0.f : static_cast<float>(std::fmod(std::atan2(-wx, wy) * 180.0 / M_PI + 360.0, 360.0));
+      else if (name == "wind_shadow_depth") g(x, y) = static_cast<float>(std::max(0.0, depth));
+      else if (name == "wind_shadow_mask") g(x, y) = depth > kWindShadowThresholdM ? 1.f : 0.f;
+    }
+  return g;
+}
+
+std::string layerUnit(const std::string& name) {
+  if (name == "valid_mask" || name == "wind_shadow_mask") return "1";
+  if (name == "wind_speed") return "m/s";
+  if (name == "wind_direction") return "deg";
+  return "m";
+}
+
 std::string layerContent(const std::string& name) {
+  if (name == "wind_speed") return "wind speed |W| (venturi and terrain redirection, Eq. 2)";
+  if (name == "wind_direction") return "direction the wind blows from, degrees clockwise from north";
+  if (name == "wind_shadow_depth") return "wind shadow depth W_z - A (height of the wind-effect surface above the ground)";
+  if (name == "wind_shadow_mask") return "1 where the wind-effect surface is more than 0.1 m above the ground (wind shadow)";
   if (name == "depth") return "total snow depth C+S+U+P";
   if (name == "bedrock") return "terrain altitude B";
   if (name == "surface") return "snow-surface altitude B+C+S+U+P";
@@ -153,10 +185,25 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   state.allocate(ti.spec);
   state.bedrockM = terrain.heightsM;
   state.validCell = terrain.valid;
-  // Sun exposure (issue #4) and wind (issue #5) are not computed yet: exposure stays 0, so the
-  // temperature follows altitude alone (T = T0 + k_t * B).
+  const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
+  // Sun exposure (issue #4) is not computed yet: exposure stays 0, so the temperature follows
+  // altitude alone (T = T0 + k_t * B).
   computeTemperatureBase(state, scene.params);
-  log << "precompute: temperature from altitude (" << fixed(since(t0), 2) << " s); sun exposure and wind field: not implemented yet\n";
+  log << "precompute: temperature from altitude (" << fixed(since(t0), 2) << " s); sun exposure: not implemented yet\n";
+  t0 = Clock::now();
+  const WindTimeline wind(state.bedrockM, state.validCell, state.spec, scene.weather, scene.params, cache, WindSolverOptions{}, &log);
+  if (wind.hasWind()) {
+    log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " ("
+        << wind.computedStates() << " computed, " << wind.cachedStates() << " from the cache"
+        << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(since(t0), 2) << " s)\n";
+    const WindFieldsAtDay start = wind.at(0.0);
+    state.windXMps = start.windXMps;
+    state.windYMps = start.windYMps;
+    state.windEffectZM = start.windEffectZM;
+  } else {
+    state.windEffectZM = state.bedrockM;
+    log << "precompute: no wind in the season: wind field skipped\n";
+  }
 
   // 4. Season
   std::unique_ptr<SnowBackend> backend = chooseBackend(scene.backend, log);
@@ -179,11 +226,12 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         o << "frames/" << layer << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
         rel = o.str();
       }
-      const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, layerGrid(s, layer), layer);
+      const Grid<float> grid = isWindLayer(layer) ? windLayerGrid(s, wind, frame ? day : scene.days, layer) : layerGrid(s, layer);
+      const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer);
       ManifestFile f;
       f.path = fs::relative(img.path, options.outDir).string();
       f.content = layerContent(layer);
-      f.unit = layer == "valid_mask" ? "1" : "m";
+      f.unit = layerUnit(layer);
       f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
       f.day = day;
       f.minValue = img.minValue;

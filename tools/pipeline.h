@@ -22,6 +22,8 @@ struct BakeOptions {
   std::optional<std::string> backend;      // cpu | cuda | auto
   std::vector<std::string> sets;           // --set KEY=VALUE
   bool progress = true;
+  std::optional<std::string> cacheDir;     // precompute cache folder (default: PrecomputeCache::defaultDirectory())
+  bool useCache = true;                    // --no-cache: neither read nor write it
 };
 
 struct BakeResult {

@@ -1,0 +1,111 @@
+#include "wind_timeline.h"
+
+#include <cmath>
+
+#include "core/hash.h"
+
+namespace snow {
+
+namespace {
+
+std::string windCacheKey(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WindState& state,
+                         const ModelParameters& p, const WindSolverOptions& o) {
+  Fnv1a64 h;
+  h.add("wind-v3");
+  h.add(altitude.data(), altitude.size() * sizeof(float));
+  h.add(valid.data(), valid.size());
+  const double numbers[] = {static_cast<double>(spec.width), static_cast<double>(spec.height), spec.cellSizeXM, spec.cellSizeYM,
+                            state.directionDeg, state.speedMps, p.venturiPerM, p.terrainWindEffect, p.windCapDecelerationMps2,
+                            static_cast<double>(o.ordering == WindOrdering::RedBlack), o.toleranceM,
+                            static_cast<double>(o.maxIterations)};
+  h.add(numbers, sizeof numbers);
+  return h.hex();
+}
+
+}  // namespace
+
+WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec,
+                           const WeatherTimeline& weather, const ModelParameters& params, const PrecomputeCache& cache,
+                           const WindSolverOptions& options, std::ostream* log)
+    : altitude_(altitude), weather_(weather) {
+  for (const auto& k : weather.keyframes) {
+    if (!(k.state.windSpeedMps > 0.0)) {
+      keyframeState_.push_back(-1);
+      continue;
+    }
+    const WindState s{k.state.windDirectionDeg, k.state.windSpeedMps};
+    int index = -1;
+    for (size_t i = 0; i < states_.size(); ++i)
+      if (states_[i] == s) index = static_cast<int>(i);
+    if (index < 0) {
+      states_.push_back(s);
+      index = static_cast<int>(states_.size()) - 1;
+    }
+    keyframeState_.push_back(index);
+  }
+  for (const WindState& s : states_) {
+    WindField f;
+    const std::string key = windCacheKey(altitude, valid, spec, s, params, options);
+    if (cache.load("wind", key, spec.width, spec.height, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps})) {
+      ++cached_;
+      f.stats.ordering = "cache";
+      f.stats.converged = true;
+      if (log) *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: from the cache\n";
+    } else {
+      f = computeWindField(altitude, valid, spec, s, params, options);
+      ++computed_;
+      cache.store("wind", key, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps});
+      if (log)
+        *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: " << f.stats.ordering << ", "
+             << f.stats.iterations << " iterations, residual " << f.stats.residual << " (" << f.stats.seconds << " s)"
+             << (f.stats.converged ? "" : " NOT CONVERGED") << "\n";
+    }
+    fields_.push_back(std::move(f));
+  }
+}
+
+WindFieldsAtDay WindTimeline::at(double day) const {
+  WindFieldsAtDay out;
+  const int w = altitude_.width(), h = altitude_.height();
+  out.windXMps.resize(w, h, 0.f);
+  out.windYMps.resize(w, h, 0.f);
+  out.windEffectZM = altitude_;
+  if (states_.empty()) return out;
+  // The bracketing keyframes and the weight of the later one, as WeatherTimeline::at does.
+  const auto& keys = weather_.keyframes;
+  size_t k0 = 0, k1 = 0;
+  double t = 0.0;
+  if (day <= keys.front().day) {
+    k0 = k1 = 0;
+  } else if (day >= keys.back().day) {
+    k0 = k1 = keys.size() - 1;
+  } else {
+    for (size_t i = 1; i < keys.size(); ++i)
+      if (day <= keys[i].day) {
+        k0 = i - 1;
+        k1 = i;
+        t = keys[i].day > keys[i - 1].day ? (day - keys[i - 1].day) / (keys[i].day - keys[i - 1].day) : 1.0;
+        break;
+      }
+  }
+  auto add = [&](int state, double weight) {
+    if (weight <= 0.0) return;
+    if (state < 0) {  // calm keyframe: no wind, the surface on the ground
+      for (size_t i = 0; i < out.windEffectZM.size(); ++i)
+        out.windEffectZM.values()[i] += static_cast<float>(weight * altitude_.values()[i]);
+      return;
+    }
+    const WindField& f = fields_[state];
+    for (size_t i = 0; i < out.windXMps.size(); ++i) {
+      out.windXMps.values()[i] += static_cast<float>(weight * f.windXMps.values()[i]);
+      out.windYMps.values()[i] += static_cast<float>(weight * f.windYMps.values()[i]);
+      out.windEffectZM.values()[i] += static_cast<float>(weight * f.windEffectZM.values()[i]);
+    }
+  };
+  out.windEffectZM.fill(0.f);
+  add(keyframeState_[k0], 1.0 - t);
+  add(keyframeState_[k1], t);
+  return out;
+}
+
+}  // namespace snow

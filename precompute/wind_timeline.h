@@ -1,0 +1,44 @@
+// The season's wind: one precomputed field and wind-effect surface per distinct wind state of
+// the weather keyframes, blended linearly between keyframes (the same weights as the keyframes'
+// own interpolation). No wind anywhere in the season: nothing is computed.
+#pragma once
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "cache.h"
+#include "core/weather.h"
+#include "wind.h"
+
+namespace snow {
+
+struct WindFieldsAtDay {
+  Grid<float> windXMps, windYMps, windEffectZM;
+};
+
+class WindTimeline {
+ public:
+  // Computes (or loads from `cache`) the field of every distinct wind state the keyframes use.
+  WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WeatherTimeline& weather,
+               const ModelParameters& params, const PrecomputeCache& cache, const WindSolverOptions& options = {},
+               std::ostream* log = nullptr);
+
+  bool hasWind() const { return !states_.empty(); }
+  size_t stateCount() const { return states_.size(); }
+  size_t computedStates() const { return computed_; }
+  size_t cachedStates() const { return cached_; }
+  const std::vector<WindState>& states() const { return states_; }
+  const WindField& field(size_t state) const { return fields_[state]; }
+  // The fields in force on `day`; zero wind and W_z = A when the season has no wind.
+  WindFieldsAtDay at(double day) const;
+
+ private:
+  const Grid<float>& altitude_;
+  WeatherTimeline weather_;
+  std::vector<WindState> states_;
+  std::vector<WindField> fields_;
+  std::vector<int> keyframeState_;  // per keyframe: index into states_, -1 for calm
+  size_t computed_ = 0, cached_ = 0;
+};
+
+}  // namespace snow
