@@ -33,9 +33,10 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   const auto t0 = Clock::now();
   const ModelParameters& p = cfg.params;
   SeasonReport report;
+  if (cfg.updateTemperatureBase) cfg.updateTemperatureBase(0, state);
   backend.upload(state);
   report.initial = backend.totals();
-  const float maxTemperatureBase = backend.maxTemperatureBaseC();
+  float maxTemperatureBase = backend.maxTemperatureBaseC();
 
   PoissonScheduler scheduler(cfg.seed);
   std::vector<PhenomenonReport> reports;
@@ -115,6 +116,14 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     addPhenomenon(std::move(s));
   }
 
+  if (cfg.updateTemperatureBase) {
+    for (int day = 1; day < cfg.days; ++day)
+      scheduler.addAction(day, [&, day](double) {
+        cfg.updateTemperatureBase(day, state);
+        backend.uploadStaticFields(state);
+        maxTemperatureBase = backend.maxTemperatureBaseC();
+      });
+  }
   for (double day : cfg.frameDays) {
     if (day < 0.0 || day > cfg.days || !onFrame) continue;
     scheduler.addAction(day, [&](double now) {

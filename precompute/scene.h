@@ -34,6 +34,8 @@ struct Scene {
   std::vector<SnowfallPeriod> userSnowfalls;
   ModelParameters params;
   OutputRequest outputs;
+  bool sunExposure = true;             // precompute.sun: false skips the sun (temperature from altitude alone)
+  std::string sunQuality = "draft";    // precompute.sun_quality: draft | production | reference
   uint64_t seed = 1;
   std::string backend = "auto";  // cpu | cuda | auto
   int threads = 0;               // 0 = all cores

@@ -47,7 +47,7 @@ struct Rule {
 
 const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface",
                                                 "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
-                                                "wind_shadow_mask"};
+                                                "wind_shadow_mask", "sun_exposure", "temperature"};
 
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {
@@ -98,6 +98,9 @@ const std::vector<Rule>& sceneRules() {
       {"events.day", Kind::Number, 0, 3650},
       {"events.duration_days", Kind::Number, 0.001, 365},
       {"parameters", Kind::Table},
+      {"precompute", Kind::Table},
+      {"precompute.sun", Kind::Bool},
+      {"precompute.sun_quality", Kind::String, -kInf, kInf, {"draft", "production", "reference"}},
       {"outputs", Kind::Table},
       {"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices},
       {"outputs.format", Kind::String, -kInf, kInf, {"exr", "tiff"}},
@@ -469,6 +472,8 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       scene.outputs.frameDays.push_back(day);
     }
   }
+  if (auto v = root["precompute"]["sun"].value<bool>()) scene.sunExposure = *v;
+  if (auto v = root["precompute"]["sun_quality"].value<std::string>()) scene.sunQuality = *v;
   scene.seed = static_cast<uint64_t>(root["run"]["seed"].value<int64_t>().value_or(1));
   if (auto b = root["run"]["backend"].value<std::string>()) scene.backend = *b;
   scene.threads = static_cast<int>(root["run"]["threads"].value<int64_t>().value_or(0));

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -23,6 +24,7 @@
 #include "cuda/cuda_backend.h"
 #include "precompute/mesh.h"
 #include "precompute/scene.h"
+#include "precompute/exposure.h"
 #include "precompute/wind_timeline.h"
 #include "progress.h"
 
@@ -101,12 +103,16 @@ Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double d
 
 std::string layerUnit(const std::string& name) {
   if (name == "valid_mask" || name == "wind_shadow_mask") return "1";
+  if (name == "sun_exposure") return "h";
+  if (name == "temperature") return "degC";
   if (name == "wind_speed") return "m/s";
   if (name == "wind_direction") return "deg";
   return "m";
 }
 
 std::string layerContent(const std::string& name) {
+  if (name == "sun_exposure") return "sun exposure I = I_sun + I_sky + I_ind, hours of equivalent direct sun per day (§4.1)";
+  if (name == "temperature") return "air temperature at the surface, T = T0 + k_t A + k_i I (§4.1)";
   if (name == "wind_speed") return "wind speed |W| (venturi and terrain redirection, Eq. 2)";
   if (name == "wind_direction") return "direction the wind blows from, degrees clockwise from north";
   if (name == "wind_shadow_depth") return "wind shadow depth W_z - A (height of the wind-effect surface above the ground)";
@@ -116,6 +122,44 @@ std::string layerContent(const std::string& name) {
   if (name == "surface") return "snow-surface altitude B+C+S+U+P";
   if (name == "valid_mask") return "1 where the terrain has data, 0 at NODATA cells (written as 0 in every layer)";
   return "snow layer: " + name;
+}
+
+// Sun exposure, from the cache when every input is unchanged.
+Exposure loadOrComputeExposure(const SnowState& state, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,
+                               const ExposureSettings& es, const PrecomputeCache& cache, std::ostream& log) {
+  Fnv1a64 h;
+  h.add("exposure-v1");
+  h.add(state.bedrockM.data(), state.bedrockM.size() * sizeof(float));
+  h.add(state.validCell.data(), state.validCell.size());
+  const double numbers[] = {static_cast<double>(state.spec.width), static_cast<double>(state.spec.height), state.spec.cellSizeXM,
+                            state.spec.cellSizeYM, es.latitudeDeg, static_cast<double>(es.startDayOfYear), es.seasonDays,
+                            p.directSunWeightHours, p.skyAmbientWeightHours, p.indirectSunWeightHours};
+  h.add(numbers, sizeof numbers);
+  h.add(es.quality.name);
+  for (const auto& m : occluders) {
+    h.add(m.positions.data(), m.positions.size() * sizeof(m.positions[0]));
+    h.add(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
+  }
+  const std::string key = h.hex();
+  // The sample days are fixed by the settings: rebuild the list, then fill the grids.
+  Exposure e;
+  for (double d = 0.0; d < es.seasonDays; d += es.quality.dayStep) e.days.push_back(DailyExposure{d, 0, {}, {}});
+  e.days.push_back(DailyExposure{es.seasonDays, 0, {}, {}});
+  std::vector<Grid<float>*> grids{&e.skyHours};
+  for (auto& d : e.days) grids.push_back(&d.sunHours), grids.push_back(&d.indirectHours);
+  if (cache.load("exposure", key, state.spec.width, state.spec.height, grids)) {
+    log << "  sun exposure: from the cache\n";
+    return e;
+  }
+  const RayScene scene(state.bedrockM, state.spec, occluders);
+  e = computeExposure(scene, state.bedrockM, state.validCell, state.spec, p, es);
+  log << "  sun exposure: direct " << fixed(e.timings.sunSeconds, 2) << " s (" << e.timings.sunRays << " rays), sky "
+      << fixed(e.timings.skySeconds, 2) << " s (" << e.timings.skyRays << " rays), indirect " << fixed(e.timings.indirectSeconds, 2)
+      << " s\n";
+  std::vector<const Grid<float>*> out{&e.skyHours};
+  for (const auto& d : e.days) out.push_back(&d.sunHours), out.push_back(&d.indirectHours);
+  cache.store("exposure", key, out);
+  return e;
 }
 
 std::unique_ptr<SnowBackend> chooseBackend(const std::string& wanted, std::ostream& log) {
@@ -168,12 +212,14 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       << (ti.filledCells ? ", " + std::to_string(ti.filledCells) + " filled" : std::string()) << ", " << ti.coordinateSystem << " ("
       << fixed(since(t0), 2) << " s)\n";
   if (!ti.resampling.empty()) log << "  resampled: " << ti.resampling << "\n";
+  std::vector<TriangleMesh> occluders;
   if (!scene.occluders.empty()) {
     t0 = Clock::now();
+    occluders = loadOccluders(scene.occluders);
     size_t triangles = 0;
-    for (const auto& mesh : loadOccluders(scene.occluders)) triangles += mesh.triangles.size();
+    for (const auto& mesh : occluders) triangles += mesh.triangles.size();
     log << "occluders: " << scene.occluders.size() << " meshes, " << triangles << " triangles (" << fixed(since(t0), 2)
-        << " s); they shade the sun-exposure precompute, which is not implemented yet\n";
+        << " s); they shade the sun exposure\n";
   }
   const double latitude = scene.latitudeDeg ? *scene.latitudeDeg : (ti.latitudeKnown ? ti.centreLatitudeDeg : 45.0);
   if (!scene.latitudeDeg)
@@ -186,10 +232,25 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   state.bedrockM = terrain.heightsM;
   state.validCell = terrain.valid;
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
-  // Sun exposure (issue #4) is not computed yet: exposure stays 0, so the temperature follows
-  // altitude alone (T = T0 + k_t * B).
-  computeTemperatureBase(state, scene.params);
-  log << "precompute: temperature from altitude (" << fixed(since(t0), 2) << " s); sun exposure: not implemented yet\n";
+  std::optional<Exposure> exposure;
+  if (scene.sunExposure) {
+    ExposureSettings es;
+    es.quality = sunQuality(scene.sunQuality);
+    es.latitudeDeg = latitude;
+    es.startDayOfYear = scene.startDayOfYear();
+    es.seasonDays = scene.days;
+    exposure = loadOrComputeExposure(state, occluders, scene.params, es, cache, log);
+    log << "precompute: sun exposure (" << es.quality.name << ", " << exposure->days.size() << " sample days) ("
+        << fixed(since(t0), 2) << " s)\n";
+  } else {
+    log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
+  }
+  // T = T0 + k_t A + k_i I (§4.1), the exposure of each season day interpolated between samples.
+  auto temperatureForDay = [&](int day, SnowState& s) {
+    if (exposure) s.exposureHours = exposure->totalAt(day);
+    computeTemperatureBase(s, scene.params);
+  };
+  temperatureForDay(0, state);
   t0 = Clock::now();
   const WindTimeline wind(state.bedrockM, state.validCell, state.spec, scene.weather, scene.params, cache, WindSolverOptions{}, &log);
   if (wind.hasWind()) {
@@ -226,7 +287,23 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         o << "frames/" << layer << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
         rel = o.str();
       }
-      const Grid<float> grid = isWindLayer(layer) ? windLayerGrid(s, wind, frame ? day : scene.days, layer) : layerGrid(s, layer);
+      const double outputDay = frame ? day : scene.days;
+      Grid<float> grid;
+      if (isWindLayer(layer)) {
+        grid = windLayerGrid(s, wind, outputDay, layer);
+      } else if (layer == "sun_exposure" || layer == "temperature") {
+        SnowState at = s;
+        if (exposure) at.exposureHours = exposure->totalAt(outputDay);
+        computeTemperatureBase(at, scene.params);
+        const double t0c = scene.weather.at(outputDay).seaLevelTemperatureC;
+        grid = Grid<float>(s.spec.width, s.spec.height, 0.f);
+        for (size_t i = 0; i < grid.size(); ++i)
+          if (s.validCell.values()[i])
+            grid.values()[i] = layer == "sun_exposure" ? at.exposureHours.values()[i]
+                                                       : static_cast<float>(t0c + at.temperatureBaseC.values()[i]);
+      } else {
+        grid = layerGrid(s, layer);
+      }
       const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer);
       ManifestFile f;
       f.path = fs::relative(img.path, options.outDir).string();
@@ -248,6 +325,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   config.weather = scene.weather;
   config.userSnowfalls = scene.userSnowfalls;
   config.frameDays = scene.outputs.frameDays;
+  if (exposure) config.updateTemperatureBase = temperatureForDay;
   ProgressBar bar(log, "season", stderrIsTerminal() && &log == &std::cerr, options.progress);
   const SeasonReport report = runSeason(
       *backend, state, config, [&](double f) { bar.update(f); }, [&](double day, const SnowState& s) { writeLayers(s, day); });

@@ -1,0 +1,252 @@
+#include "exposure.h"
+
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+
+#include "core/errors.h"
+#include "solar.h"
+
+namespace snow {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Rays start a little above the surface along the normal, so they do not hit their own cell.
+std::array<float, 3> rayOrigin(const RayScene& scene, int i, int j, const std::array<float, 3>& n, const GridSpec& spec) {
+  const auto p = scene.cellPoint(i, j);
+  const float eps = static_cast<float>(1e-3 * std::min(spec.cellSizeXM, spec.cellSizeYM) + 1e-5 * std::abs(p[2]));
+  return {p[0] + eps * n[0], p[1] + eps * n[1], p[2] + eps * n[2]};
+}
+
+}  // namespace
+
+const std::vector<std::string>& sunQualityNames() {
+  static const std::vector<std::string> names{"draft", "production", "reference"};
+  return names;
+}
+
+SunQuality sunQuality(const std::string& name) {
+  if (name == "draft") return {"draft", 8, 6, 1.0, 30.0, 8, 4, 200.0};
+  if (name == "production") return {"production", 16, 9, 0.5, 10.0, 16, 8, 400.0};
+  if (name == "reference") return {"reference", 64, 12, 0.125, 5.0, 32, 16, 800.0};
+  throw InputError("sun quality '" + name + "' is not one of: draft, production, reference");
+}
+
+void terrainNormals(const Grid<float>& a, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out) {
+  const int w = spec.width, h = spec.height;
+  out.assign(static_cast<size_t>(w) * h, {0.f, 0.f, 1.f});
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      auto ok = [&](int x, int y) { return x >= 0 && y >= 0 && x < w && y < h && valid(x, y); };
+      const bool l = ok(i - 1, j), r = ok(i + 1, j), u = ok(i, j - 1), d = ok(i, j + 1);
+      const double aL = l ? a(i - 1, j) : a(i, j), aR = r ? a(i + 1, j) : a(i, j);
+      const double aN = u ? a(i, j - 1) : a(i, j), aS = d ? a(i, j + 1) : a(i, j);
+      const double gx = (l || r) ? (aR - aL) / ((l && r ? 2.0 : 1.0) * spec.cellSizeXM) : 0.0;
+      const double gyNorth = (u || d) ? (aN - aS) / ((u && d ? 2.0 : 1.0) * spec.cellSizeYM) : 0.0;  // rows run south
+      const double norm = std::sqrt(1.0 + gx * gx + gyNorth * gyNorth);
+      out[static_cast<size_t>(j) * w + i] = {static_cast<float>(-gx / norm), static_cast<float>(-gyNorth / norm),
+                                             static_cast<float>(1.0 / norm)};
+    }
+}
+
+// Direct sun for one day: for each sun position above the horizon, shadow rays in 4 x 4 tiles
+// (coherent 16-ray packets).
+Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                             double latitudeDeg, int doy, double hourStep, double kSun, unsigned long long* rayCount) {
+  const int w = spec.width, h = spec.height;
+  std::vector<std::array<float, 3>> normals;
+  terrainNormals(heights, valid, spec, normals);
+  Grid<float> sun(w, h, 0.f);
+  std::atomic<unsigned long long> rays{0};
+  for (double hour = hourStep / 2; hour < 24.0; hour += hourStep) {
+    const SunPosition s = sunPosition(latitudeDeg, doy, hour);
+    if (s.elevationDeg <= 0.0) continue;
+    const std::array<float, 3> dir{static_cast<float>(s.direction[0]), static_cast<float>(s.direction[1]),
+                                   static_cast<float>(s.direction[2])};
+    tbb::parallel_for(tbb::blocked_range2d<int>(0, (h + 3) / 4, 0, (w + 3) / 4), [&](const tbb::blocked_range2d<int>& r) {
+      unsigned long long local = 0;
+      for (int tj = r.rows().begin(); tj < r.rows().end(); ++tj)
+        for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti) {
+          bool want[16], hit[16];
+          std::array<float, 3> origins[16], dirs[16];
+          float cosine[16];
+          for (int k = 0; k < 16; ++k) {
+            const int i = ti * 4 + (k & 3), j = tj * 4 + (k >> 2);
+            want[k] = false;
+            cosine[k] = 0.f;
+            dirs[k] = dir;
+            if (i >= w || j >= h || !valid(i, j)) continue;
+            const auto& n = normals[static_cast<size_t>(j) * w + i];
+            cosine[k] = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
+            if (cosine[k] <= 0.f) continue;  // self-shadowed: facing away from the sun
+            origins[k] = rayOrigin(scene, i, j, n, spec);
+            want[k] = true;
+            ++local;
+          }
+          scene.occluded16(want, origins, dirs, std::numeric_limits<float>::infinity(), hit);
+          for (int k = 0; k < 16; ++k)
+            if (want[k] && !hit[k]) sun(ti * 4 + (k & 3), tj * 4 + (k >> 2)) += static_cast<float>(kSun * cosine[k] * hourStep);
+        }
+      rays += local;
+    });
+  }
+  if (rayCount) *rayCount += rays;
+  return sun;
+}
+
+// The horizon angle per azimuth: the lowest elevation whose ray escapes, found by bisection on
+// exact ray queries (no marching step to jump a thin ridge); angles are above the horizontal
+// and never negative (a summit sees the whole sky).
+Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                               int azimuths, int bisections, double kSky, unsigned long long* rayCount,
+                               std::vector<Grid<float>>* horizons) {
+  const int w = spec.width, h = spec.height;
+  std::vector<std::array<float, 3>> normals;
+  terrainNormals(heights, valid, spec, normals);
+  Grid<float> sky(w, h, 0.f);
+  if (horizons) horizons->assign(azimuths, Grid<float>(w, h, 0.f));
+  std::atomic<unsigned long long> rays{0};
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 0, w), [&](const tbb::blocked_range2d<int>& r) {
+    unsigned long long local = 0;
+    for (int j = r.rows().begin(); j < r.rows().end(); ++j)
+      for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
+        if (!valid(i, j)) continue;
+        const auto origin = rayOrigin(scene, i, j, {0.f, 0.f, 1.f}, spec);
+        double sum = 0.0;
+        for (int k = 0; k < azimuths; ++k) {
+          // Azimuths offset by half a step so none runs exactly along a grid axis or diagonal.
+          const double az = (k + 0.5) * 2.0 * kPi / azimuths;
+          const double ex = std::sin(az), ey = std::cos(az);
+          auto blocked = [&](double elevation) {
+            ++local;
+            const std::array<float, 3> d{static_cast<float>(ex * std::cos(elevation)), static_cast<float>(ey * std::cos(elevation)),
+                                         static_cast<float>(std::sin(elevation))};
+            return scene.occluded(origin, d, std::numeric_limits<float>::infinity());
+          };
+          double phi = 0.0;
+          if (blocked(0.0)) {
+            double lo = 0.0, hi = kPi / 2;
+            for (int b = 0; b < bisections; ++b) {
+              const double mid = 0.5 * (lo + hi);
+              (blocked(mid) ? lo : hi) = mid;
+            }
+            phi = 0.5 * (lo + hi);
+          }
+          if (horizons) (*horizons)[k](i, j) = static_cast<float>(phi * 180.0 / kPi);
+          sum += std::cos(phi) * std::cos(phi);
+        }
+        sky(i, j) = static_cast<float>(kSky * kPi / azimuths * sum);
+      }
+    rays += local;
+  });
+  if (rayCount) *rayCount += rays;
+  return sky;
+}
+
+// One bounce: polar sampling around each receiver (rings at the middle of equal-width
+// annuli, directions rotated by half a step every other ring), senders read from the direct
+// sun map at the nearest cell. Senders are not tested for visibility: the two cosines already
+// drop those behind the receiver's horizon plane or facing away; a ridge between two facing
+// slopes is not seen (documented in README).
+Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                               int directions, int rings, double radiusM, double kIndOverKSun) {
+  const int w = spec.width, h = spec.height;
+  Grid<float> ind(w, h, 0.f);
+  if (directions <= 0 || rings <= 0 || kIndOverKSun == 0.0) return ind;
+  std::vector<std::array<float, 3>> normals;
+  terrainNormals(heights, valid, spec, normals);
+  const double dr = radiusM / rings;
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 0, w), [&](const tbb::blocked_range2d<int>& r) {
+    for (int j = r.rows().begin(); j < r.rows().end(); ++j)
+      for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
+        if (!valid(i, j)) continue;
+        const auto& nr = normals[static_cast<size_t>(j) * w + i];
+        const double px = (i + 0.5) * spec.cellSizeXM, py = (h - j - 0.5) * spec.cellSizeYM, pz = heights(i, j);
+        double sum = 0.0;
+        for (int ring = 0; ring < rings; ++ring) {
+          const double rIn = ring * dr, rOut = (ring + 1) * dr, rMid = 0.5 * (rIn + rOut);
+          const double area = kPi * (rOut * rOut - rIn * rIn) / directions;  // A_ij
+          for (int k = 0; k < directions; ++k) {
+            const double az = (k + (ring % 2 ? 0.5 : 0.0)) * 2.0 * kPi / directions + 0.1;
+            const double sx = px + rMid * std::sin(az), sy = py + rMid * std::cos(az);
+            const int si = static_cast<int>(std::floor(sx / spec.cellSizeXM));
+            const int sj = h - 1 - static_cast<int>(std::floor(sy / spec.cellSizeYM));
+            if (si < 0 || sj < 0 || si >= w || sj >= h || !valid(si, sj) || (si == i && sj == j)) continue;
+            const double vx = (si + 0.5) * spec.cellSizeXM - px, vy = (h - sj - 0.5) * spec.cellSizeYM - py, vz = heights(si, sj) - pz;
+            const double d2 = vx * vx + vy * vy + vz * vz, d = std::sqrt(d2);
+            const double cosR = (nr[0] * vx + nr[1] * vy + nr[2] * vz) / d;
+            const auto& ns = normals[static_cast<size_t>(sj) * w + si];
+            const double cosS = -(ns[0] * vx + ns[1] * vy + ns[2] * vz) / d;
+            if (cosR <= 0.0 || cosS <= 0.0) continue;
+            sum += area * sun(si, sj) * cosS * cosR / (kPi * d2);
+          }
+        }
+        ind(i, j) = static_cast<float>(kIndOverKSun * sum);
+      }
+  });
+  return ind;
+}
+
+Grid<float> Exposure::totalAt(double seasonDay) const {
+  Grid<float> total = skyHours;
+  if (days.empty()) return total;
+  size_t a = 0, b = 0;
+  double t = 0.0;
+  if (seasonDay <= days.front().seasonDay) {
+    a = b = 0;
+  } else if (seasonDay >= days.back().seasonDay) {
+    a = b = days.size() - 1;
+  } else {
+    for (size_t k = 1; k < days.size(); ++k)
+      if (seasonDay <= days[k].seasonDay) {
+        a = k - 1, b = k;
+        t = (seasonDay - days[a].seasonDay) / (days[b].seasonDay - days[a].seasonDay);
+        break;
+      }
+  }
+  for (size_t i = 0; i < total.size(); ++i) {
+    const double ea = days[a].sunHours.values()[i] + days[a].indirectHours.values()[i];
+    const double eb = days[b].sunHours.values()[i] + days[b].indirectHours.values()[i];
+    total.values()[i] += static_cast<float>(ea + (eb - ea) * t);
+  }
+  return total;
+}
+
+Exposure computeExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                         const ModelParameters& p, const ExposureSettings& s) {
+  Exposure e;
+  auto t0 = Clock::now();
+  e.skyHours = computeSkyExposure(scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
+                                  &e.timings.skyRays);
+  e.timings.skySeconds = since(t0);
+  // Sample days: 0, dayStep, 2 dayStep, ... and the last day of the season.
+  std::vector<double> sampleDays;
+  for (double d = 0.0; d < s.seasonDays; d += s.quality.dayStep) sampleDays.push_back(d);
+  sampleDays.push_back(s.seasonDays);
+  const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
+  for (double d : sampleDays) {
+    DailyExposure day;
+    day.seasonDay = d;
+    day.dayOfYear = static_cast<int>(std::fmod(s.startDayOfYear - 1 + std::floor(d), 365.0)) + 1;
+    t0 = Clock::now();
+    day.sunHours = computeDirectSun(scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
+                                    p.directSunWeightHours, &e.timings.sunRays);
+    e.timings.sunSeconds += since(t0);
+    t0 = Clock::now();
+    day.indirectHours = computeIndirectSun(day.sunHours, heights, valid, spec, s.quality.indirectDirections, s.quality.indirectRings,
+                                           s.quality.indirectRadiusM, kIndOverKSun);
+    e.timings.indirectSeconds += since(t0);
+    e.days.push_back(std::move(day));
+  }
+  return e;
+}
+
+}  // namespace snow

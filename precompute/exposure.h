@@ -1,0 +1,74 @@
+// Sun exposure (paper §4.1): I = I_sun + I_sky + I_ind per cell, in hours of equivalent direct
+// sun per day, at a documented set of season days (interpolated between them).
+//   I_sun = k_sun sum_h s_h max(0, n . i_h) dh      shadow rays toward the sun, hour by hour
+//   I_sky = k_sky pi / N sum_i cos^2(phi_i)          horizon angle phi_i per azimuth, by bisection
+//   I_ind = (k_ind / k_sun) sum_ij A_ij I_sun(p_ij) cos(phi_s) cos(phi_r) / (pi d^2)
+// All ray queries go through RayScene (Embree), so occluder meshes shade too.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/grid.h"
+#include "core/parameters.h"
+#include "ray_scene.h"
+
+namespace snow {
+
+struct SunQuality {
+  std::string name;
+  int azimuths;             // sky: horizon directions N
+  int bisections;           // sky: horizon angle to 90 deg / 2^bisections
+  double hourStep;          // direct: hours between sun positions (sampled at the middle of each step)
+  double dayStep;           // days between exposure samples over the season (interpolated between)
+  int indirectDirections;   // indirect: directions per ring (0 = no indirect pass)
+  int indirectRings;        // indirect: rings out to the radius
+  double indirectRadiusM;   // indirect: sampling radius, metres
+};
+
+// "draft", "production", "reference"; throws InputError for anything else.
+SunQuality sunQuality(const std::string& name);
+const std::vector<std::string>& sunQualityNames();
+
+struct ExposureSettings {
+  SunQuality quality = sunQuality("draft");
+  double latitudeDeg = 45.0;
+  int startDayOfYear = 335;
+  double seasonDays = 120.0;
+};
+
+struct DailyExposure {
+  double seasonDay = 0.0;
+  int dayOfYear = 0;
+  Grid<float> sunHours;       // I_sun
+  Grid<float> indirectHours;  // I_ind
+};
+
+struct ExposureTimings {
+  double sunSeconds = 0, skySeconds = 0, indirectSeconds = 0;
+  unsigned long long sunRays = 0, skyRays = 0;
+};
+
+struct Exposure {
+  Grid<float> skyHours;  // I_sky: rotation invariant, the same every day
+  std::vector<DailyExposure> days;
+  ExposureTimings timings;
+  // I on a season day: I_sky + the linear interpolation of I_sun + I_ind between sample days.
+  Grid<float> totalAt(double seasonDay) const;
+};
+
+// Unit surface normals (x east, y north, z up) from central differences that skip NODATA.
+void terrainNormals(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out);
+
+Exposure computeExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                         const ModelParameters& params, const ExposureSettings& settings);
+
+// Pieces, for tests and benchmarks.
+Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                             double latitudeDeg, int dayOfYear, double hourStep, double kSunHours, unsigned long long* rays = nullptr);
+Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                               int azimuths, int bisections, double kSkyHours, unsigned long long* rays = nullptr,
+                               std::vector<Grid<float>>* horizonAnglesDeg = nullptr);
+Grid<float> computeIndirectSun(const Grid<float>& sunHours, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                               int directions, int rings, double radiusM, double kIndOverKSun);
+
+}  // namespace snow
