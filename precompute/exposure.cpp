@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "core/errors.h"
+#include "horizon.h"
 #include "solar.h"
 
 namespace snow {
@@ -220,12 +221,22 @@ Grid<float> Exposure::totalAt(double seasonDay) const {
   return total;
 }
 
-Exposure computeExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& p, const ExposureSettings& s) {
+  if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
   Exposure e;
   auto t0 = Clock::now();
-  e.skyHours = computeSkyExposure(scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
-                                  &e.timings.skyRays);
+  std::vector<Grid<float>> shadowHorizons;
+  if (s.horizonSweep) {
+    const auto skyHorizons = computeHorizonsBySweep(heights, valid, spec, s.quality.azimuths);
+    shadowHorizons = computeHorizonsBySweep(heights, valid, spec, 4 * s.quality.azimuths);
+    e.timings.horizonSeconds = since(t0);
+    t0 = Clock::now();
+    e.skyHours = skyFromHorizons(skyHorizons, valid, p.skyAmbientWeightHours);
+  } else {
+    e.skyHours = computeSkyExposure(*scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
+                                    &e.timings.skyRays);
+  }
   e.timings.skySeconds = since(t0);
   // Sample days: 0, dayStep, 2 dayStep, ... and the last day of the season.
   std::vector<double> sampleDays;
@@ -237,8 +248,10 @@ Exposure computeExposure(const RayScene& scene, const Grid<float>& heights, cons
     day.seasonDay = d;
     day.dayOfYear = static_cast<int>(std::fmod(s.startDayOfYear - 1 + std::floor(d), 365.0)) + 1;
     t0 = Clock::now();
-    day.sunHours = computeDirectSun(scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
-                                    p.directSunWeightHours, &e.timings.sunRays);
+    day.sunHours = s.horizonSweep ? directSunFromHorizons(shadowHorizons, heights, valid, spec, s.latitudeDeg, day.dayOfYear,
+                                                          s.quality.hourStep, p.directSunWeightHours)
+                                  : computeDirectSun(*scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
+                                                     p.directSunWeightHours, &e.timings.sunRays);
     e.timings.sunSeconds += since(t0);
     t0 = Clock::now();
     day.indirectHours = computeIndirectSun(day.sunHours, heights, valid, spec, s.quality.indirectDirections, s.quality.indirectRings,

@@ -3,7 +3,8 @@
 //   I_sun = k_sun sum_h s_h max(0, n . i_h) dh      shadow rays toward the sun, hour by hour
 //   I_sky = k_sky pi / N sum_i cos^2(phi_i)          horizon angle phi_i per azimuth, by bisection
 //   I_ind = (k_ind / k_sun) sum_ij A_ij I_sun(p_ij) cos(phi_s) cos(phi_r) / (pi d^2)
-// All ray queries go through RayScene (Embree), so occluder meshes shade too.
+// Ray queries go through RayScene (Embree), so occluder meshes shade too; pure height fields use
+// the horizon-sweep fast path by default (horizon.h).
 #pragma once
 #include <string>
 #include <vector>
@@ -31,6 +32,10 @@ const std::vector<std::string>& sunQualityNames();
 
 struct ExposureSettings {
   SunQuality quality = sunQuality("draft");
+  // The fast path for pure height fields (horizon.h): sky and shadows from swept horizon angles
+  // (sky: quality.azimuths directions; shadows: 4x as many, interpolated). false: Embree rays
+  // for both (needed with occluder meshes).
+  bool horizonSweep = true;
   double latitudeDeg = 45.0;
   int startDayOfYear = 335;
   double seasonDays = 120.0;
@@ -46,6 +51,7 @@ struct DailyExposure {
 struct ExposureTimings {
   double sunSeconds = 0, skySeconds = 0, indirectSeconds = 0;
   unsigned long long sunRays = 0, skyRays = 0;
+  double horizonSeconds = 0;  // the fast path's sweeps (counted in neither sun nor sky)
 };
 
 struct Exposure {
@@ -59,7 +65,8 @@ struct Exposure {
 // Unit surface normals (x east, y north, z up) from central differences that skip NODATA.
 void terrainNormals(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out);
 
-Exposure computeExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+// `scene` may be null when settings.horizonSweep is true.
+Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& params, const ExposureSettings& settings);
 
 // Pieces, for tests and benchmarks.

@@ -36,6 +36,7 @@ struct Scene {
   OutputRequest outputs;
   bool sunExposure = true;             // precompute.sun: false skips the sun (temperature from altitude alone)
   std::string sunQuality = "draft";    // precompute.sun_quality: draft | production | reference
+  std::string sunMethod = "auto";      // precompute.sun_method: auto (horizon sweep unless occluders) | horizon | embree
   uint64_t seed = 1;
   std::string backend = "auto";  // cpu | cuda | auto
   int threads = 0;               // 0 = all cores

@@ -101,6 +101,7 @@ const std::vector<Rule>& sceneRules() {
       {"precompute", Kind::Table},
       {"precompute.sun", Kind::Bool},
       {"precompute.sun_quality", Kind::String, -kInf, kInf, {"draft", "production", "reference"}},
+      {"precompute.sun_method", Kind::String, -kInf, kInf, {"auto", "horizon", "embree"}},
       {"outputs", Kind::Table},
       {"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices},
       {"outputs.format", Kind::String, -kInf, kInf, {"exr", "tiff"}},
@@ -474,6 +475,7 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   }
   if (auto v = root["precompute"]["sun"].value<bool>()) scene.sunExposure = *v;
   if (auto v = root["precompute"]["sun_quality"].value<std::string>()) scene.sunQuality = *v;
+  if (auto v = root["precompute"]["sun_method"].value<std::string>()) scene.sunMethod = *v;
   scene.seed = static_cast<uint64_t>(root["run"]["seed"].value<int64_t>().value_or(1));
   if (auto b = root["run"]["backend"].value<std::string>()) scene.backend = *b;
   scene.threads = static_cast<int>(root["run"]["threads"].value<int64_t>().value_or(0));

@@ -194,7 +194,8 @@ TEST(Exposure, SeasonSamplesInterpolateBetweenDays) {
   s.latitudeDeg = 46.5;
   s.startDayOfYear = 335;  // 1 December
   s.seasonDays = 120;
-  const Exposure e = computeExposure(scene, f.heights, f.valid, f.spec, ModelParameters{}, s);
+  s.horizonSweep = false;
+  const Exposure e = computeExposure(&scene, f.heights, f.valid, f.spec, ModelParameters{}, s);
   ASSERT_EQ(e.days.size(), 5u);  // draft: every 30 days, plus the last day
   EXPECT_EQ(e.days[1].dayOfYear, 365);
   EXPECT_EQ(e.days[2].dayOfYear, 30);  // wraps into January

@@ -15,6 +15,8 @@
 #include "core/errors.h"
 #include "core/reference_scenario.h"
 #include "cuda/cuda_backend.h"
+#include "precompute/exposure.h"
+#include "precompute/horizon.h"
 #include "precompute/terrain_loader.h"
 #include "precompute/wind.h"
 
@@ -51,21 +53,116 @@ void writeCsv(const BenchOptions& o, const std::string& name, const std::string&
 
 std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string windBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string sunBench(const BenchOptions& o, std::ostream& log, int threads);
 
 }  // namespace
 
 std::string runBench(const BenchOptions& o, std::ostream& log) {
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  if (o.stage != "all" && o.stage != "season" && o.stage != "wind")
-    throw InputError("--stage " + o.stage + ": must be season, wind or all");
+  if (o.stage != "all" && o.stage != "season" && o.stage != "wind" && o.stage != "sun")
+    throw InputError("--stage " + o.stage + ": must be sun, wind, season or all");
   std::string out;
+  if (o.stage == "all" || o.stage == "sun") out += sunBench(o, log, threads) + "\n";
   if (o.stage == "all" || o.stage == "wind") out += windBench(o, log, threads) + "\n";
   if (o.stage == "all" || o.stage == "season") out += seasonBench(o, log, threads);
   return out;
 }
 
 namespace {
+
+double relativeL1(const Grid<float>& a, const Grid<float>& reference) {
+  double diff = 0, sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) diff += std::abs(a.values()[i] - reference.values()[i]), sum += std::abs(reference.values()[i]);
+  return sum > 0 ? diff / sum : 0.0;
+}
+
+// Sun exposure: run time of each term for a 120-day season on a sunSize^2 grid, per quality
+// level, and each level's error on one day against the Embree path at reference quality.
+std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
+  std::ostringstream table, csv;
+  const ModelParameters p;
+  const double latitude = 46.5;
+  const int startDoy = 335;  // 1 December
+  csv << "part,quality,method,size,horizons_s,sky_s,direct_s,indirect_s,temperature_s,total_s,err_sky,err_sun,err_ind,err_total\n";
+  // Timing.
+  DefaultTerrainOptions big;
+  big.size = o.sunSize;
+  big.cellSizeM = 10240.0 / o.sunSize;
+  const Terrain tb = makeBuiltinTerrain(big);
+  table << "Sun exposure, 120-day season from 1 December at 46.5 N, builtin range " << o.sunSize << "² at "
+        << format("%.0f", big.cellSizeM) << " m, " << machineDescription() << ", " << threads << " threads\n\n"
+        << "| quality | method | horizons (s) | sky (s) | direct (s) | indirect (s) | temperature, 120 days (s) | total (s) |\n"
+        << "|---|---|---|---|---|---|---|---|\n";
+  std::vector<std::string> levels{"draft", "production", "reference"};
+  for (const auto& name : levels) {
+    ExposureSettings es;
+    es.quality = sunQuality(name);
+    es.latitudeDeg = latitude;
+    es.startDayOfYear = startDoy;
+    es.seasonDays = 120;
+    es.horizonSweep = true;
+    const auto t0 = std::chrono::steady_clock::now();
+    const Exposure e = computeExposure(nullptr, tb.heightsM, tb.valid, tb.info.spec, p, es);
+    const auto t1 = std::chrono::steady_clock::now();
+    SnowState st;
+    st.allocate(tb.info.spec);
+    st.bedrockM = tb.heightsM;
+    for (int day = 0; day < 120; ++day) {
+      st.exposureHours = e.totalAt(day);
+      computeTemperatureBase(st, p);
+    }
+    const double tempSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    table << "| " << name << " | horizon sweep | " << format("%.2f", e.timings.horizonSeconds) << " | " << format("%.2f", e.timings.skySeconds)
+          << " | " << format("%.2f", e.timings.sunSeconds) << " | " << format("%.2f", e.timings.indirectSeconds) << " | "
+          << format("%.2f", tempSeconds) << " | " << format("%.2f", total) << " |\n";
+    csv << "time," << name << ",horizon," << o.sunSize << "," << e.timings.horizonSeconds << "," << e.timings.skySeconds << ","
+        << e.timings.sunSeconds << "," << e.timings.indirectSeconds << "," << tempSeconds << "," << total << ",,,,\n";
+    log << "  sun " << name << " " << o.sunSize << "²: " << format("%.1f", total) << " s\n";
+  }
+  // Accuracy on one day, against the Embree path at reference quality.
+  DefaultTerrainOptions small;
+  small.size = o.sunAccuracySize;
+  small.cellSizeM = 10240.0 / o.sunAccuracySize;
+  const Terrain ts = makeBuiltinTerrain(small);
+  const RayScene scene(ts.heightsM, ts.info.spec);
+  const int doy = 20;  // 20 January
+  auto oneDay = [&](const SunQuality& q, bool sweep, Grid<float>& sky, Grid<float>& sun, Grid<float>& ind) {
+    if (sweep) {
+      sky = skyFromHorizons(computeHorizonsBySweep(ts.heightsM, ts.valid, ts.info.spec, q.azimuths), ts.valid, p.skyAmbientWeightHours);
+      sun = directSunFromHorizons(computeHorizonsBySweep(ts.heightsM, ts.valid, ts.info.spec, 4 * q.azimuths), ts.heightsM, ts.valid,
+                                  ts.info.spec, latitude, doy, q.hourStep, p.directSunWeightHours);
+    } else {
+      sky = computeSkyExposure(scene, ts.heightsM, ts.valid, ts.info.spec, q.azimuths, q.bisections, p.skyAmbientWeightHours);
+      sun = computeDirectSun(scene, ts.heightsM, ts.valid, ts.info.spec, latitude, doy, q.hourStep, p.directSunWeightHours);
+    }
+    ind = computeIndirectSun(sun, ts.heightsM, ts.valid, ts.info.spec, q.indirectDirections, q.indirectRings, q.indirectRadiusM,
+                             p.indirectSunWeightHours / p.directSunWeightHours);
+  };
+  Grid<float> refSky, refSun, refInd;
+  oneDay(sunQuality("reference"), false, refSky, refSun, refInd);
+  Grid<float> refTotal = refSky;
+  for (size_t i = 0; i < refTotal.size(); ++i) refTotal.values()[i] += refSun.values()[i] + refInd.values()[i];
+  table << "\nError on 20 January against the Embree path at reference quality (relative L1 over the grid), builtin range "
+        << o.sunAccuracySize << "² at " << format("%.0f", small.cellSizeM) << " m:\n\n"
+        << "| quality | method | I_sky | I_sun | I_ind | I |\n|---|---|---|---|---|---|\n";
+  for (const auto& name : levels)
+    for (bool sweep : {true, false}) {
+      if (!sweep && name == "reference") continue;  // the reference itself
+      Grid<float> sky, sun, ind;
+      oneDay(sunQuality(name), sweep, sky, sun, ind);
+      Grid<float> total = sky;
+      for (size_t i = 0; i < total.size(); ++i) total.values()[i] += sun.values()[i] + ind.values()[i];
+      const double es = relativeL1(sky, refSky), eu = relativeL1(sun, refSun), ei = relativeL1(ind, refInd), et = relativeL1(total, refTotal);
+      table << "| " << name << " | " << (sweep ? "horizon sweep" : "Embree") << " | " << format("%.4f", es) << " | " << format("%.4f", eu)
+            << " | " << format("%.4f", ei) << " | " << format("%.4f", et) << " |\n";
+      csv << "error," << name << "," << (sweep ? "horizon" : "embree") << "," << o.sunAccuracySize << ",,,,,,," << es << "," << eu << ","
+          << ei << "," << et << "\n";
+    }
+  writeCsv(o, "sun.csv", csv.str(), table);
+  return table.str();
+}
 
 std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
   std::ostringstream table, csv;

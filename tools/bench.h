@@ -9,7 +9,9 @@
 namespace snow {
 
 struct BenchOptions {
-  std::string stage = "all";  // season | wind | all
+  std::string stage = "all";  // sun | wind | season | all
+  int sunSize = 1024;          // grid of the sun-exposure timing table
+  int sunAccuracySize = 256;   // grid of the sun-exposure accuracy table (the Embree reference is costly)
   std::vector<int> sizes{256, 512, 1024, 2048};
   double days = 120.0;
   std::string backend = "cpu";  // cpu | cuda | auto

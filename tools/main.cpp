@@ -64,7 +64,8 @@ int main(int argc, char** argv) {
   benchCmd->add_option("--backend", benchOptions.backend, "cpu, cuda or auto")->check(CLI::IsMember({"cpu", "cuda", "auto"}))
       ->capture_default_str();
   benchCmd->add_option("--threads", benchOptions.threads, "CPU threads, 0 = all cores");
-  benchCmd->add_option("--stage", benchOptions.stage, "season, wind or all")->check(CLI::IsMember({"season", "wind", "all"}))
+  benchCmd->add_option("--sun-size", benchOptions.sunSize, "Grid size of the sun-exposure timing table")->capture_default_str();
+  benchCmd->add_option("--stage", benchOptions.stage, "sun, wind, season or all")->check(CLI::IsMember({"sun", "season", "wind", "all"}))
       ->capture_default_str();
   benchCmd->add_option("--csv-dir", benchOptions.csvDir, "Folder for the CSV files (empty: none)")->capture_default_str();
   benchCmd->add_option("--data", benchOptions.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();

@@ -128,7 +128,8 @@ std::string layerContent(const std::string& name) {
 Exposure loadOrComputeExposure(const SnowState& state, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,
                                const ExposureSettings& es, const PrecomputeCache& cache, std::ostream& log) {
   Fnv1a64 h;
-  h.add("exposure-v1");
+  h.add("exposure-v2");
+  h.add(es.horizonSweep ? "horizon-sweep" : "embree");
   h.add(state.bedrockM.data(), state.bedrockM.size() * sizeof(float));
   h.add(state.validCell.data(), state.validCell.size());
   const double numbers[] = {static_cast<double>(state.spec.width), static_cast<double>(state.spec.height), state.spec.cellSizeXM,
@@ -151,9 +152,11 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
     log << "  sun exposure: from the cache\n";
     return e;
   }
-  const RayScene scene(state.bedrockM, state.spec, occluders);
-  e = computeExposure(scene, state.bedrockM, state.validCell, state.spec, p, es);
-  log << "  sun exposure: direct " << fixed(e.timings.sunSeconds, 2) << " s (" << e.timings.sunRays << " rays), sky "
+  std::unique_ptr<RayScene> scene;
+  if (!es.horizonSweep) scene = std::make_unique<RayScene>(state.bedrockM, state.spec, occluders);
+  e = computeExposure(scene.get(), state.bedrockM, state.validCell, state.spec, p, es);
+  log << "  sun exposure (" << (es.horizonSweep ? "horizon sweep" : "Embree rays") << "): horizons "
+      << fixed(e.timings.horizonSeconds, 2) << " s, direct " << fixed(e.timings.sunSeconds, 2) << " s (" << e.timings.sunRays << " rays), sky "
       << fixed(e.timings.skySeconds, 2) << " s (" << e.timings.skyRays << " rays), indirect " << fixed(e.timings.indirectSeconds, 2)
       << " s\n";
   std::vector<const Grid<float>*> out{&e.skyHours};
@@ -239,8 +242,12 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     es.latitudeDeg = latitude;
     es.startDayOfYear = scene.startDayOfYear();
     es.seasonDays = scene.days;
+    // The fast path where it is valid (a pure height field) unless the scene asks for rays.
+    es.horizonSweep = scene.sunMethod == "horizon" || (scene.sunMethod == "auto" && occluders.empty());
+    if (scene.sunMethod == "horizon" && !occluders.empty())
+      throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
     exposure = loadOrComputeExposure(state, occluders, scene.params, es, cache, log);
-    log << "precompute: sun exposure (" << es.quality.name << ", " << exposure->days.size() << " sample days) ("
+    log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", " << exposure->days.size() << " sample days) ("
         << fixed(since(t0), 2) << " s)\n";
   } else {
     log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
