@@ -270,3 +270,37 @@ TEST(Cli, RealDemWithNodataBakesWithAMaskAndNoSnowInTheHoles) {
   EXPECT_GT(snowy, (mask.size() - holes) / 2);
   fs::remove_all(dir);
 }
+
+TEST(Cli, PrecomputeCacheIsReusedAndGivesTheSameBytes) {
+  const fs::path dir = workDir();
+  const std::string cache = (dir / "cache").string();
+  const std::string common = "bake preset:default --backend cpu --quiet --set terrain.size=64 --set season.days=20 "
+                             "--set outputs.frames_days=[] --set 'outputs.layers=[\"depth\",\"sun_exposure\",\"wind_shadow_depth\"]' "
+                             "--cache-dir " + cache;
+  const ProcessResult first = snowbake(dir, common + " --out " + (dir / "a").string());
+  ASSERT_EQ(first.status, 0) << first.err;
+  EXPECT_EQ(first.err.find("sun exposure: from the cache"), std::string::npos) << first.err;
+  EXPECT_EQ(first.err.find("m/s: from the cache"), std::string::npos) << first.err;
+  const ProcessResult second = snowbake(dir, common + " --out " + (dir / "b").string());
+  ASSERT_EQ(second.status, 0) << second.err;
+  EXPECT_NE(second.err.find("sun exposure: from the cache"), std::string::npos) << second.err;
+  EXPECT_NE(second.err.find("m/s: from the cache"), std::string::npos) << second.err;
+  const auto a = filesIn(dir / "a"), b = filesIn(dir / "b");
+  for (const auto& [name, bytes] : a) EXPECT_TRUE(bytes == b.at(name)) << name;
+  // A changed input is recomputed, and --no-cache reads nothing.
+  const ProcessResult changed = snowbake(dir, common + " --set site.latitude_deg=30 --out " + (dir / "c").string());
+  EXPECT_EQ(changed.err.find("sun exposure: from the cache"), std::string::npos) << changed.err;
+  const ProcessResult off = snowbake(dir, common + " --no-cache --out " + (dir / "d").string());
+  EXPECT_EQ(off.err.find("sun exposure: from the cache"), std::string::npos) << off.err;
+  EXPECT_EQ(off.err.find("m/s: from the cache"), std::string::npos) << off.err;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, SunOffSkipsTheExposure) {
+  const fs::path dir = workDir();
+  const ProcessResult r = snowbake(dir, "bake preset:default --backend cpu --no-cache --set precompute.sun=false " + kSmall +
+                                            " --out " + (dir / "o").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("sun exposure off"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}

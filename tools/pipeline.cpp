@@ -155,10 +155,14 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
   std::unique_ptr<RayScene> scene;
   if (!es.horizonSweep) scene = std::make_unique<RayScene>(state.bedrockM, state.spec, occluders);
   e = computeExposure(scene.get(), state.bedrockM, state.validCell, state.spec, p, es);
-  log << "  sun exposure (" << (es.horizonSweep ? "horizon sweep" : "Embree rays") << "): horizons "
-      << fixed(e.timings.horizonSeconds, 2) << " s, direct " << fixed(e.timings.sunSeconds, 2) << " s (" << e.timings.sunRays << " rays), sky "
-      << fixed(e.timings.skySeconds, 2) << " s (" << e.timings.skyRays << " rays), indirect " << fixed(e.timings.indirectSeconds, 2)
-      << " s\n";
+  if (es.horizonSweep)
+    log << "  sun exposure (horizon sweep): horizons " << fixed(e.timings.horizonSeconds, 2) << " s, direct "
+        << fixed(e.timings.sunSeconds, 2) << " s, sky " << fixed(e.timings.skySeconds, 2) << " s, indirect "
+        << fixed(e.timings.indirectSeconds, 2) << " s\n";
+  else
+    log << "  sun exposure (Embree rays): direct " << fixed(e.timings.sunSeconds, 2) << " s (" << e.timings.sunRays << " rays), sky "
+        << fixed(e.timings.skySeconds, 2) << " s (" << e.timings.skyRays << " rays), indirect " << fixed(e.timings.indirectSeconds, 2)
+        << " s\n";
   std::vector<const Grid<float>*> out{&e.skyHours};
   for (const auto& d : e.days) out.push_back(&d.sunHours), out.push_back(&d.indirectHours);
   cache.store("exposure", key, out);
