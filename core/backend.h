@@ -9,6 +9,8 @@
 #include "kernels/melt.h"
 #include "kernels/powder_diffusion.h"
 #include "kernels/snowfall.h"
+#include "kernels/stability.h"
+#include "kernels/wind_transport.h"
 #include "snow_state.h"
 
 namespace snow {
@@ -37,6 +39,9 @@ class SnowBackend {
   virtual double melt(const MeltArgs& args) = 0;
   // Transport: conserves mass; runs its own substeps (see powderDiffusionSubsteps).
   virtual void powderDiffusion(const PowderDiffusionArgs& args) = 0;
+  virtual void windTransport(const WindTransportArgs& args) = 0;  // conserves mass
+  // Moves snow between the stable and unstable layers (conserves mass).
+  virtual void stabilityChange(const StabilityArgs& args) = 0;
 
   virtual LayerTotals totals() = 0;
   // Highest temperature (degC) of any valid cell for a sea-level temperature of 0: lets the

@@ -28,6 +28,9 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(unstable_, s.unstableM.values());
     exec_.upload(powder_, s.powderM.values());
     exec_.upload(moving_, s.snowMoving.values());
+    exec_.upload(windScour_, s.windScourM.values());
+    exec_.upload(windDeposit_, s.windDepositM.values());
+    exec_.upload(melted_, s.meltedM.values());
     exec_.upload(valid_, s.validCell.values());
     exec_.upload(delta_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
@@ -42,6 +45,7 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(windX_, s.windXMps.values());
     exec_.upload(windY_, s.windYMps.values());
     exec_.upload(windEffectZ_, s.windEffectZM.values());
+    exec_.upload(windLoading_, s.windLoadingMps2.values());
   }
 
   void download(SnowState& s) override {
@@ -50,10 +54,18 @@ class ExecBackend final : public SnowBackend {
     exec_.download(unstable_, s.unstableM.values());
     exec_.download(powder_, s.powderM.values());
     exec_.download(moving_, s.snowMoving.values());
+    exec_.download(windScour_, s.windScourM.values());
+    exec_.download(windDeposit_, s.windDepositM.values());
+    exec_.download(melted_, s.meltedM.values());
   }
 
   double snowfall(const SnowfallArgs& a) override { return runSnowfall(exec_, view(), a); }
   double melt(const MeltArgs& a) override { return runMelt(exec_, view(), a); }
+  void stabilityChange(const StabilityArgs& a) override { runStability(exec_, view(), a); }
+  void windTransport(const WindTransportArgs& a) override {
+    runWindTransport(exec_, view(), a);
+    exec_.finish();
+  }
   void powderDiffusion(const PowderDiffusionArgs& a) override {
     runPowderDiffusion(exec_, view(), a);
     exec_.finish();
@@ -95,6 +107,10 @@ class ExecBackend final : public SnowBackend {
     v.windX = windX_.data();
     v.windY = windY_.data();
     v.windEffectZ = windEffectZ_.data();
+    v.windLoading = windLoading_.data();
+    v.windScour = windScour_.data();
+    v.windDeposit = windDeposit_.data();
+    v.melted = melted_.data();
     v.delta = delta_.data();
     v.surfaceSlope = surfaceSlope_.data();
     v.scratchSurface = scratchSurface_.data();
@@ -107,6 +123,7 @@ class ExecBackend final : public SnowBackend {
   typename Exec::template Buffer<float> bedrock_, compacted_, stable_, unstable_, powder_;
   typename Exec::template Buffer<uint8_t> moving_, valid_;
   typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
+  typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_;
 };
 
 }  // namespace snow

@@ -21,6 +21,16 @@ inline std::vector<RegisteredStep> registeredSteps(const ModelParameters& p, con
   return {
       {"snowfall", [p, weather](SnowBackend& b) { return b.snowfall(makeSnowfallArgs(p, 0.5, weather)); }},
       {"melt", [p, weather](SnowBackend& b) { return b.melt(makeMeltArgs(p, 0.5, weather)); }},
+      {"stability change",
+       [p, weather](SnowBackend& b) {
+         b.stabilityChange(makeStabilityArgs(p, 0.5, weather));
+         return 0.0;
+       }},
+      {"wind transport",
+       [p](SnowBackend& b) {
+         b.windTransport(makeWindTransportArgs(p, 0.5));
+         return 0.0;
+       }},
       {"powder diffusion",
        [p](SnowBackend& b) {
          b.powderDiffusion(makePowderDiffusionArgs(p, 0.5));

@@ -36,6 +36,8 @@ const std::vector<ParameterInfo>& parameterTable() {
       {"diffusion_rest_slope", &P::diffusionRestSlope, "-", 0.0, 100.0, "s_d0: rest slope of powder"},
       {"diffusion_rate_per_day", &P::diffusionRatePerDay, "1/day", 0.0, 1000.0, "k_m: powder shift rate (at 10 m cells)"},
       {"wind_erosion_rate_m_per_s_per_day", &P::windErosionRateMPerSPerDay, "m/s/day", 0.0, 100.0, "k_erosion"},
+      {"wind_instability_per_mps2", &P::windInstabilityPerMps2, "m/day/(m/s^2)", 0.0, 100.0, "instability from wind loading (W . grad W_sz > 0)"},
+      {"wind_shadow_tolerance_m", &P::windShadowToleranceM, "m", 0.0, 100.0, "W_z above the snow by more than this: no erosion"},
       {"snow_density_kg_per_m3", &P::snowDensityKgPerM3, "kg/m^3", 10.0, 1000.0, "rho"},
       {"gravity_mps2", &P::gravityMps2, "m/s^2", 0.1, 100.0, "g"},
       {"avalanche_rest_angle_deg", &P::avalancheRestAngleDeg, "deg", 0.0, 89.0, "theta_c"},

@@ -33,7 +33,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   const auto t0 = Clock::now();
   const ModelParameters& p = cfg.params;
   SeasonReport report;
-  if (cfg.updateTemperatureBase) cfg.updateTemperatureBase(0, state);
+  if (cfg.updateStaticFields) cfg.updateStaticFields(0, state);
   backend.upload(state);
   report.initial = backend.totals();
   float maxTemperatureBase = backend.maxTemperatureBaseC();
@@ -83,7 +83,9 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     addPhenomenon(std::move(s));
   }
   {
-    // Melt (§5.2), always active. Skipped on days when even the warmest cell is below T_0melt.
+    // State changes (§5.2), always active: melt, skipped on days when even the warmest cell is
+    // below T_0melt, and stability changes, skipped when it is below T_freeze and there is no
+    // wind loading.
     PhenomenonSpec s;
     s.name = "melt";
     s.alwaysActive = true;
@@ -102,6 +104,34 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     addPhenomenon(std::move(s));
   }
   {
+    PhenomenonSpec s;
+    s.name = "stability";
+    s.alwaysActive = true;
+    s.stepsPerDay = p.stateChangeStepsPerDay;
+    const int slot = static_cast<int>(reports.size());
+    s.onStep = [&, slot](const EventContext& e) {
+      const WeatherState w = cfg.weather.at(e.day);
+      if (w.seaLevelTemperatureC + maxTemperatureBase <= p.freezeTemperatureC && !(cfg.windTransport && p.windInstabilityPerMps2 > 0)) {
+        ++reports[slot].skippedSteps;
+        return;
+      }
+      timed(slot, [&] { backend.stabilityChange(makeStabilityArgs(p, e.stepDays, w)); });
+    };
+    addPhenomenon(std::move(s));
+  }
+  if (cfg.windTransport) {
+    // Wind transport (§5.4), always active while the season has wind.
+    PhenomenonSpec s;
+    s.name = "wind transport";
+    s.alwaysActive = true;
+    s.stepsPerDay = p.windTransportStepsPerDay;
+    const int slot = static_cast<int>(reports.size());
+    s.onStep = [&, slot](const EventContext& e) {
+      timed(slot, [&] { backend.windTransport(makeWindTransportArgs(p, e.stepDays)); });
+    };
+    addPhenomenon(std::move(s));
+  }
+  {
     // Powder diffusion (§5.3), always active.
     PhenomenonSpec s;
     s.name = "powder diffusion";
@@ -116,10 +146,10 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     addPhenomenon(std::move(s));
   }
 
-  if (cfg.updateTemperatureBase) {
+  if (cfg.updateStaticFields) {
     for (int day = 1; day < cfg.days; ++day)
       scheduler.addAction(day, [&, day](double) {
-        cfg.updateTemperatureBase(day, state);
+        cfg.updateStaticFields(day, state);
         backend.uploadStaticFields(state);
         maxTemperatureBase = backend.maxTemperatureBaseC();
       });

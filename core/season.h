@@ -19,10 +19,12 @@ struct SeasonConfig {
   WeatherTimeline weather;
   std::vector<SnowfallPeriod> userSnowfalls;  // storms requested as user events
   std::vector<double> frameDays;              // days at which to hand the state to onFrame
-  // Per-day temperature: when set, called at the start of every season day (0, 1, 2, ...) to
-  // refill state.temperatureBaseC for that day (sun exposure changes through the season); the
-  // backend's static fields are then replaced.
-  std::function<void(int day, SnowState& state)> updateTemperatureBase;
+  // Per-day static fields: when set, called at the start of every season day (0, 1, 2, ...) to
+  // refill the state's static fields for that day (temperature from that day's sun exposure,
+  // the wind of that day); the backend's static fields are then replaced.
+  std::function<void(int day, SnowState& state)> updateStaticFields;
+  // Wind transport runs only when the season has wind (the static wind fields are non-zero).
+  bool windTransport = false;
 };
 
 struct PhenomenonReport {

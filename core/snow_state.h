@@ -38,6 +38,11 @@ struct SnowState {
   Grid<float> windXMps;          // wind field W (east component)
   Grid<float> windYMps;          // wind field W (south component, +y = rows downward)
   Grid<float> windEffectZM;      // wind-effect surface altitude W_z
+  Grid<float> windLoadingMps2;   // max(0, W . grad W_sz): where wind loading destabilises snow
+  // Records for the bakers, accumulated over the season (metres of snow).
+  Grid<float> windScourM;        // removed by wind transport
+  Grid<float> windDepositM;      // deposited by wind transport
+  Grid<float> meltedM;           // removed by melt
 
   // Allocates every field for `s`, snow layers zero, all cells valid, static fields zero.
   void allocate(const GridSpec& s) {
@@ -55,6 +60,10 @@ struct SnowState {
     windXMps.resize(w, h, 0.f);
     windYMps.resize(w, h, 0.f);
     windEffectZM.resize(w, h, 0.f);
+    windLoadingMps2.resize(w, h, 0.f);
+    windScourM.resize(w, h, 0.f);
+    windDepositM.resize(w, h, 0.f);
+    meltedM.resize(w, h, 0.f);
   }
   Grid<float>& layer(SnowLayer l) {
     switch (l) {
@@ -87,6 +96,10 @@ struct SnowFieldsView {
   const float* windX = nullptr;
   const float* windY = nullptr;
   const float* windEffectZ = nullptr;
+  const float* windLoading = nullptr;
+  float* windScour = nullptr;
+  float* windDeposit = nullptr;
+  float* melted = nullptr;
   float* delta = nullptr;  // per-cell scratch: snow volume changed by the last step (for the mass ledger)
   // Per-cell scratch: |grad A| of the snow surface, taken before a per-cell pass that changes A,
   // so the pass never reads a neighbour that another thread is writing.

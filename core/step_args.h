@@ -33,6 +33,28 @@ inline MeltArgs makeMeltArgs(const ModelParameters& p, double dtDays, const Weat
   return a;
 }
 
+inline StabilityArgs makeStabilityArgs(const ModelParameters& p, double dtDays, const WeatherState& w) {
+  StabilityArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.seaLevelTemperatureC = static_cast<float>(w.seaLevelTemperatureC);
+  a.warmTemperatureC = static_cast<float>(p.warmTemperatureC);
+  a.coolTemperatureC = static_cast<float>(p.coolTemperatureC);
+  a.freezeTemperatureC = static_cast<float>(p.freezeTemperatureC);
+  a.instabilityByWarmthMPerDay = static_cast<float>(p.instabilityByWarmthMPerDay);
+  a.stabilityByColdMPerDay = static_cast<float>(p.stabilityByColdMPerDay);
+  a.unstableCriticalSlope = static_cast<float>(p.unstableCriticalSlope);
+  a.windInstabilityPerMps2 = static_cast<float>(p.windInstabilityPerMps2);
+  return a;
+}
+
+inline WindTransportArgs makeWindTransportArgs(const ModelParameters& p, double dtDays) {
+  WindTransportArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.erosionRate = static_cast<float>(p.windErosionRateMPerSPerDay);
+  a.shadowToleranceM = static_cast<float>(p.windShadowToleranceM);
+  return a;
+}
+
 inline PowderDiffusionArgs makePowderDiffusionArgs(const ModelParameters& p, double dtDays) {
   PowderDiffusionArgs a;
   a.dtDays = static_cast<float>(dtDays);

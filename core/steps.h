@@ -11,6 +11,8 @@
 #include "kernels/melt.h"
 #include "kernels/powder_diffusion.h"
 #include "kernels/snowfall.h"
+#include "kernels/stability.h"
+#include "kernels/wind_transport.h"
 #include "snow_state.h"
 #include "tiling.h"
 
@@ -27,6 +29,24 @@ template <class Exec>
 double runMelt(Exec& exec, const SnowFieldsView& v, const MeltArgs& a) {
   exec.forEachCell(v.width, v.height, MeltKernel{v, a});
   return exec.sum(v.delta, v.valid, v.width, v.height) * static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
+}
+
+template <class Exec>
+void runStability(Exec& exec, const SnowFieldsView& v, const StabilityArgs& a) {
+  exec.forEachCell(v.width, v.height, SurfaceSlopeKernel{v});
+  exec.forEachCell(v.width, v.height, StabilityKernel{v, a});
+}
+
+// One pass of five colours from a snapshot. Erosion per event is bounded by the powder there,
+// and the deposit moves one cell: no substeps needed for stability.
+template <class Exec>
+void runWindTransport(Exec& exec, const SnowFieldsView& v, const WindTransportArgs& a) {
+  exec.forEachCell(v.width, v.height, PowderSnapshotKernel{v});
+  WindTransportArgs pass = a;
+  for (int colour = 0; colour < 5; ++colour) {
+    pass.colour = colour;
+    exec.forEachCellOfColour(v.width, v.height, colour, WindTransportKernel{v, pass});
+  }
 }
 
 template <class Exec>

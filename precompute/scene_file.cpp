@@ -47,7 +47,8 @@ struct Rule {
 
 const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface",
                                                 "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
-                                                "wind_shadow_mask", "sun_exposure", "temperature"};
+                                                "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
+                                                "wind_deposit", "melt"};
 
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {

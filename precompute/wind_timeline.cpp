@@ -1,5 +1,6 @@
 #include "wind_timeline.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/hash.h"
@@ -60,8 +61,25 @@ WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& val
              << f.stats.iterations << " iterations, residual " << f.stats.residual << " (" << f.stats.seconds << " s)"
              << (f.stats.converged ? "" : " NOT CONVERGED") << "\n";
     }
+    loading_.push_back(windLoading(f, valid, spec));
     fields_.push_back(std::move(f));
   }
+}
+
+Grid<float> windLoading(const WindField& f, const Grid<uint8_t>& valid, const GridSpec& spec) {
+  const int w = spec.width, h = spec.height;
+  Grid<float> out(w, h, 0.f);
+  const Grid<float>& s = f.verticalSpeedMps;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (!valid(x, y)) continue;
+      auto ok = [&](int i, int j) { return i >= 0 && j >= 0 && i < w && j < h && valid(i, j); };
+      const bool l = ok(x - 1, y), r = ok(x + 1, y), u = ok(x, y - 1), d = ok(x, y + 1);
+      const double gx = (l || r) ? ((r ? s(x + 1, y) : s(x, y)) - (l ? s(x - 1, y) : s(x, y))) / ((l && r ? 2.0 : 1.0) * spec.cellSizeXM) : 0.0;
+      const double gy = (u || d) ? ((d ? s(x, y + 1) : s(x, y)) - (u ? s(x, y - 1) : s(x, y))) / ((u && d ? 2.0 : 1.0) * spec.cellSizeYM) : 0.0;
+      out(x, y) = static_cast<float>(std::max(0.0, f.windXMps(x, y) * gx + f.windYMps(x, y) * gy));
+    }
+  return out;
 }
 
 WindFieldsAtDay WindTimeline::at(double day) const {
@@ -70,6 +88,7 @@ WindFieldsAtDay WindTimeline::at(double day) const {
   out.windXMps.resize(w, h, 0.f);
   out.windYMps.resize(w, h, 0.f);
   out.windEffectZM = altitude_;
+  out.windLoadingMps2.resize(w, h, 0.f);
   if (states_.empty()) return out;
   // The bracketing keyframes and the weight of the later one, as WeatherTimeline::at does.
   const auto& keys = weather_.keyframes;
@@ -100,6 +119,7 @@ WindFieldsAtDay WindTimeline::at(double day) const {
       out.windXMps.values()[i] += static_cast<float>(weight * f.windXMps.values()[i]);
       out.windYMps.values()[i] += static_cast<float>(weight * f.windYMps.values()[i]);
       out.windEffectZM.values()[i] += static_cast<float>(weight * f.windEffectZM.values()[i]);
+      out.windLoadingMps2.values()[i] += static_cast<float>(weight * loading_[state].values()[i]);
     }
   };
   out.windEffectZM.fill(0.f);

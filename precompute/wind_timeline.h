@@ -2,6 +2,7 @@
 // the weather keyframes, blended linearly between keyframes (the same weights as the keyframes'
 // own interpolation). No wind anywhere in the season: nothing is computed.
 #pragma once
+#include <algorithm>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -14,7 +15,11 @@ namespace snow {
 
 struct WindFieldsAtDay {
   Grid<float> windXMps, windYMps, windEffectZM;
+  Grid<float> windLoadingMps2;  // max(0, W . grad W_sz): where the vertical wind speed rises
 };
+
+// max(0, W . grad W_sz) by central differences (NODATA neighbours skipped).
+Grid<float> windLoading(const WindField& field, const Grid<uint8_t>& valid, const GridSpec& spec);
 
 class WindTimeline {
  public:
@@ -24,6 +29,10 @@ class WindTimeline {
                std::ostream* log = nullptr);
 
   bool hasWind() const { return !states_.empty(); }
+  // True when the fields differ between days (several states, or calm keyframes among windy ones).
+  bool varies() const {
+    return states_.size() > 1 || (hasWind() && std::find(keyframeState_.begin(), keyframeState_.end(), -1) != keyframeState_.end());
+  }
   size_t stateCount() const { return states_.size(); }
   size_t computedStates() const { return computed_; }
   size_t cachedStates() const { return cached_; }
@@ -37,6 +46,7 @@ class WindTimeline {
   WeatherTimeline weather_;
   std::vector<WindState> states_;
   std::vector<WindField> fields_;
+  std::vector<Grid<float>> loading_;
   std::vector<int> keyframeState_;  // per keyframe: index into states_, -1 for calm
   size_t computed_ = 0, cached_ = 0;
 };

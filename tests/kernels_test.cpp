@@ -46,6 +46,10 @@ SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   v.windX = s.windXMps.data();
   v.windY = s.windYMps.data();
   v.windEffectZ = s.windEffectZM.data();
+  v.windLoading = s.windLoadingMps2.data();
+  v.windScour = s.windScourM.data();
+  v.windDeposit = s.windDepositM.data();
+  v.melted = s.meltedM.data();
   v.delta = delta.data();
   v.surfaceSlope = delta.data() + s.spec.cellCount();
   v.scratchSurface = delta.data() + 2 * s.spec.cellCount();
@@ -250,4 +254,116 @@ TEST(PowderDiffusion, LonePeakSpreads) {
   EXPECT_GT(s.powderM(1, 2), 0.f);
   EXPECT_FLOAT_EQ(s.powderM(1, 2), s.powderM(3, 2));  // symmetric
   EXPECT_FLOAT_EQ(s.powderM(2, 1), s.powderM(2, 3));
+}
+
+TEST(StabilityKernel, RateFollowsTemperatureAndSlope) {
+  StabilityArgs a;  // T_warm 5, T_cool -5, T_freeze -20, k_w = k_c = 1e4 m/day (Table 2)
+  a.instabilityByWarmthMPerDay = 0.2f;
+  a.stabilityByColdMPerDay = 0.1f;
+  EXPECT_FLOAT_EQ(stabilityRate(a, -30.f), 0.f);
+  EXPECT_FLOAT_EQ(stabilityRate(a, -20.f), 0.f);
+  EXPECT_FLOAT_EQ(stabilityRate(a, -12.5f), 0.05f);  // half way from freeze to cool
+  EXPECT_FLOAT_EQ(stabilityRate(a, -5.f), 0.1f);
+  EXPECT_NEAR(stabilityRate(a, 0.f), 0.5f * 0.1f - 0.5f * 0.2f, 1e-7f);
+  EXPECT_FLOAT_EQ(stabilityRate(a, 8.f), -0.2f);
+  // Warm snow on a steep slope destabilises faster than on a gentle one; cool snow stabilises
+  // faster on the gentle one.
+  auto run = [&](float slope, float temperature) {
+    SnowState s = plane(7, 5, 10.0, slope, 2000.f, temperature - 0.f);
+    s.stableM.fill(1.f);
+    s.unstableM.fill(1.f);
+    std::vector<float> delta;
+    SerialExec exec;
+    a.dtDays = 1.f;
+    runStability(exec, viewOf(s, delta), a);
+    EXPECT_NEAR(s.stableM(3, 2) + s.unstableM(3, 2), 2.f, 1e-6f);  // snow only changes layer
+    return s.unstableM(3, 2) - 1.f;  // gained by the unstable layer
+  };
+  const float steepWarm = run(1.0f, 10.f), gentleWarm = run(0.1f, 10.f);
+  EXPECT_NEAR(steepWarm, 0.2f * 1.0f / 1.3f, 1e-5f);
+  EXPECT_NEAR(gentleWarm, 0.2f * 0.1f / 0.4f, 1e-5f);
+  const float steepCool = run(1.0f, -5.f), gentleCool = run(0.1f, -5.f);
+  EXPECT_NEAR(-steepCool, 0.1f * 0.3f / 1.3f, 1e-5f);
+  EXPECT_NEAR(-gentleCool, 0.1f * 0.3f / 0.4f, 1e-5f);
+  EXPECT_EQ(run(0.5f, -25.f), 0.f);
+}
+
+TEST(StabilityKernel, NeverMovesMoreThanTheLayerHolds) {
+  SnowState s = plane(5, 5, 10.0, 0.5f, 2000.f, 20.f);  // hot: k_w = 1e4 m/day wants everything
+  s.stableM.fill(0.3f);
+  s.unstableM.fill(0.1f);
+  std::vector<float> delta;
+  SerialExec exec;
+  runStability(exec, viewOf(s, delta), StabilityArgs{});
+  for (int y = 0; y < 5; ++y)
+    for (int x = 0; x < 5; ++x) {
+      EXPECT_EQ(s.stableM(x, y), 0.f);
+      EXPECT_FLOAT_EQ(s.unstableM(x, y), 0.4f);
+    }
+}
+
+namespace {
+// A ridge along y (crest at x = 10) with 1 m of powder everywhere, wind from the west.
+SnowState ridge(float windX, float windY, float shadowHeight) {
+  SnowState s = plane(21, 9, 10.0, 0.f, 2000.f, -10.f);
+  for (int y = 0; y < 9; ++y)
+    for (int x = 0; x < 21; ++x) {
+      s.bedrockM(x, y) = 2000.f - 3.f * std::abs(static_cast<float>(x - 10)) * std::abs(static_cast<float>(x - 10)) * 0.1f;
+      s.powderM(x, y) = 1.f;
+      s.windXMps(x, y) = windX;
+      s.windYMps(x, y) = windY;
+      s.windEffectZM(x, y) = s.bedrockM(x, y) + 1.f + shadowHeight;
+    }
+  return s;
+}
+}  // namespace
+
+TEST(WindTransport, ScoursTheCrestAndDepositsDownwind) {
+  SnowState s = ridge(10.f, 0.f, 0.f);
+  std::vector<float> delta;
+  SnowFieldsView v = viewOf(s, delta);
+  SerialExec exec;
+  const double before = totalDepth(s);
+  runWindTransport(exec, v, WindTransportArgs{});
+  // The parabolic ridge has d2A/dx2 = -0.6 m / (10 m)^2 everywhere: curv_W = 10 * -0.006 =
+  // -0.06 /s, so every cell erodes 0.5 day * 0.1 * 0.06 = 0.003 m and hands it east (no W_y).
+  for (int x = 1; x < 20; ++x) {
+    EXPECT_NEAR(s.windScourM(x, 4), 0.003f, 1e-5f) << x;
+    EXPECT_NEAR(s.windDepositM(x + 1, 4), 0.003f, 1e-5f) << x;
+  }
+  for (int y = 0; y < 9; ++y) {
+    EXPECT_EQ(s.windDepositM(0, y), 0.f);  // nothing blows upwind
+    EXPECT_EQ(s.windScourM(20, y), 0.f);   // the east edge has no receiver: its snow stays
+  }
+  EXPECT_NEAR(totalDepth(s), before, 1e-5 * before);
+}
+
+TEST(WindTransport, NothingMovesInTheShadowOrWithoutWindOrOnFlatGround) {
+  for (int c = 0; c < 3; ++c) {
+    SnowState s = c == 0 ? ridge(10.f, 0.f, 5.f) : (c == 1 ? ridge(0.f, 0.f, 0.f) : plane(9, 9, 10.0, 0.f, 2000.f, -10.f));
+    if (c == 2) {
+      s.powderM.fill(1.f);
+      s.windXMps.fill(10.f);
+      s.windEffectZM = s.bedrockM;
+    }
+    const std::vector<float> before = s.powderM.values();
+    std::vector<float> delta;
+    SerialExec exec;
+    runWindTransport(exec, viewOf(s, delta), WindTransportArgs{});
+    EXPECT_EQ(s.powderM.values(), before) << c;
+  }
+}
+
+TEST(WindTransport, DiagonalWindSplitsTheDepositAndEdgesKeepTheirSnow) {
+  SnowState s = ridge(6.f, 8.f, 0.f);
+  std::vector<float> delta;
+  SerialExec exec;
+  const double before = totalDepth(s);
+  runWindTransport(exec, viewOf(s, delta), WindTransportArgs{});
+  // From the crest cell (10, 4): 6/14 of it east, 8/14 south.
+  const float eroded = s.windScourM(10, 4);
+  ASSERT_GT(eroded, 0.f);
+  EXPECT_NEAR(totalDepth(s), before, 1e-5 * before);
+  // The crest's bottom row (y = 8) cannot send south: nothing leaves the grid.
+  for (float v : s.powderM.values()) ASSERT_GE(v, 0.f);
 }

@@ -5,6 +5,8 @@
 #include "core/cpu_backend.h"
 #include "core/default_terrain.h"
 #include "core/season.h"
+#include "precompute/wind.h"
+#include "precompute/wind_timeline.h"
 #include "test_support.h"
 
 using namespace snow;
@@ -158,4 +160,36 @@ TEST(DefaultTerrain, DeterministicAndInRange) {
   EXPECT_FLOAT_EQ(hi, 3100.f);
   o.seed = 7;
   EXPECT_NE(generateDefaultTerrain(o).values(), a.values());
+}
+
+namespace {
+// The range with a westerly wind field and its wind-effect surface.
+SnowState windyRange(int size, double cell, double speed) {
+  SnowState s = terrainState(size, cell);
+  ModelParameters p;
+  const WindField f = computeWindField(s.bedrockM, s.validCell, s.spec, WindState{270.0, speed}, p);
+  s.windXMps = f.windXMps;
+  s.windYMps = f.windYMps;
+  s.windEffectZM = f.windEffectZM;
+  s.windLoadingMps2 = windLoading(f, s.validCell, s.spec);
+  return s;
+}
+}  // namespace
+
+TEST(Season, WindScoursRidgesLoadsLeesAndConservesMass) {
+  SnowState s = windyRange(96, 20.0, 10.0);
+  SeasonConfig c = winter(60, -4.0);
+  c.windTransport = true;
+  computeTemperatureBase(s, c.params);
+  auto backend = createCpuBackend();
+  const SeasonReport r = runSeason(*backend, s, c);
+  double scour = 0, deposit = 0;
+  for (size_t i = 0; i < s.windScourM.size(); ++i) scour += s.windScourM.values()[i], deposit += s.windDepositM.values()[i];
+  EXPECT_GT(scour, 1.0) << "the wind should move snow on this range";
+  EXPECT_NEAR(deposit, scour, 1e-4 * scour);  // every scoured metre lands somewhere
+  EXPECT_LT(r.massBalanceRelativeError(), 1e-6);
+  expectPhysical(s);
+  // Scour only where the surface is exposed (not in the wind shadow).
+  for (size_t i = 0; i < s.windScourM.size(); ++i)
+    if (s.windEffectZM.values()[i] - s.bedrockM.values()[i] > 30.f) ASSERT_EQ(s.windScourM.values()[i], 0.f);
 }

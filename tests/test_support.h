@@ -35,6 +35,11 @@ inline SnowState makeRoughState(int w, int h, uint64_t seed, double cellSizeXM =
       s.unstableM(x, y) = 0.3f * uniformFloat(r.v[3]);
       s.powderM(x, y) = (x + y) % 7 == 0 ? 0.f : 1.5f * uniformFloat(key.draw(1, cell, RngStream::Test).v[0]);
       s.temperatureBaseC(x, y) = -0.0065f * b + 2.f * uniformFloat(key.draw(2, cell, RngStream::Test).v[0]);
+      // A westerly wind turning with the row, a shadow behind the cliff, some wind loading.
+      s.windXMps(x, y) = 8.f;
+      s.windYMps(x, y) = 3.f * std::sin(0.2f * static_cast<float>(y));
+      s.windEffectZM(x, y) = x > w / 2 && x < w / 2 + 4 ? b + 50.f : b;
+      s.windLoadingMps2(x, y) = 0.01f * uniformFloat(key.draw(3, cell, RngStream::Test).v[0]);
       if (holes && (x - w / 3) * (x - w / 3) + (y - h / 2) * (y - h / 2) < (w / 10) * (w / 10)) {
         s.validCell(x, y) = 0;
         s.compactedM(x, y) = s.stableM(x, y) = s.unstableM(x, y) = s.powderM(x, y) = 0.f;

@@ -71,6 +71,9 @@ Grid<float> layerGrid(const SnowState& s, const std::string& name) {
       if (!s.validCell(x, y)) continue;
       float v = 0.f;
       if (name == "compacted") v = s.compactedM(x, y);
+      else if (name == "wind_scour") v = s.windScourM(x, y);
+      else if (name == "wind_deposit") v = s.windDepositM(x, y);
+      else if (name == "melt") v = s.meltedM(x, y);
       else if (name == "stable") v = s.stableM(x, y);
       else if (name == "unstable") v = s.unstableM(x, y);
       else if (name == "powder") v = s.powderM(x, y);
@@ -83,7 +86,10 @@ Grid<float> layerGrid(const SnowState& s, const std::string& name) {
   return g;
 }
 
-bool isWindLayer(const std::string& name) { return name.rfind("wind_", 0) == 0; }
+// The layers drawn from the precomputed wind fields (scour and deposit are season records).
+bool isWindLayer(const std::string& name) {
+  return name == "wind_speed" || name == "wind_direction" || name == "wind_shadow_depth" || name == "wind_shadow_mask";
+}
 
 // Wind layers for the day of an output, from the precomputed fields.
 Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double day, const std::string& name) {
@@ -111,6 +117,9 @@ std::string layerUnit(const std::string& name) {
 }
 
 std::string layerContent(const std::string& name) {
+  if (name == "wind_scour") return "snow removed by wind transport since the season start (m)";
+  if (name == "wind_deposit") return "snow deposited by wind transport since the season start (m)";
+  if (name == "melt") return "snow melted since the season start (m)";
   if (name == "sun_exposure") return "sun exposure I = I_sun + I_sky + I_ind, hours of equivalent direct sun per day (§4.1)";
   if (name == "temperature") return "air temperature at the surface, T = T0 + k_t A + k_i I (§4.1)";
   if (name == "wind_speed") return "wind speed |W| (venturi and terrain redirection, Eq. 2)";
@@ -272,10 +281,20 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     state.windXMps = start.windXMps;
     state.windYMps = start.windYMps;
     state.windEffectZM = start.windEffectZM;
+    state.windLoadingMps2 = start.windLoadingMps2;
   } else {
     state.windEffectZM = state.bedrockM;
     log << "precompute: no wind in the season: wind field skipped\n";
   }
+  // The wind of each day when it changes through the season (more than one keyframe state).
+  const bool windChanges = wind.varies();
+  auto windForDay = [&](int day, SnowState& s) {
+    const WindFieldsAtDay f = wind.at(day);
+    s.windXMps = f.windXMps;
+    s.windYMps = f.windYMps;
+    s.windEffectZM = f.windEffectZM;
+    s.windLoadingMps2 = f.windLoadingMps2;
+  };
 
   // 4. Season
   std::unique_ptr<SnowBackend> backend = chooseBackend(scene.backend, log);
@@ -336,7 +355,12 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   config.weather = scene.weather;
   config.userSnowfalls = scene.userSnowfalls;
   config.frameDays = scene.outputs.frameDays;
-  if (exposure) config.updateTemperatureBase = temperatureForDay;
+  config.windTransport = wind.hasWind();
+  if (exposure || windChanges)
+    config.updateStaticFields = [&](int day, SnowState& s) {
+      if (exposure) temperatureForDay(day, s);
+      if (windChanges) windForDay(day, s);
+    };
   ProgressBar bar(log, "season", stderrIsTerminal() && &log == &std::cerr, options.progress);
   const SeasonReport report = runSeason(
       *backend, state, config, [&](double f) { bar.update(f); }, [&](double day, const SnowState& s) { writeLayers(s, day); });

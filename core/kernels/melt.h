@@ -42,6 +42,7 @@ struct MeltKernel {
     v.stable[i] = s;
     v.compacted[i] = c;
     v.delta[i] = -removed;
+    v.melted[i] = v.melted[i] + removed;
   }
 };
 

@@ -47,6 +47,9 @@ void expectSameBytes(const SnowState& a, const SnowState& b) {
   EXPECT_EQ(a.unstableM.values(), b.unstableM.values());
   EXPECT_EQ(a.powderM.values(), b.powderM.values());
   EXPECT_EQ(a.snowMoving.values(), b.snowMoving.values());
+  EXPECT_EQ(a.windScourM.values(), b.windScourM.values());
+  EXPECT_EQ(a.windDepositM.values(), b.windDepositM.values());
+  EXPECT_EQ(a.meltedM.values(), b.meltedM.values());
 }
 
 }  // namespace

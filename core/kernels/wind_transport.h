@@ -1,0 +1,74 @@
+// Wind transport (paper §5.4), five colour passes of the §7.1 cross tiling like powder
+// diffusion, from a snapshot of A and P taken before the passes (order-independent).
+//   curv_W = |W_x| d2A/dx2 + |W_y| d2A/dy2     (A the snow surface, second differences)
+// set to zero where it is positive (convex: nothing to scour) or where the wind-effect surface
+// stands above the snow (a wind shadow: W_z - A > shadow tolerance). Eroded powder per event:
+//   e = min(P, dt * k_erosion * (-curv_W))
+// We read Table 2's k_erosion (printed "0.1 m s^-1 day^-1") as metres of snow per day per s^-1 of
+// curv_W, i.e. m s day^-1: the only reading under which e is a depth.
+// Where the paper is vague: the eroded snow is deposited as powder into the two 4-neighbours
+// the wind blows toward (sign of W_x, sign of W_y), split |W_x| : |W_y|. A neighbour that is
+// NODATA or off the grid does not receive: its share stays (the boundary is closed, so mass is
+// conserved exactly up to float rounding). Records: cumulative scour at the source, deposit at
+// the receivers.
+#pragma once
+#include "../hd.h"
+#include "../snow_state.h"
+
+namespace snow {
+
+struct WindTransportArgs {
+  float dtDays = 0.5f;
+  float erosionRate = 0.1f;          // k_erosion, m s day^-1 (see above)
+  float shadowToleranceM = 0.1f;     // W_z more than this above the snow: in the wind shadow
+  int colour = 0;
+};
+
+struct WindTransportKernel {
+  SnowFieldsView v;
+  WindTransportArgs a;
+
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    if (!v.valid[i]) return;
+    const float powder = v.scratchPowder[i];
+    if (!(powder > 0.f)) return;
+    const float ap = v.scratchSurface[i];
+    if (v.windEffectZ[i] - ap > a.shadowToleranceM) return;  // sheltered
+    const float wx = v.windX[i], wy = v.windY[i];
+    if (wx == 0.f && wy == 0.f) return;
+    // Second differences of the snapshot surface; missing neighbours mirror the cell (zero).
+    const float aL = v.isValid(x - 1, y) ? v.scratchSurface[i - 1] : ap;
+    const float aR = v.isValid(x + 1, y) ? v.scratchSurface[i + 1] : ap;
+    const float aU = v.isValid(x, y - 1) ? v.scratchSurface[i - v.width] : ap;
+    const float aD = v.isValid(x, y + 1) ? v.scratchSurface[i + v.width] : ap;
+    const float dxx = (aL - 2.f * ap + aR) / (v.cellSizeXM * v.cellSizeXM);
+    const float dyy = (aU - 2.f * ap + aD) / (v.cellSizeYM * v.cellSizeYM);
+    const float curv = fabsf(wx) * dxx + fabsf(wy) * dyy;
+    if (!(curv < 0.f)) return;
+    const float eroded = minf(powder, a.dtDays * a.erosionRate * (-curv));
+    if (!(eroded > 0.f)) return;
+    // Receivers downwind.
+    const int nx = x + (wx > 0.f ? 1 : -1), ny = y + (wy > 0.f ? 1 : -1);
+    const float wsum = fabsf(wx) + fabsf(wy);
+    const bool rx = wx != 0.f && v.isValid(nx, y), ry = wy != 0.f && v.isValid(x, ny);
+    const float toX = rx ? eroded * fabsf(wx) / wsum : 0.f;
+    const float toY = ry ? eroded * fabsf(wy) / wsum : 0.f;
+    const float moved = toX + toY;
+    if (!(moved > 0.f)) return;
+    if (rx) {
+      const int n = v.index(nx, y);
+      v.powder[n] = v.powder[n] + toX;
+      v.windDeposit[n] = v.windDeposit[n] + toX;
+    }
+    if (ry) {
+      const int n = v.index(x, ny);
+      v.powder[n] = v.powder[n] + toY;
+      v.windDeposit[n] = v.windDeposit[n] + toY;
+    }
+    v.powder[i] = maxf(0.f, v.powder[i] - moved);
+    v.windScour[i] = v.windScour[i] + moved;
+  }
+};
+
+}  // namespace snow
