@@ -191,5 +191,7 @@ TEST(Season, WindScoursRidgesLoadsLeesAndConservesMass) {
   expectPhysical(s);
   // Scour only where the surface is exposed (not in the wind shadow).
   for (size_t i = 0; i < s.windScourM.size(); ++i)
-    if (s.windEffectZM.values()[i] - s.bedrockM.values()[i] > 30.f) ASSERT_EQ(s.windScourM.values()[i], 0.f);
+    if (s.windEffectZM.values()[i] - s.bedrockM.values()[i] > 30.f) {
+      ASSERT_EQ(s.windScourM.values()[i], 0.f);
+    }
 }

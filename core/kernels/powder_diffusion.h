@@ -39,6 +39,22 @@ struct PowderDiffusionArgs {
   int colour = 0;                // which of the five colour passes
 };
 
+// Moves `amount` of snow from a source holding `remaining` into `receiver`, and returns what the
+// source has left. Mass stays exact to rounding because the source gives what the receiver
+// actually gained, (P_n + a) - P_n, which is exact in float: a share far below a deep receiver's
+// last bit then stays at the source instead of vanishing (a bias that added up over long
+// seasons). A gain that rounding makes larger than what the source still has is not made, so
+// the source never goes negative and needs no clamp. `record`, if given, adds the gain.
+SNOW_HD SNOW_INLINE float giveTo(float& receiver, float amount, float remaining, float* record) {
+  const float before = receiver;
+  const float after = before + amount;
+  const float gained = after - before;
+  if (!(gained > 0.f) || gained > remaining) return remaining;
+  receiver = after;
+  if (record) *record = *record + gained;
+  return remaining - gained;
+}
+
 // Copies A and P before the colour passes of a substep (per cell, no neighbour reads).
 struct PowderSnapshotKernel {
   SnowFieldsView v;
@@ -87,16 +103,18 @@ struct PowderDiffusionKernel {
       total += out[d];
     }
     if (!(total > 0.f)) return;
-    const float scale = total > powder ? powder / total : 1.f;
-    float moved = 0.f;
+    // When the outflows want more than the cell holds, they are scaled to all but a millionth
+    // of it: the float sums of the shares then stay below the powder, so the source never
+    // rounds below zero and needs no clamp (a clamp at zero adds a little snow each time, a
+    // bias that adds up over a season).
+    const bool empties = total >= powder;
+    const float scale = empties ? powder / total * (1.f - 1e-6f) : 1.f;
+    float remaining = v.powder[i];
     for (int d = 0; d < 4; ++d) {
       if (!(out[d] > 0.f)) continue;
-      const float amount = out[d] * scale;
-      const int n = v.index(x + dxs[d], y + dys[d]);
-      v.powder[n] = v.powder[n] + amount;
-      moved += amount;
+      remaining = giveTo(v.powder[v.index(x + dxs[d], y + dys[d])], out[d] * scale, remaining, nullptr);
     }
-    v.powder[i] = maxf(0.f, v.powder[i] - moved);
+    v.powder[i] = remaining;
   }
 };
 

@@ -14,6 +14,7 @@
 #pragma once
 #include "../hd.h"
 #include "../snow_state.h"
+#include "powder_diffusion.h"
 
 namespace snow {
 
@@ -46,28 +47,24 @@ struct WindTransportKernel {
     const float dyy = (aU - 2.f * ap + aD) / (v.cellSizeYM * v.cellSizeYM);
     const float curv = fabsf(wx) * dxx + fabsf(wy) * dyy;
     if (!(curv < 0.f)) return;
-    const float eroded = minf(powder, a.dtDays * a.erosionRate * (-curv));
+    // All but a millionth at most, so the shares' float sums stay below the powder (no clamp).
+    const float eroded = minf(powder * (1.f - 1e-6f), a.dtDays * a.erosionRate * (-curv));
     if (!(eroded > 0.f)) return;
     // Receivers downwind.
     const int nx = x + (wx > 0.f ? 1 : -1), ny = y + (wy > 0.f ? 1 : -1);
     const float wsum = fabsf(wx) + fabsf(wy);
     const bool rx = wx != 0.f && v.isValid(nx, y), ry = wy != 0.f && v.isValid(x, ny);
-    const float toX = rx ? eroded * fabsf(wx) / wsum : 0.f;
-    const float toY = ry ? eroded * fabsf(wy) / wsum : 0.f;
-    const float moved = toX + toY;
-    if (!(moved > 0.f)) return;
-    if (rx) {
-      const int n = v.index(nx, y);
-      v.powder[n] = v.powder[n] + toX;
-      v.windDeposit[n] = v.windDeposit[n] + toX;
-    }
-    if (ry) {
-      const int n = v.index(x, ny);
-      v.powder[n] = v.powder[n] + toY;
-      v.windDeposit[n] = v.windDeposit[n] + toY;
-    }
-    v.powder[i] = maxf(0.f, v.powder[i] - moved);
-    v.windScour[i] = v.windScour[i] + moved;
+    // The second share is the rest of the first, so the two sum to what was eroded.
+    const float toX = rx ? (ry ? eroded * fabsf(wx) / wsum : eroded * fabsf(wx) / wsum) : 0.f;
+    const float toY = ry ? (rx ? maxf(0.f, eroded - toX) : eroded * fabsf(wy) / wsum) : 0.f;
+    if (!(toX + toY > 0.f)) return;
+    // giveTo (powder_diffusion.h): the source gives exactly what each receiver gained.
+    const float start = v.powder[i];
+    float remaining = start;
+    if (rx) remaining = giveTo(v.powder[v.index(nx, y)], toX, remaining, &v.windDeposit[v.index(nx, y)]);
+    if (ry) remaining = giveTo(v.powder[v.index(x, ny)], toY, remaining, &v.windDeposit[v.index(x, ny)]);
+    v.powder[i] = remaining;
+    v.windScour[i] = v.windScour[i] + (start - remaining);
   }
 };
 
