@@ -219,12 +219,12 @@ std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads) {
     throw InputError("--backend cuda: no usable CUDA device: " + cuda::probeDevice().reason);
 
   std::ostringstream table, csv;
-  table << "Season stage, reference scenario (" << o.days << " days; snowfall, melt, powder diffusion), "
+  table << "Season stage, reference scenario (" << o.days << " days; snowfall, melt, stability, powder diffusion; no wind), "
         << (backendName == "cpu" ? machineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
         << "\n\n";
-  table << "| grid | cell (m) | backend | season (s) | snowfall (s) | melt (s) | diffusion (s) | events | mass balance error |\n"
-        << "|---|---|---|---|---|---|---|---|---|\n";
-  csv << "size,cell_m,backend,threads,season_s,snowfall_s,melt_s,diffusion_s,events,mass_error\n";
+  table << "| grid | cell (m) | backend | season (s) | snowfall (s) | melt (s) | stability (s) | diffusion (s) | events | mass balance error |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|\n";
+  csv << "size,cell_m,backend,threads,season_s,snowfall_s,melt_s,stability_s,diffusion_s,events,mass_error\n";
   for (int size : o.sizes) {
     if (size < 8) throw InputError("--sizes: " + std::to_string(size) + " is too small");
     SnowState state = referenceRangeState(size);
@@ -234,18 +234,20 @@ std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads) {
     const auto t0 = std::chrono::steady_clock::now();
     const SeasonReport r = runSeason(*backend, state, config);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    double phase[3] = {0, 0, 0};
+    double phase[4] = {0, 0, 0, 0};
     for (const auto& p : r.phenomena) {
       if (p.name.rfind("snowfall", 0) == 0) phase[0] += p.seconds;
       if (p.name == "melt") phase[1] += p.seconds;
       if (p.name == "powder diffusion") phase[2] += p.seconds;
+      if (p.name == "stability") phase[3] += p.seconds;
     }
     const double cell = state.spec.cellSizeXM;
     table << "| " << size << "² | " << format("%.2f", cell) << " | " << backend->name() << " | " << format("%.3f", seconds) << " | "
-          << format("%.3f", phase[0]) << " | " << format("%.3f", phase[1]) << " | " << format("%.3f", phase[2]) << " | " << r.events
+          << format("%.3f", phase[0]) << " | " << format("%.3f", phase[1]) << " | " << format("%.3f", phase[3]) << " | "
+          << format("%.3f", phase[2]) << " | " << r.events
           << " | " << format("%.1e", r.massBalanceRelativeError()) << " |\n";
     csv << size << "," << cell << "," << backend->name() << "," << threads << "," << seconds << "," << phase[0] << "," << phase[1]
-        << "," << phase[2] << "," << r.events << "," << r.massBalanceRelativeError() << "\n";
+        << "," << phase[3] << "," << phase[2] << "," << r.events << "," << r.massBalanceRelativeError() << "\n";
     log << "  " << size << "² done in " << format("%.2f", seconds) << " s\n";
   }
   writeCsv(o, "season.csv", csv.str(), table);
