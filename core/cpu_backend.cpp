@@ -15,17 +15,9 @@ namespace {
 // Rows per task: large enough to amortise scheduling, small enough to balance 2..64 threads.
 constexpr int kRowGrain = 8;
 
-class TbbExec {
+class TbbExec : public HostStorage {
  public:
-  template <class T>
-  using Buffer = HostBuffer<T>;
-
   std::string name() const { return "cpu"; }
-
-  template <class T>
-  void upload(Buffer<T>& b, const std::vector<T>& host) { b.values() = host; }
-  template <class T>
-  void download(Buffer<T>& b, std::vector<T>& host) { host = b.values(); }
 
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {
@@ -41,7 +33,6 @@ class TbbExec {
         for (int x = firstColumnOfColour(y, colour); x < width; x += 5) kernel(x, y);
     });
   }
-  void finish() {}
   // Row sums in parallel, each row in order; then the rows in order: the same bytes as SerialExec.
   double sum(const float* values, const uint8_t* valid, int width, int height) {
     rowSums_.assign(static_cast<size_t>(height), 0.0);

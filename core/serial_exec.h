@@ -39,17 +39,20 @@ inline float rowMax(const float* values, const uint8_t* valid, int width, int y)
   return m;
 }
 
-class SerialExec {
- public:
+// Storage for the executors that run on the host: buffers are vectors, "upload" is a copy.
+struct HostStorage {
   template <class T>
   using Buffer = HostBuffer<T>;
-
-  std::string name() const { return "serial"; }
-
   template <class T>
   void upload(Buffer<T>& b, const std::vector<T>& host) { b.values() = host; }
   template <class T>
   void download(Buffer<T>& b, std::vector<T>& host) { host = b.values(); }
+  void finish() {}
+};
+
+class SerialExec : public HostStorage {
+ public:
+  std::string name() const { return "serial"; }
 
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {
@@ -61,7 +64,6 @@ class SerialExec {
     for (int y = 0; y < height; ++y)
       for (int x = firstColumnOfColour(y, colour); x < width; x += 5) kernel(x, y);
   }
-  void finish() {}
   double sum(const float* values, const uint8_t* valid, int width, int height) {
     double s = 0.0;
     for (int y = 0; y < height; ++y) s += rowSum(values, valid, width, y);

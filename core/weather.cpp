@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "bracket.h"
+
 namespace snow {
 
 namespace {
@@ -18,22 +20,16 @@ double lerpAngleDeg(double a, double b, double t) {
 
 WeatherState WeatherTimeline::at(double day) const {
   if (keyframes.empty()) return WeatherState{};
-  if (day <= keyframes.front().day) return keyframes.front().state;
-  if (day >= keyframes.back().day) return keyframes.back().state;
-  for (size_t i = 1; i < keyframes.size(); ++i) {
-    const auto& k0 = keyframes[i - 1];
-    const auto& k1 = keyframes[i];
-    if (day <= k1.day) {
-      const double t = k1.day > k0.day ? (day - k0.day) / (k1.day - k0.day) : 1.0;
-      WeatherState s;
-      s.seaLevelTemperatureC = lerp(k0.state.seaLevelTemperatureC, k1.state.seaLevelTemperatureC, t);
-      s.windDirectionDeg = lerpAngleDeg(k0.state.windDirectionDeg, k1.state.windDirectionDeg, t);
-      s.windSpeedMps = lerp(k0.state.windSpeedMps, k1.state.windSpeedMps, t);
-      s.snowfallIntensity = lerp(k0.state.snowfallIntensity, k1.state.snowfallIntensity, t);
-      return s;
-    }
-  }
-  return keyframes.back().state;
+  const Bracket b = bracketOf(keyframes.size(), day, [&](size_t i) { return keyframes[i].day; });
+  const WeatherState& s0 = keyframes[b.first].state;
+  const WeatherState& s1 = keyframes[b.second].state;
+  const double t = b.weight;
+  WeatherState s;
+  s.seaLevelTemperatureC = lerp(s0.seaLevelTemperatureC, s1.seaLevelTemperatureC, t);
+  s.windDirectionDeg = lerpAngleDeg(s0.windDirectionDeg, s1.windDirectionDeg, t);
+  s.windSpeedMps = lerp(s0.windSpeedMps, s1.windSpeedMps, t);
+  s.snowfallIntensity = lerp(s0.snowfallIntensity, s1.snowfallIntensity, t);
+  return s;
 }
 
 bool WeatherTimeline::hasWind() const {

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/bracket.h"
 #include "core/errors.h"
 #include "horizon.h"
 #include "solar.h"
@@ -199,20 +200,9 @@ Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& height
 Grid<float> Exposure::totalAt(double seasonDay) const {
   Grid<float> total = skyHours;
   if (days.empty()) return total;
-  size_t a = 0, b = 0;
-  double t = 0.0;
-  if (seasonDay <= days.front().seasonDay) {
-    a = b = 0;
-  } else if (seasonDay >= days.back().seasonDay) {
-    a = b = days.size() - 1;
-  } else {
-    for (size_t k = 1; k < days.size(); ++k)
-      if (seasonDay <= days[k].seasonDay) {
-        a = k - 1, b = k;
-        t = (seasonDay - days[a].seasonDay) / (days[b].seasonDay - days[a].seasonDay);
-        break;
-      }
-  }
+  const Bracket br = bracketOf(days.size(), seasonDay, [&](size_t i) { return days[i].seasonDay; });
+  const size_t a = br.first, b = br.second;
+  const double t = br.weight;
   for (size_t i = 0; i < total.size(); ++i) {
     const double ea = days[a].sunHours.values()[i] + days[a].indirectHours.values()[i];
     const double eb = days[b].sunHours.values()[i] + days[b].indirectHours.values()[i];

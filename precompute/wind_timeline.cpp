@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/bracket.h"
 #include "core/hash.h"
 
 namespace snow {
@@ -90,23 +91,11 @@ WindFieldsAtDay WindTimeline::at(double day) const {
   out.windEffectZM = altitude_;
   out.windLoadingMps2.resize(w, h, 0.f);
   if (states_.empty()) return out;
-  // The bracketing keyframes and the weight of the later one, as WeatherTimeline::at does.
+  // The bracketing keyframes and the weight of the later one, as WeatherTimeline::at uses.
   const auto& keys = weather_.keyframes;
-  size_t k0 = 0, k1 = 0;
-  double t = 0.0;
-  if (day <= keys.front().day) {
-    k0 = k1 = 0;
-  } else if (day >= keys.back().day) {
-    k0 = k1 = keys.size() - 1;
-  } else {
-    for (size_t i = 1; i < keys.size(); ++i)
-      if (day <= keys[i].day) {
-        k0 = i - 1;
-        k1 = i;
-        t = keys[i].day > keys[i - 1].day ? (day - keys[i - 1].day) / (keys[i].day - keys[i - 1].day) : 1.0;
-        break;
-      }
-  }
+  const Bracket br = bracketOf(keys.size(), day, [&](size_t i) { return keys[i].day; });
+  const size_t k0 = br.first, k1 = br.second;
+  const double t = br.weight;
   auto add = [&](int state, double weight) {
     if (weight <= 0.0) return;
     if (state < 0) {  // calm keyframe: no wind, the surface on the ground

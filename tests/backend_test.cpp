@@ -35,16 +35,6 @@ SnowState runAll(SnowBackend& backend, const SnowState& initial, std::vector<dou
   return s;
 }
 
-void expectSameBytes(const SnowState& a, const SnowState& b) {
-  EXPECT_EQ(a.compactedM.values(), b.compactedM.values());
-  EXPECT_EQ(a.stableM.values(), b.stableM.values());
-  EXPECT_EQ(a.unstableM.values(), b.unstableM.values());
-  EXPECT_EQ(a.powderM.values(), b.powderM.values());
-  EXPECT_EQ(a.snowMoving.values(), b.snowMoving.values());
-  EXPECT_EQ(a.windScourM.values(), b.windScourM.values());
-  EXPECT_EQ(a.windDepositM.values(), b.windDepositM.values());
-  EXPECT_EQ(a.meltedM.values(), b.meltedM.values());
-}
 
 }  // namespace
 
@@ -61,7 +51,7 @@ TEST(CpuBackend, EveryRegisteredStepMatchesSerialBitForBit) {
     cpu->download(b);
     SCOPED_TRACE(step.name);
     EXPECT_EQ(la, lb);
-    expectSameBytes(a, b);
+    test::expectSameBytes(a, b);
     const bool changed = a.powderM.values() != initial.powderM.values() || a.stableM.values() != initial.stableM.values() ||
                          a.unstableM.values() != initial.unstableM.values() || a.compactedM.values() != initial.compactedM.values();
     EXPECT_TRUE(changed) << step.name << " did nothing on the fixture";
@@ -84,8 +74,8 @@ TEST(CpuBackend, OneAndTwoThreadsGiveTheSameBytes) {
   }
   auto s = createSerialBackend();
   serial = runAll(*s, initial, &lSerial);
-  expectSameBytes(one, two);
-  expectSameBytes(one, serial);
+  test::expectSameBytes(one, two);
+  test::expectSameBytes(one, serial);
   EXPECT_EQ(l1, l2);
   EXPECT_EQ(l1, lSerial);
 }

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdint>
 
+#include <gtest/gtest.h>
+
 #include "core/rng.h"
 #include "core/snow_state.h"
 
@@ -47,6 +49,18 @@ inline SnowState makeRoughState(int w, int h, uint64_t seed, double cellSizeXM =
     }
   }
   return s;
+}
+
+// Every evolving field of two states is byte for byte the same (gtest expectations).
+inline void expectSameBytes(const SnowState& a, const SnowState& b) {
+  EXPECT_EQ(a.compactedM.values(), b.compactedM.values());
+  EXPECT_EQ(a.stableM.values(), b.stableM.values());
+  EXPECT_EQ(a.unstableM.values(), b.unstableM.values());
+  EXPECT_EQ(a.powderM.values(), b.powderM.values());
+  EXPECT_EQ(a.snowMoving.values(), b.snowMoving.values());
+  EXPECT_EQ(a.windScourM.values(), b.windScourM.values());
+  EXPECT_EQ(a.windDepositM.values(), b.windDepositM.values());
+  EXPECT_EQ(a.meltedM.values(), b.meltedM.values());
 }
 
 }  // namespace snow::test

@@ -41,16 +41,6 @@ ModelParameters params() {
   return p;
 }
 
-void expectSameBytes(const SnowState& a, const SnowState& b) {
-  EXPECT_EQ(a.compactedM.values(), b.compactedM.values());
-  EXPECT_EQ(a.stableM.values(), b.stableM.values());
-  EXPECT_EQ(a.unstableM.values(), b.unstableM.values());
-  EXPECT_EQ(a.powderM.values(), b.powderM.values());
-  EXPECT_EQ(a.snowMoving.values(), b.snowMoving.values());
-  EXPECT_EQ(a.windScourM.values(), b.windScourM.values());
-  EXPECT_EQ(a.windDepositM.values(), b.windDepositM.values());
-  EXPECT_EQ(a.meltedM.values(), b.meltedM.values());
-}
 
 }  // namespace
 
@@ -76,7 +66,7 @@ TEST(CudaBackend, EveryRegisteredStepMatchesTheCpuBitForBit) {
     gpu->download(b);
     SCOPED_TRACE(step.name);
     EXPECT_EQ(la, lb);
-    expectSameBytes(a, b);
+    test::expectSameBytes(a, b);
     EXPECT_EQ(cpu.totals().totalM3(), gpu->totals().totalM3());
   }
 }
@@ -94,7 +84,7 @@ TEST(CudaBackend, LongSequencesStayIdentical) {
     for (const auto& step : steps) ASSERT_EQ(step.run(cpu), step.run(*gpu)) << step.name << " round " << round;
   cpu.download(a);
   gpu->download(b);
-  expectSameBytes(a, b);
+  test::expectSameBytes(a, b);
   EXPECT_EQ(cpu.maxTemperatureBaseC(), gpu->maxTemperatureBaseC());
 }
 
@@ -133,7 +123,7 @@ TEST(CudaBackend, WholeSeasonMatchesTheCpuBitForBit) {
   EXPECT_EQ(ra.snowfallAddedM3, rb.snowfallAddedM3);
   EXPECT_EQ(ra.meltRemovedM3, rb.meltRemovedM3);
   EXPECT_GT(ra.meltRemovedM3, 0.0);
-  expectSameBytes(a, b);
+  test::expectSameBytes(a, b);
   EXPECT_LT(rb.massBalanceRelativeError(), 1e-6);
 }
 
