@@ -203,3 +203,26 @@ TEST(Exposure, SeasonSamplesInterpolateBetweenDays) {
   EXPECT_NEAR(e.totalAt(15.0)(5, 5), e.skyHours(5, 5) + 0.5f * (d0 + d1), 1e-4f);
   EXPECT_GT(e.totalAt(120.0)(5, 5), e.totalAt(20.0)(5, 5));  // March is sunnier than December
 }
+
+// The indirect term's documented decision: senders are not tested for visibility; the cosines
+// decide. Two slopes facing each other across a V valley light each other; a slope facing away
+// from the receiver (the far side of a ridge, as seen from its crest) sends nothing.
+TEST(Exposure, IndirectComesFromFacingSlopesAndNotFromBehind) {
+  const double cell = 5.0;
+  const int w = 81, h = 21;
+  // A V valley along y, walls of slope 0.5: both walls face each other.
+  const Field v = makeField(w, h, cell, [&](double x, double) { return 1000.0 + 0.5 * std::abs(x - 40.5 * cell); });
+  const Grid<float> lit(w, h, 4.f);
+  const Grid<float> ind = computeIndirectSun(lit, v.heights, v.valid, v.spec, 32, 16, 200.0, 1.0);
+  EXPECT_GT(ind(30, 10), 0.05f);  // on the west wall, lit by the east wall
+  // A ridge (the V upside down): from the east side, the west side faces away.
+  const Field r = makeField(w, h, cell, [&](double x, double) { return 1000.0 - 0.5 * std::abs(x - 40.5 * cell); });
+  const Grid<float> westOnly = [&] {
+    Grid<float> g(w, h, 0.f);
+    for (int j = 0; j < h; ++j)
+      for (int i = 0; i < 40; ++i) g(i, j) = 4.f;
+    return g;
+  }();
+  const Grid<float> behind = computeIndirectSun(westOnly, r.heights, r.valid, r.spec, 32, 16, 200.0, 1.0);
+  EXPECT_EQ(behind(50, 10), 0.f);  // the lit west slope is behind the east slope's tangent plane
+}
