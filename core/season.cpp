@@ -24,8 +24,7 @@ double SeasonReport::massBalanceRelativeError() const {
 void computeTemperatureBase(SnowState& s, const ModelParameters& p) {
   s.temperatureBaseC.resize(s.spec.width, s.spec.height);
   for (size_t i = 0; i < s.bedrockM.size(); ++i)
-    s.temperatureBaseC.values()[i] = static_cast<float>(p.lapseRateCPerM * s.bedrockM.values()[i] +
-                                                        p.sunWarmingCPerHour * s.exposureHours.values()[i]);
+    s.temperatureBaseC.values()[i] = temperatureBaseC(p, s.bedrockM.values()[i], s.exposureHours.values()[i]);
 }
 
 SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfig& cfg,

@@ -53,7 +53,12 @@ using ProgressCallback = std::function<void(double fraction)>;
 SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfig& config,
                        const ProgressCallback& progress = {}, const FrameCallback& onFrame = {});
 
-// Fills temperatureBaseC = k_t * B + k_i * exposure (T = T0 + base; paper §4.1).
+// k_t * A + k_i * I: the temperature less the sea-level T0 (paper §4.1).
+inline float temperatureBaseC(const ModelParameters& p, float altitudeM, float exposureHours) {
+  return static_cast<float>(p.lapseRateCPerM * altitudeM + p.sunWarmingCPerHour * exposureHours);
+}
+
+// Fills temperatureBaseC from the bedrock and the exposure (T = T0 + base).
 void computeTemperatureBase(SnowState& state, const ModelParameters& params);
 
 }  // namespace snow

@@ -211,6 +211,20 @@ Grid<float> Exposure::totalAt(double seasonDay) const {
   return total;
 }
 
+std::vector<DailyExposure> exposureSampleDays(const ExposureSettings& s) {
+  std::vector<double> seasonDays;
+  for (double d = 0.0; d < s.seasonDays; d += s.quality.dayStep) seasonDays.push_back(d);
+  seasonDays.push_back(s.seasonDays);
+  std::vector<DailyExposure> days;
+  for (double d : seasonDays) {
+    DailyExposure day;
+    day.seasonDay = d;
+    day.dayOfYear = static_cast<int>(std::fmod(s.startDayOfYear - 1 + std::floor(d), 365.0)) + 1;
+    days.push_back(std::move(day));
+  }
+  return days;
+}
+
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& p, const ExposureSettings& s) {
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
@@ -228,15 +242,8 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
                                     &e.timings.skyRays);
   }
   e.timings.skySeconds = since(t0);
-  // Sample days: 0, dayStep, 2 dayStep, ... and the last day of the season.
-  std::vector<double> sampleDays;
-  for (double d = 0.0; d < s.seasonDays; d += s.quality.dayStep) sampleDays.push_back(d);
-  sampleDays.push_back(s.seasonDays);
   const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
-  for (double d : sampleDays) {
-    DailyExposure day;
-    day.seasonDay = d;
-    day.dayOfYear = static_cast<int>(std::fmod(s.startDayOfYear - 1 + std::floor(d), 365.0)) + 1;
+  for (DailyExposure day : exposureSampleDays(s)) {
     t0 = Clock::now();
     day.sunHours = s.horizonSweep ? directSunFromHorizons(shadowHorizons, heights, valid, spec, s.latitudeDeg, day.dayOfYear,
                                                           s.quality.hourStep, p.directSunWeightHours)

@@ -65,6 +65,10 @@ struct Exposure {
 // Unit surface normals (x east, y north, z up) from central differences that skip NODATA.
 void terrainNormals(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out);
 
+// The season days exposure is computed at (0, dayStep, 2 dayStep, ..., and the last day), each
+// with its day of the year: DailyExposure entries with empty grids.
+std::vector<DailyExposure> exposureSampleDays(const ExposureSettings& settings);
+
 // `scene` may be null when settings.horizonSweep is true.
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& params, const ExposureSettings& settings);

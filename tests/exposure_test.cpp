@@ -48,8 +48,12 @@ TEST(Solar, EquinoxNoonElevationIsNinetyMinusLatitude) {
   for (double lat : {0.0, 23.0, 46.5, 65.0, -33.9}) {
     const SunPosition s = sunPosition(lat, dayOfYear(2025, 3, 20), 12.0);
     EXPECT_NEAR(s.elevationDeg, 90.0 - std::abs(lat), 0.5) << lat;
-    if (lat > 1) EXPECT_NEAR(s.azimuthDeg, 180.0, 1e-6);  // due south at solar noon
-    if (lat < -1) EXPECT_NEAR(std::fmod(s.azimuthDeg + 180.0, 360.0) - 180.0, 0.0, 1e-6);
+    if (lat > 1) {
+      EXPECT_NEAR(s.azimuthDeg, 180.0, 1e-6);  // due south at solar noon
+    }
+    if (lat < -1) {
+      EXPECT_NEAR(std::fmod(s.azimuthDeg + 180.0, 360.0) - 180.0, 0.0, 1e-6);
+    }
   }
 }
 
@@ -141,7 +145,9 @@ TEST(Exposure, VValleyHorizonAndSky) {
     const double az = (k + 0.5) * 2.0 * kPi / azimuths;
     const double phi = std::atan(s * std::abs(std::sin(az)));
     // Azimuths close to the valley axis reach the grid's end before the wall: skip those.
-    if (std::abs(std::sin(az)) > 0.3) EXPECT_NEAR(horizons[k](i, j), phi * 180.0 / kPi, 0.05) << "azimuth " << az * 180 / kPi;
+    if (std::abs(std::sin(az)) > 0.3) {
+      EXPECT_NEAR(horizons[k](i, j), phi * 180.0 / kPi, 0.05) << "azimuth " << az * 180 / kPi;
+    }
     expectedSky += std::cos(phi) * std::cos(phi);
   }
   expectedSky *= 0.1 * kPi / azimuths;

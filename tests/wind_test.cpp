@@ -118,7 +118,9 @@ TEST(WindEffectSurface, LeeCapMatchesTheAnalyticParabola) {
   for (int x = edge + 1; x < 400; ++x) {
     // W_sz falls linearly while in the cap.
     const double s = (x - edge) * cell;
-    if (analyticCap(s, H, U, c) > 2.0) EXPECT_NEAR(k.wsz(x, y), -c * s / U, 0.01 * c * s / U);
+    if (analyticCap(s, H, U, c) > 2.0) {
+      EXPECT_NEAR(k.wsz(x, y), -c * s / U, 0.01 * c * s / U);
+    }
   }
   double worstCap = 0.0;
   for (int x = edge + 1; x < 400; ++x) {

@@ -41,8 +41,6 @@ const char* programVersion() { return SNOWBAKE_VERSION; }
 
 namespace {
 
-constexpr double kWindShadowThresholdM = 0.1;
-
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 std::string fixed(double v, int digits) {
@@ -92,7 +90,7 @@ bool isWindLayer(const std::string& name) {
 }
 
 // Wind layers for the day of an output, from the precomputed fields.
-Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double day, const std::string& name) {
+Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double day, const std::string& name, double shadowToleranceM) {
   const WindFieldsAtDay f = wind.at(day);
   Grid<float> g(s.spec.width, s.spec.height, 0.f);
   for (int y = 0; y < s.spec.height; ++y)
@@ -102,7 +100,7 @@ Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double d
       if (name == "wind_speed") g(x, y) = static_cast<float>(std::hypot(wx, wy));
       else if (name == "wind_direction") g(x, y) = wx == 0 && wy == 0 ? 0.f : static_cast<float>(std::fmod(std::atan2(-wx, wy) * 180.0 / M_PI + 360.0, 360.0));
       else if (name == "wind_shadow_depth") g(x, y) = static_cast<float>(std::max(0.0, depth));
-      else if (name == "wind_shadow_mask") g(x, y) = depth > kWindShadowThresholdM ? 1.f : 0.f;
+      else if (name == "wind_shadow_mask") g(x, y) = depth > shadowToleranceM ? 1.f : 0.f;
     }
   return g;
 }
@@ -125,7 +123,7 @@ std::string layerContent(const std::string& name) {
   if (name == "wind_speed") return "wind speed |W| (venturi and terrain redirection, Eq. 2)";
   if (name == "wind_direction") return "direction the wind blows from, degrees clockwise from north";
   if (name == "wind_shadow_depth") return "wind shadow depth W_z - A (height of the wind-effect surface above the ground)";
-  if (name == "wind_shadow_mask") return "1 where the wind-effect surface is more than 0.1 m above the ground (wind shadow)";
+  if (name == "wind_shadow_mask") return "1 where the wind-effect surface is more than wind_shadow_tolerance_m above the ground (wind shadow)";
   if (name == "depth") return "total snow depth C+S+U+P";
   if (name == "bedrock") return "terrain altitude B";
   if (name == "surface") return "snow-surface altitude B+C+S+U+P";
@@ -151,10 +149,9 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
     h.add(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
   }
   const std::string key = h.hex();
-  // The sample days are fixed by the settings: rebuild the list, then fill the grids.
+  // The sample days are fixed by the settings: list them, then fill the grids from the cache.
   Exposure e;
-  for (double d = 0.0; d < es.seasonDays; d += es.quality.dayStep) e.days.push_back(DailyExposure{d, 0, {}, {}});
-  e.days.push_back(DailyExposure{es.seasonDays, 0, {}, {}});
+  e.days = exposureSampleDays(es);
   std::vector<Grid<float>*> grids{&e.skyHours};
   for (auto& d : e.days) grids.push_back(&d.sunHours), grids.push_back(&d.indirectHours);
   if (cache.load("exposure", key, state.spec.width, state.spec.height, grids)) {
@@ -277,24 +274,20 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " ("
         << wind.computedStates() << " computed, " << wind.cachedStates() << " from the cache"
         << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(since(t0), 2) << " s)\n";
-    const WindFieldsAtDay start = wind.at(0.0);
-    state.windXMps = start.windXMps;
-    state.windYMps = start.windYMps;
-    state.windEffectZM = start.windEffectZM;
-    state.windLoadingMps2 = start.windLoadingMps2;
   } else {
-    state.windEffectZM = state.bedrockM;
     log << "precompute: no wind in the season: wind field skipped\n";
   }
-  // The wind of each day when it changes through the season (more than one keyframe state).
-  const bool windChanges = wind.varies();
+  // The wind of a day (calm: no wind, W_z on the ground); refreshed daily when it changes through
+  // the season (several keyframe states, or calm keyframes among windy ones).
   auto windForDay = [&](int day, SnowState& s) {
-    const WindFieldsAtDay f = wind.at(day);
-    s.windXMps = f.windXMps;
-    s.windYMps = f.windYMps;
-    s.windEffectZM = f.windEffectZM;
-    s.windLoadingMps2 = f.windLoadingMps2;
+    WindFieldsAtDay f = wind.at(day);
+    s.windXMps = std::move(f.windXMps);
+    s.windYMps = std::move(f.windYMps);
+    s.windEffectZM = std::move(f.windEffectZM);
+    s.windLoadingMps2 = std::move(f.windLoadingMps2);
   };
+  windForDay(0, state);
+  const bool windChanges = wind.varies();
 
   // 4. Season
   std::unique_ptr<SnowBackend> backend = chooseBackend(scene.backend, log);
@@ -320,17 +313,17 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       const double outputDay = frame ? day : scene.days;
       Grid<float> grid;
       if (isWindLayer(layer)) {
-        grid = windLayerGrid(s, wind, outputDay, layer);
+        grid = windLayerGrid(s, wind, outputDay, layer, scene.params.windShadowToleranceM);
       } else if (layer == "sun_exposure" || layer == "temperature") {
-        SnowState at = s;
-        if (exposure) at.exposureHours = exposure->totalAt(outputDay);
-        computeTemperatureBase(at, scene.params);
+        // I of the output's day, and T = T0 + k_t A + k_i I.
+        const Grid<float> sun = exposure ? exposure->totalAt(outputDay) : Grid<float>(s.spec.width, s.spec.height, 0.f);
         const double t0c = scene.weather.at(outputDay).seaLevelTemperatureC;
         grid = Grid<float>(s.spec.width, s.spec.height, 0.f);
-        for (size_t i = 0; i < grid.size(); ++i)
-          if (s.validCell.values()[i])
-            grid.values()[i] = layer == "sun_exposure" ? at.exposureHours.values()[i]
-                                                       : static_cast<float>(t0c + at.temperatureBaseC.values()[i]);
+        for (size_t i = 0; i < grid.size(); ++i) {
+          if (!s.validCell.values()[i]) continue;
+          const float base = temperatureBaseC(scene.params, s.bedrockM.values()[i], sun.values()[i]);
+          grid.values()[i] = layer == "sun_exposure" ? sun.values()[i] : static_cast<float>(t0c + base);
+        }
       } else {
         grid = layerGrid(s, layer);
       }

@@ -55,7 +55,7 @@ struct WindTransportKernel {
     const float wsum = fabsf(wx) + fabsf(wy);
     const bool rx = wx != 0.f && v.isValid(nx, y), ry = wy != 0.f && v.isValid(x, ny);
     // The second share is the rest of the first, so the two sum to what was eroded.
-    const float toX = rx ? (ry ? eroded * fabsf(wx) / wsum : eroded * fabsf(wx) / wsum) : 0.f;
+    const float toX = rx ? eroded * fabsf(wx) / wsum : 0.f;
     const float toY = ry ? (rx ? maxf(0.f, eroded - toX) : eroded * fabsf(wy) / wsum) : 0.f;
     if (!(toX + toY > 0.f)) return;
     // giveTo (powder_diffusion.h): the source gives exactly what each receiver gained.
