@@ -1,7 +1,9 @@
 // Float grids as single-channel 32-bit float images (OpenEXR or TIFF), linear values in the
 // grid's own unit (metres for snow layers), row 0 at the north edge.
 #pragma once
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/grid.h"
 
@@ -15,6 +17,14 @@ struct WrittenImage {
 // `format` is "exr" or "tiff"; the file gets that extension. Written atomically.
 WrittenImage writeFloatImage(const std::string& pathWithoutExtension, const std::string& format, const Grid<float>& grid,
                              const std::string& channelName);
+
+// An 8-bit sRGB PNG preview, three bytes per pixel, row 0 at the north edge. Written atomically.
+void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb);
+
+// A shaded-relief preview of the snow surface (bedrock + snow, lit from the north-west), with
+// avalanche scour tinted red (full at 1 m) and deposit tinted blue (full at 2 m); NODATA black.
+std::vector<uint8_t> avalanchePreviewRgb(const Grid<float>& surfaceM, const Grid<uint8_t>& valid, const Grid<float>& scourM,
+                                         const Grid<float>& depositM, double cellSizeXM, double cellSizeYM);
 
 // Reads one channel of a float image back (for tests and `snowbake info`).
 Grid<float> readFloatImage(const std::string& path);

@@ -30,6 +30,13 @@ std::string manifestToJson(const Manifest& m) {
   for (const auto& p : m.phenomena)
     phenomena.push_back({{"name", p.name}, {"starts", p.starts}, {"steps", p.steps}, {"stops", p.stops}, {"skipped_steps", p.skippedSteps}});
   j["run"]["phenomena"] = phenomena;
+  ordered_json avalanches = ordered_json::array();
+  for (const auto& a : m.avalanches)
+    avalanches.push_back({{"day", a.day}, {"rupture_cell", {a.x, a.y}}, {"user", a.user}, {"released", a.released},
+                          {"outcome", a.why}, {"release_cells", a.releaseCells}, {"footprint_cells", a.footprintCells},
+                          {"released_m3", a.releasedM3}, {"deposit_m3", a.depositM3}, {"runout_m", a.runoutM},
+                          {"fall_height_m", a.fallHeightM}, {"steps", a.steps}, {"simulated_s", a.simulatedS}});
+  j["run"]["avalanches"] = avalanches;
   j["mass_balance_m3"] = {{"initial_snow", m.initialSnowM3},
                           {"snowfall_added", m.snowfallAddedM3},
                           {"melt_removed", m.meltRemovedM3},

@@ -23,6 +23,15 @@ struct ManifestPhenomenon {
   unsigned long long starts = 0, steps = 0, stops = 0, skippedSteps = 0;
 };
 
+struct ManifestAvalanche {
+  double day = 0;
+  int x = 0, y = 0;
+  bool user = false, released = false;
+  std::string why;
+  int releaseCells = 0, footprintCells = 0, steps = 0;
+  double releasedM3 = 0, depositM3 = 0, runoutM = 0, fallHeightM = 0, simulatedS = 0;
+};
+
 struct Manifest {
   std::string programVersion;
   std::string sceneSource;
@@ -40,6 +49,7 @@ struct Manifest {
   unsigned long long events = 0;
   double snowfallAddedM3 = 0, meltRemovedM3 = 0, finalSnowM3 = 0, initialSnowM3 = 0;
   std::vector<ManifestPhenomenon> phenomena;
+  std::vector<ManifestAvalanche> avalanches;
   std::vector<ManifestFile> files;
 };
 

@@ -6,6 +6,9 @@
 #include <memory>
 #include <string>
 
+#include <vector>
+
+#include "kernels/avalanche.h"
 #include "kernels/melt.h"
 #include "kernels/powder_diffusion.h"
 #include "kernels/snowfall.h"
@@ -47,6 +50,20 @@ class SnowBackend {
   // Highest temperature (degC) of any valid cell for a sea-level temperature of 0: lets the
   // season skip melt kernels on days when no cell can melt.
   virtual float maxTemperatureBaseC() = 0;
+
+  // The snow depth (C + S + U + P) and U of cells in rows y0..y0+rows-1, columns x0..x0+cols-1
+  // (clipped to the grid by the caller), row after row: a cheap look at a few cells.
+  virtual void readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) = 0;
+
+  // Avalanches (kernels/avalanche.h; the host loop is core/avalanche.h). Release: `moving` (one
+  // byte per cell) marks the released cells; records U + P and joins their powder to U.
+  virtual void avalancheRelease(const std::vector<uint8_t>& moving) = 0;
+  // `substeps` substeps of args.dtS, the box dilated by one cell before each (snow moves at most
+  // one cell a substep), then per-row statistics of the final box: 4 floats per row y0..y1-1
+  // (fastest pipe m/s, deepest moving snow m, first and last column holding moving snow or -1).
+  virtual std::vector<float> avalancheSteps(const AvalancheArgs& args, int substeps) = 0;
+  // Deposits the moving snow in the box and adds the scour and deposit records.
+  virtual void avalancheSettle(const AvalancheArgs& box) = 0;
 };
 
 }  // namespace snow

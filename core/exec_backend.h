@@ -3,6 +3,7 @@
 // owns the fields and runs the step functions of steps.h. Included by core/cpu_backend.cpp and
 // by the CUDA backend's .cu file, so it must stay free of TBB and CUDA headers.
 #pragma once
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>
@@ -31,11 +32,17 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(windScour_, s.windScourM.values());
     exec_.upload(windDeposit_, s.windDepositM.values());
     exec_.upload(melted_, s.meltedM.values());
+    exec_.upload(avalancheScour_, s.avalancheScourM.values());
+    exec_.upload(avalancheDeposit_, s.avalancheDepositM.values());
+    avalancheFieldsReady_ = false;
     exec_.upload(valid_, s.validCell.values());
     exec_.upload(delta_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(scratchSurface_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(scratchPowder_, std::vector<float>(s.spec.cellCount(), 0.f));
+    const size_t tiles = static_cast<size_t>(view().tilesX()) * view().tilesY();
+    exec_.upload(tileActive_, std::vector<uint8_t>(tiles, 0));
+    exec_.upload(tileNeeded_, std::vector<uint8_t>(tiles, 0));
     uploadStaticFields(s);
   }
 
@@ -57,6 +64,8 @@ class ExecBackend final : public SnowBackend {
     exec_.download(windScour_, s.windScourM.values());
     exec_.download(windDeposit_, s.windDepositM.values());
     exec_.download(melted_, s.meltedM.values());
+    exec_.download(avalancheScour_, s.avalancheScourM.values());
+    exec_.download(avalancheDeposit_, s.avalancheDepositM.values());
   }
 
   double snowfall(const SnowfallArgs& a) override { return runSnowfall(exec_, view(), a); }
@@ -68,6 +77,50 @@ class ExecBackend final : public SnowBackend {
   }
   void powderDiffusion(const PowderDiffusionArgs& a) override {
     runPowderDiffusion(exec_, view(), a);
+    exec_.finish();
+  }
+
+  void readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) override {
+    depth.assign(static_cast<size_t>(cols) * rows, 0.f);
+    unstable.assign(depth.size(), 0.f);
+    std::vector<float> row(static_cast<size_t>(cols));
+    for (int r = 0; r < rows; ++r) {
+      const size_t offset = static_cast<size_t>(y0 + r) * spec_.width + x0;
+      float* d = &depth[static_cast<size_t>(r) * cols];
+      for (auto* layer : {&compacted_, &stable_, &unstable_, &powder_}) {
+        exec_.downloadRange(*layer, offset, static_cast<size_t>(cols), row.data());
+        for (int c = 0; c < cols; ++c) d[c] += row[c];
+        if (layer == &unstable_) std::copy(row.begin(), row.end(), unstable.begin() + static_cast<size_t>(r) * cols);
+      }
+    }
+  }
+
+  void avalancheRelease(const std::vector<uint8_t>& moving) override {
+    if (!avalancheFieldsReady_) {  // allocated on the first avalanche only
+      exec_.upload(flows_, std::vector<float>(4 * spec_.cellCount(), 0.f));
+      exec_.upload(avalancheBefore_, std::vector<float>(spec_.cellCount(), 0.f));
+      exec_.upload(rowStats_, std::vector<float>(4 * static_cast<size_t>(spec_.height), 0.f));
+      avalancheFieldsReady_ = true;
+    }
+    exec_.upload(moving_, moving);
+    exec_.forEachCell(spec_.width, spec_.height, AvalancheReleaseKernel{view()});
+    exec_.finish();
+  }
+  std::vector<float> avalancheSteps(const AvalancheArgs& args, int substeps) override {
+    AvalancheArgs a = args;
+    runAvalancheSteps(exec_, view(), a, substeps);
+    std::vector<float> stats;
+    exec_.download(rowStats_, stats);
+    std::vector<float> box(stats.begin() + 4 * static_cast<size_t>(a.y0), stats.begin() + 4 * static_cast<size_t>(a.y1));
+    box.push_back(static_cast<float>(a.x0));
+    box.push_back(static_cast<float>(a.y0));
+    box.push_back(static_cast<float>(a.x1));
+    box.push_back(static_cast<float>(a.y1));
+    return box;
+  }
+  void avalancheSettle(const AvalancheArgs& a) override {
+    if (a.x1 > a.x0 && a.y1 > a.y0)
+      exec_.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheSettleKernel>{AvalancheSettleKernel{view()}, a.x0, a.y0});
     exec_.finish();
   }
 
@@ -115,15 +168,24 @@ class ExecBackend final : public SnowBackend {
     v.surfaceSlope = surfaceSlope_.data();
     v.scratchSurface = scratchSurface_.data();
     v.scratchPowder = scratchPowder_.data();
+    v.flows = flows_.data();
+    v.avalancheBefore = avalancheBefore_.data();
+    v.avalancheScour = avalancheScour_.data();
+    v.avalancheDeposit = avalancheDeposit_.data();
+    v.rowStats = rowStats_.data();
+    v.tileActive = tileActive_.data();
+    v.tileNeeded = tileNeeded_.data();
     return v;
   }
 
   Exec exec_;
   GridSpec spec_;
   typename Exec::template Buffer<float> bedrock_, compacted_, stable_, unstable_, powder_;
-  typename Exec::template Buffer<uint8_t> moving_, valid_;
+  typename Exec::template Buffer<uint8_t> moving_, valid_, tileActive_, tileNeeded_;
   typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
   typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_;
+  typename Exec::template Buffer<float> flows_, avalancheBefore_, avalancheScour_, avalancheDeposit_, rowStats_;
+  bool avalancheFieldsReady_ = false;
 };
 
 }  // namespace snow

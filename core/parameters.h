@@ -44,14 +44,24 @@ struct ModelParameters {
   double windInstabilityPerMps2 = 0.05;      // not in Table 2: S -> U per day per m/s^2 of wind loading (§5.4)
   double windShadowToleranceM = 0.1;         // W_z this far above the snow: sheltered from erosion
   // --- §6.1 avalanches
-  double snowDensityKgPerM3 = 500.0;         // rho (0.5 g cm^-3)
+  double snowDensityKgPerM3 = 500.0;         // rho (0.5 g cm^-3); cancels in a = dP / (rho dx)
   double gravityMps2 = 9.8;                  // g
   double avalancheRestAngleDeg = 30.0;       // theta_c
-  double snowViscosityPerS2 = 5e-4;          // k_viscous
+  double snowViscosityPerS2 = 5e-4;          // k_viscous: damping rate k_v U (U in metres) of wet flow
   // --- §6.2 ski tracks
   double skierTargetSlopeDeg = 30.0;         // s_t
   double trackAmplitudeM = 5.0;              // a
   double trackFrequencyPerM = 0.01;          // f
+  // --- §6.1 avalanches, beyond Table 2
+  double avalancheDryTemperatureC = -10.0;    // alpha = 1 (granular) at or below
+  double avalancheWetTemperatureC = 0.0;      // alpha = 0 (viscous) at or above
+  double avalancheWetGranularFraction = 0.2;  // alpha of wet snow: the granular friction it keeps
+  double avalancheRatePerKm2PerDay = 1.0 / 7.0;  // spontaneous releases: about one a week per km^2
+  double avalancheReachMPerM = 50.0;          // release reach: metres per metre of unstable snow at the rupture
+  double avalancheMinUnstableM = 0.05;        // no release where U is thinner
+  double avalancheStopSpeedMps = 0.05;        // at rest when no pipe flows faster
+  double avalancheMaxDurationS = 600.0;       // cap on one avalanche's simulated time
+  double avalancheStepS = 0.1;                // simulated time of one avalanche step (temporal zoom)
   // --- §3.2 / §7.4 event frequencies (mean events per simulated day) and durations
   double snowfallStartsPerDay = 1.0 / 7.0;   // a snowfall starts once a week on average
   double snowfallMeanDurationDays = 3.0;     // and lasts three days on average
@@ -59,8 +69,12 @@ struct ModelParameters {
   double stateChangeStepsPerDay = 2.0;       // delta t_m = 0.5 day
   double diffusionStepsPerDay = 2.0;
   double windTransportStepsPerDay = 2.0;
-  // Reference cell size at which the paper's per-step transport rates were set (10 m, §8).
-  double referenceCellSizeM = 10.0;
+  // Length that turns k_m (a share per day) into a creep speed: powder moves k_m * L_d metres a
+  // day per unit of slope above its rest slope, whatever the cell size (see powder_diffusion.h).
+  double diffusionLengthM = 400.0;
+  // A powder film thinner than this does not slide (a dusting sticks to rock; it also keeps the
+  // diffusion's work to where there is snow to move).
+  double diffusionMinDepthM = 0.001;
 };
 
 // One row per parameter: the scene-file key, its member, its unit and its valid range.

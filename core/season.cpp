@@ -4,6 +4,9 @@
 #include <chrono>
 #include <cmath>
 
+#include <deque>
+
+#include "rng.h"
 #include "scheduler.h"
 #include "step_args.h"
 
@@ -46,16 +49,33 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   };
 
 
+  // Each step acts over the time since the phenomenon's previous step (or its start), not over
+  // the nominal 1 / stepsPerDay: the Poisson clock decides when steps happen, but a storm of
+  // three days adds three days of snow however many steps it drew, and a season melts for as
+  // long as it is warm. (With nominal steps, a fixed 4-day storm drew 9 steps in one run and 14
+  // in another: 30 % of the season's snow was the luck of the draw.) Continuous phenomena
+  // catch up at the season's end; episodic ones at their stop.
+  std::vector<double> lastStep;
+  auto sinceLast = [&lastStep](int slot, double day) {
+    const double dt = std::max(0.0, day - lastStep[slot]);
+    lastStep[slot] = day;
+    return dt;
+  };
+  std::vector<std::function<void(double day)>> catchUp;  // continuous phenomena, run at the end
   auto addPhenomenon = [&](PhenomenonSpec spec) {
     reports.push_back(PhenomenonReport{spec.name});
+    lastStep.push_back(0.0);
     return scheduler.add(std::move(spec));
   };
-  auto makeSnowfallStep = [&](int slot) {
-    return [&, slot](const EventContext& e) {
-      timed(slot, [&] {
-        report.snowfallAddedM3 += backend.snowfall(makeSnowfallArgs(p, e.stepDays, cfg.weather.at(e.day)));
-      });
-    };
+  auto snowfallOver = [&](int slot, double day) {
+    const double dt = sinceLast(slot, day);
+    if (dt > 0.0)
+      timed(slot, [&] { report.snowfallAddedM3 += backend.snowfall(makeSnowfallArgs(p, dt, cfg.weather.at(day))); });
+  };
+  auto makeSnowfallEvents = [&](PhenomenonSpec& s, int slot) {
+    s.onStart = [&, slot](const EventContext& e) { lastStep[slot] = e.day; };
+    s.onStep = [&, slot](const EventContext& e) { snowfallOver(slot, e.day); };
+    s.onStop = [&, slot](const EventContext& e) { snowfallOver(slot, e.day); };
   };
 
   // Snowfall (§5.1): Poisson starts once a week, three days on average; or the fixed periods of
@@ -70,7 +90,11 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     } else {
       for (const auto& w : cfg.weather.snowfallPeriods) s.windows.push_back({w.startDay, w.endDay});
     }
-    s.onStep = makeSnowfallStep(static_cast<int>(reports.size()));
+    const int slot = static_cast<int>(reports.size());
+    makeSnowfallEvents(s, slot);
+    catchUp.push_back([&, slot](double day) {
+      if (scheduler.isActive(slot)) snowfallOver(slot, day);
+    });
     addPhenomenon(std::move(s));
   }
   if (!cfg.userSnowfalls.empty()) {
@@ -78,7 +102,11 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     s.name = "snowfall (user events)";
     s.stepsPerDay = p.snowfallStepsPerDay;
     for (const auto& w : cfg.userSnowfalls) s.windows.push_back({w.startDay, w.endDay});
-    s.onStep = makeSnowfallStep(static_cast<int>(reports.size()));
+    const int slot = static_cast<int>(reports.size());
+    makeSnowfallEvents(s, slot);
+    catchUp.push_back([&, slot](double day) {
+      if (scheduler.isActive(slot)) snowfallOver(slot, day);
+    });
     addPhenomenon(std::move(s));
   }
   {
@@ -90,16 +118,17 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     s.alwaysActive = true;
     s.stepsPerDay = p.stateChangeStepsPerDay;
     const int slot = static_cast<int>(reports.size());
-    s.onStep = [&, slot](const EventContext& e) {
-      const WeatherState w = cfg.weather.at(e.day);
+    auto over = [&, slot](double day) {
+      const double dt = sinceLast(slot, day);
+      const WeatherState w = cfg.weather.at(day);
       if (w.seaLevelTemperatureC + maxTemperatureBase <= p.meltThresholdC) {
         ++reports[slot].skippedSteps;
         return;
       }
-      timed(slot, [&] {
-        report.meltRemovedM3 -= backend.melt(makeMeltArgs(p, e.stepDays, w));
-      });
+      timed(slot, [&] { report.meltRemovedM3 -= backend.melt(makeMeltArgs(p, dt, w)); });
     };
+    s.onStep = [over](const EventContext& e) { over(e.day); };
+    catchUp.push_back(over);
     addPhenomenon(std::move(s));
   }
   {
@@ -108,14 +137,17 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     s.alwaysActive = true;
     s.stepsPerDay = p.stateChangeStepsPerDay;
     const int slot = static_cast<int>(reports.size());
-    s.onStep = [&, slot](const EventContext& e) {
-      const WeatherState w = cfg.weather.at(e.day);
+    auto over = [&, slot](double day) {
+      const double dt = sinceLast(slot, day);
+      const WeatherState w = cfg.weather.at(day);
       if (w.seaLevelTemperatureC + maxTemperatureBase <= p.freezeTemperatureC && !(cfg.windTransport && p.windInstabilityPerMps2 > 0)) {
         ++reports[slot].skippedSteps;
         return;
       }
-      timed(slot, [&] { backend.stabilityChange(makeStabilityArgs(p, e.stepDays, w)); });
+      timed(slot, [&] { backend.stabilityChange(makeStabilityArgs(p, dt, w)); });
     };
+    s.onStep = [over](const EventContext& e) { over(e.day); };
+    catchUp.push_back(over);
     addPhenomenon(std::move(s));
   }
   if (cfg.windTransport) {
@@ -125,9 +157,12 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     s.alwaysActive = true;
     s.stepsPerDay = p.windTransportStepsPerDay;
     const int slot = static_cast<int>(reports.size());
-    s.onStep = [&, slot](const EventContext& e) {
-      timed(slot, [&] { backend.windTransport(makeWindTransportArgs(p, e.stepDays)); });
+    auto over = [&, slot](double day) {
+      const double dt = sinceLast(slot, day);
+      if (dt > 0.0) timed(slot, [&] { backend.windTransport(makeWindTransportArgs(p, dt)); });
     };
+    s.onStep = [over](const EventContext& e) { over(e.day); };
+    catchUp.push_back(over);
     addPhenomenon(std::move(s));
   }
   {
@@ -137,12 +172,79 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     s.alwaysActive = true;
     s.stepsPerDay = p.diffusionStepsPerDay;
     const int slot = static_cast<int>(reports.size());
-    s.onStep = [&, slot](const EventContext& e) {
-      timed(slot, [&] {
-        backend.powderDiffusion(makePowderDiffusionArgs(p, e.stepDays));
-      });
+    auto over = [&, slot](double day) {
+      const double dt = sinceLast(slot, day);
+      if (dt > 0.0) timed(slot, [&] { backend.powderDiffusion(makePowderDiffusionArgs(p, dt)); });
     };
+    s.onStep = [over](const EventContext& e) { over(e.day); };
+    catchUp.push_back(over);
     addPhenomenon(std::move(s));
+  }
+
+  // Avalanches (§6.1): spontaneous releases at about one a week per km^2 (rupture cell weighted
+  // by unstable depth and slope above the rest angle), and the scene's user releases. A zoomed
+  // phenomenon: while one runs, its steps of 0.1 s are the only events (§3.1's temporal zoom).
+  AvalancheRun avalanche(backend, p, state);
+  std::deque<UserAvalanche> pendingAvalanches;
+  int avalancheId = -1;
+  {
+    double validCells = 0;
+    for (uint8_t v : state.validCell.values()) validCells += v;
+    const double areaKm2 = validCells * state.spec.cellAreaM2() * 1e-6;
+    const double startsPerDay = p.avalancheRatePerKm2PerDay * areaKm2;
+    if (startsPerDay > 0.0 || !cfg.userAvalanches.empty()) {
+      PhenomenonSpec s;
+      s.name = "avalanche";
+      s.zoomed = true;
+      s.startsPerDay = startsPerDay;
+      s.stepsPerDay = 86400.0 / p.avalancheStepS;
+      const int slot = static_cast<int>(reports.size());
+      s.onStart = [&, slot](const EventContext& e) {
+        timed(slot, [&] {
+          const double t0 = cfg.weather.at(e.day).seaLevelTemperatureC;
+          if (!pendingAvalanches.empty()) {
+            const UserAvalanche u = pendingAvalanches.front();
+            pendingAvalanches.pop_front();
+            avalanche.release(u.x, u.y, e.day, t0, true);
+            if (!avalanche.active()) report.avalanches.push_back(avalanche.record());
+          } else {
+            const RandomKey key{cfg.seed};
+            const Philox4x32 r = key.draw(e.eventIndex, 0, RngStream::Avalanche);
+            ++report.avalancheTries;
+            avalanche.trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), uniformOpenDouble(r.v[2], r.v[3]), e.day, t0);
+          }
+        });
+      };
+      s.onStep = [&, slot](const EventContext&) {
+        if (avalanche.active()) timed(slot, [&] { avalanche.step(); });
+      };
+      s.finished = [&] { return !avalanche.active() || avalanche.atRest(); };
+      s.onStop = [&, slot](const EventContext&) {
+        if (avalanche.active()) timed(slot, [&] { report.avalanches.push_back(avalanche.settle()); });
+        // User releases that came while this one ran: run them now, one after the other.
+        while (!pendingAvalanches.empty()) {
+          const UserAvalanche u = pendingAvalanches.front();
+          pendingAvalanches.pop_front();
+          timed(slot, [&] {
+            if (avalanche.release(u.x, u.y, u.day, cfg.weather.at(u.day).seaLevelTemperatureC, true)) {
+              while (!avalanche.step()) {
+              }
+              report.avalanches.push_back(avalanche.settle());
+            } else {
+              report.avalanches.push_back(avalanche.record());
+            }
+          });
+        }
+      };
+      avalancheId = addPhenomenon(std::move(s));
+    }
+  }
+  for (const UserAvalanche& u : cfg.userAvalanches) {
+    if (u.day < 0.0 || u.day > cfg.days) continue;
+    scheduler.addAction(u.day, [&, u](double) {
+      pendingAvalanches.push_back(u);
+      scheduler.start(avalancheId);
+    });
   }
 
   if (cfg.updateStaticFields) {
@@ -169,6 +271,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
       progress(std::min(1.0, day / cfg.days));
     }
   });
+  for (const auto& f : catchUp) f(cfg.days);
   if (progress) progress(1.0);
 
   backend.download(state);

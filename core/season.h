@@ -6,11 +6,18 @@
 #include <string>
 #include <vector>
 
+#include "avalanche.h"
 #include "backend.h"
 #include "parameters.h"
 #include "weather.h"
 
 namespace snow {
+
+// An avalanche asked for in the scene: rupture cell and day.
+struct UserAvalanche {
+  double day = 0;
+  int x = 0, y = 0;
+};
 
 struct SeasonConfig {
   double days = 120.0;
@@ -18,6 +25,7 @@ struct SeasonConfig {
   ModelParameters params;
   WeatherTimeline weather;
   std::vector<SnowfallPeriod> userSnowfalls;  // storms requested as user events
+  std::vector<UserAvalanche> userAvalanches;  // avalanches requested as user events
   std::vector<double> frameDays;              // days at which to hand the state to onFrame
   // Per-day static fields: when set, called at the start of every season day (0, 1, 2, ...) to
   // refill the state's static fields for that day (temperature from that day's sun exposure,
@@ -41,6 +49,8 @@ struct SeasonReport {
   double meltRemovedM3 = 0.0;     // positive
   uint64_t events = 0;
   double seconds = 0.0;
+  std::vector<AvalancheRecord> avalanches;  // every avalanche released, and every user release that could not be
+  uint64_t avalancheTries = 0;              // spontaneous release tries (most find nothing to release)
   // |final - (initial + added - melted)| relative to the snow that passed through.
   double massBalanceRelativeError() const;
 };

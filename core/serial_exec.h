@@ -2,6 +2,7 @@
 // The TBB executor must give the same bytes (each cell is written by exactly one call per pass),
 // and the GPU test binary uses this one as the CPU reference because it links no TBB.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -47,6 +48,10 @@ struct HostStorage {
   void upload(Buffer<T>& b, const std::vector<T>& host) { b.values() = host; }
   template <class T>
   void download(Buffer<T>& b, std::vector<T>& host) { host = b.values(); }
+  template <class T>
+  void downloadRange(Buffer<T>& b, size_t offset, size_t count, T* out) {
+    std::copy(b.values().begin() + offset, b.values().begin() + offset + count, out);
+  }
   void finish() {}
 };
 

@@ -43,6 +43,8 @@ struct SnowState {
   Grid<float> windScourM;        // removed by wind transport
   Grid<float> windDepositM;      // deposited by wind transport
   Grid<float> meltedM;           // removed by melt
+  Grid<float> avalancheScourM;   // taken away by avalanches (net per avalanche)
+  Grid<float> avalancheDepositM; // left by avalanches (net per avalanche)
 
   // Allocates every field for `s`, snow layers zero, all cells valid, static fields zero.
   void allocate(const GridSpec& s) {
@@ -64,6 +66,8 @@ struct SnowState {
     windScourM.resize(w, h, 0.f);
     windDepositM.resize(w, h, 0.f);
     meltedM.resize(w, h, 0.f);
+    avalancheScourM.resize(w, h, 0.f);
+    avalancheDepositM.resize(w, h, 0.f);
   }
   Grid<float>& layer(SnowLayer l) {
     switch (l) {
@@ -107,6 +111,23 @@ struct SnowFieldsView {
   // Per-cell scratch for transport snapshots (powder diffusion: A and P at the substep's start).
   float* scratchSurface = nullptr;
   float* scratchPowder = nullptr;
+  // Per-tile scratch (kTileSize² cells a tile, tilesX() by tilesY()): which tiles a transport
+  // substep has work in, and which need its snapshot (the active ones and their neighbours).
+  // Avalanches: four signed pipe flows per cell (m^3/s), U + P at release, the records, and four
+  // floats per row of statistics for the host.
+  float* flows = nullptr;
+  float* avalancheBefore = nullptr;
+  float* avalancheScour = nullptr;
+  float* avalancheDeposit = nullptr;
+  float* rowStats = nullptr;
+  uint8_t* tileActive = nullptr;
+  uint8_t* tileNeeded = nullptr;
+
+  static constexpr int kTileShift = 5;
+  static constexpr int kTileSize = 1 << kTileShift;
+  SNOW_HD SNOW_INLINE int tilesX() const { return (width + kTileSize - 1) >> kTileShift; }
+  SNOW_HD SNOW_INLINE int tilesY() const { return (height + kTileSize - 1) >> kTileShift; }
+  SNOW_HD SNOW_INLINE int tileOf(int x, int y) const { return (y >> kTileShift) * tilesX() + (x >> kTileShift); }
 
   SNOW_HD SNOW_INLINE bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
   SNOW_HD SNOW_INLINE int index(int x, int y) const { return y * width + x; }

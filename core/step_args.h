@@ -60,7 +60,8 @@ inline PowderDiffusionArgs makePowderDiffusionArgs(const ModelParameters& p, dou
   a.dtDays = static_cast<float>(dtDays);
   a.diffusionRatePerDay = static_cast<float>(p.diffusionRatePerDay);
   a.restSlope = static_cast<float>(p.diffusionRestSlope);
-  a.referenceCellSizeM = static_cast<float>(p.referenceCellSizeM);
+  a.diffusionLengthM = static_cast<float>(p.diffusionLengthM);
+  a.minDepthM = static_cast<float>(p.diffusionMinDepthM);
   return a;
 }
 

@@ -8,6 +8,7 @@
 //   float maxValue(const float* values, const uint8_t* valid, int width, int height);
 //   void finish();  // waits for queued work (GPU) and reports its errors
 #pragma once
+#include "kernels/avalanche.h"
 #include "kernels/melt.h"
 #include "kernels/powder_diffusion.h"
 #include "kernels/snowfall.h"
@@ -52,15 +53,50 @@ void runWindTransport(Exec& exec, const SnowFieldsView& v, const WindTransportAr
 template <class Exec>
 void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusionArgs& a) {
   const float minCell = v.cellSizeXM < v.cellSizeYM ? v.cellSizeXM : v.cellSizeYM;
-  const int substeps = powderDiffusionSubsteps(a.dtDays, a.diffusionRatePerDay, a.referenceCellSizeM, minCell);
+  const int substeps = powderDiffusionSubsteps(a.dtDays, a.diffusionRatePerDay, a.diffusionLengthM, minCell);
   PowderDiffusionArgs sub = a;
   sub.dtDays = a.dtDays / static_cast<float>(substeps);
+  // With tile masks, each substep first finds the tiles where some cell holds powder above its
+  // rest slope; the snapshot and the colour passes then skip the rest of the grid. Skipped cells
+  // are exactly those that would not move snow, so the result is the same bytes either way.
+  const bool gated = v.tileActive != nullptr && v.tileNeeded != nullptr;
+  const uint8_t* active = gated ? v.tileActive : nullptr;
+  const uint8_t* needed = gated ? v.tileNeeded : nullptr;
   for (int s = 0; s < substeps; ++s) {
-    exec.forEachCell(v.width, v.height, PowderSnapshotKernel{v});
+    if (gated) {
+      exec.forEachCell(v.tilesX(), v.tilesY(), PowderActivityKernel{v, a.restSlope, a.minDepthM});
+      exec.forEachCell(v.tilesX(), v.tilesY(), TileDilateKernel{v});
+    }
+    exec.forEachCell(v.width, v.height, TileGated<PowderSnapshotKernel>{PowderSnapshotKernel{v}, needed, v.tilesX()});
     for (int colour = 0; colour < 5; ++colour) {
       sub.colour = colour;
-      exec.forEachCellOfColour(v.width, v.height, colour, PowderDiffusionKernel{v, sub});
+      exec.forEachCellOfColour(v.width, v.height, colour,
+                               TileGated<PowderDiffusionKernel>{PowderDiffusionKernel{v, sub}, active, v.tilesX()});
     }
+  }
+}
+
+// Avalanche substeps over a box that grows by one cell per substep (snow moves at most one cell
+// a substep), then the per-row statistics of the grown box. Returns the grown box in `a`.
+template <class Exec>
+void runAvalancheSteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a, int substeps) {
+  for (int s = 0; s < substeps; ++s) {
+    a.x0 = a.x0 > 0 ? a.x0 - 1 : 0;
+    a.y0 = a.y0 > 0 ? a.y0 - 1 : 0;
+    a.x1 = a.x1 < v.width ? a.x1 + 1 : v.width;
+    a.y1 = a.y1 < v.height ? a.y1 + 1 : v.height;
+    const int w = a.x1 - a.x0, h = a.y1 - a.y0;
+    if (w <= 0 || h <= 0) return;
+    // Every cell with moving snow is at least one cell inside the box, so all of its pipes and
+    // neighbours are processed; cells outside hold no flows (AvalancheClearIdleKernel).
+    exec.forEachCell(w, h, InBox<AvalancheFlowKernel>{AvalancheFlowKernel{v, a}, a.x0, a.y0});
+    exec.forEachCell(w, h, InBox<AvalancheScaleKernel>{AvalancheScaleKernel{v, a}, a.x0, a.y0});
+    exec.forEachCell(w, h, InBox<AvalancheApplyScaleKernel>{AvalancheApplyScaleKernel{v}, a.x0, a.y0});
+    exec.forEachCell(w, h, InBox<AvalancheHeightKernel>{AvalancheHeightKernel{v, a}, a.x0, a.y0});
+  }
+  if (a.x1 > a.x0 && a.y1 > a.y0) {
+    exec.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheClearIdleKernel>{AvalancheClearIdleKernel{v}, a.x0, a.y0});
+    exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a});
   }
 }
 

@@ -104,6 +104,11 @@ class CudaExec {
     if (!host.empty()) check(cudaMemcpy(host.data(), b.data(), host.size() * sizeof(T), cudaMemcpyDeviceToHost), "download");
   }
 
+  template <class T>
+  void downloadRange(Buffer<T>& b, size_t offset, size_t count, T* out) {
+    if (count > 0) check(cudaMemcpy(out, b.data() + offset, count * sizeof(T), cudaMemcpyDeviceToHost), "download range");
+  }
+
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {
     const dim3 block(32, 8);

@@ -32,6 +32,16 @@ struct Scene {
   double days = 120.0;
   WeatherTimeline weather;
   std::vector<SnowfallPeriod> userSnowfalls;
+  // Avalanches asked for in [[events]] (type = "avalanche"): a day and a rupture point, in metres
+  // east and south of the grid's north-west corner (position_m) or in the DEM's own projected
+  // metres (map_position, easting and northing).
+  struct AvalancheEvent {
+    double day = 0;
+    double xM = 0, yM = 0;
+    bool mapCoordinates = false;
+    int line = 0;  // where it was given, for messages
+  };
+  std::vector<AvalancheEvent> userAvalanches;
   ModelParameters params;
   OutputRequest outputs;
   bool sunExposure = true;             // precompute.sun: false skips the sun (temperature from altitude alone)

@@ -48,7 +48,8 @@ struct Rule {
 const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface",
                                                 "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
                                                 "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
-                                                "wind_deposit", "melt"};
+                                                "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit",
+                                                "avalanche_preview"};
 
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {
@@ -95,7 +96,9 @@ const std::vector<Rule>& sceneRules() {
       {"weather.snowfall.start_day", Kind::Number, 0, 3650},
       {"weather.snowfall.end_day", Kind::Number, 0, 3650},
       {"events", Kind::TableArray},
-      {"events.type", Kind::String, -kInf, kInf, {"snowfall"}},
+      {"events.type", Kind::String, -kInf, kInf, {"snowfall", "avalanche"}},
+      {"events.position_m", Kind::NumberArray, -1e7, 1e7},
+      {"events.map_position", Kind::NumberArray, -1e9, 1e9},
       {"events.day", Kind::Number, 0, 3650},
       {"events.duration_days", Kind::Number, 0.001, 365},
       {"parameters", Kind::Table},
@@ -449,9 +452,26 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   if (const toml::array* events = root["events"].as_array()) {
     for (auto&& element : *events) {
       const toml::table& e = *element.as_table();
-      for (const char* required : {"type", "day", "duration_days"})
+      for (const char* required : {"type", "day"})
         if (!e.contains(required)) throw InputError(where(source, e.source()) + ": events." + required + ": missing");
       const double day = e["day"].value<double>().value();
+      if (e["type"].value<std::string>().value() == "avalanche") {
+        const bool metres = e.contains("position_m"), map = e.contains("map_position");
+        if (metres == map)
+          throw InputError(where(source, e.source()) + ": events: an avalanche needs position_m = [x, y] or map_position = [easting, northing] (one of them)");
+        const char* key = metres ? "position_m" : "map_position";
+        const toml::array& xy = *e.get(key)->as_array();
+        if (xy.size() != 2) fail(source, *e.get(key), std::string("events.") + key, "needs two numbers");
+        Scene::AvalancheEvent a;
+        a.day = day;
+        a.xM = xy[0].value<double>().value();
+        a.yM = xy[1].value<double>().value();
+        a.mapCoordinates = map;
+        a.line = static_cast<int>(e.source().begin.line);
+        scene.userAvalanches.push_back(a);
+        continue;
+      }
+      if (!e.contains("duration_days")) throw InputError(where(source, e.source()) + ": events.duration_days: missing");
       scene.userSnowfalls.push_back({day, day + e["duration_days"].value<double>().value()});
     }
   }

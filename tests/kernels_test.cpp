@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "core/serial_exec.h"
 #include "core/steps.h"
@@ -27,9 +28,13 @@ SnowState plane(int w, int h, double cell, float slopeX, float base, float tempe
 }
 
 SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
-  // One buffer holds the four scratch fields: delta, slope, surface and powder snapshots.
-  delta.assign(4 * s.spec.cellCount(), 0.f);
+  // One buffer holds the four scratch fields (delta, slope, surface and powder snapshots) and,
+  // behind them, the two per-tile masks as bytes.
   SnowFieldsView v;
+  v.width = s.spec.width;
+  v.height = s.spec.height;
+  const size_t tiles = static_cast<size_t>(v.tilesX()) * v.tilesY();
+  delta.assign(4 * s.spec.cellCount() + 2 * (tiles / sizeof(float) + 1), 0.f);
   v.width = s.spec.width;
   v.height = s.spec.height;
   v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM);
@@ -54,6 +59,8 @@ SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   v.surfaceSlope = delta.data() + s.spec.cellCount();
   v.scratchSurface = delta.data() + 2 * s.spec.cellCount();
   v.scratchPowder = delta.data() + 3 * s.spec.cellCount();
+  v.tileActive = reinterpret_cast<uint8_t*>(delta.data() + 4 * s.spec.cellCount());
+  v.tileNeeded = v.tileActive + tiles;
   return v;
 }
 
@@ -209,7 +216,8 @@ TEST(PowderDiffusion, RoughTerrainMassExactAndNonNegative) {
 
 TEST(PowderDiffusion, SubstepsGrowWithEventLengthAndShrinkingCells) {
   EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 10.f, 10.f), 1);
-  EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 10.f, 2.f), 5);
+  EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 400.f, 10.f), 10);  // defaults at 10 m: one cell a substep
+  EXPECT_EQ(powderDiffusionSubsteps(0.5f, 0.5f, 400.f, 2.f), 50);
   EXPECT_EQ(powderDiffusionSubsteps(1e9f, 1e9f, 10.f, 0.01f), 256);
 }
 
@@ -222,7 +230,9 @@ float powderLeaving(float gx, float gy) {
   s.powderM(4, 4) = 1e-3f;
   std::vector<float> delta;
   SerialExec exec;
-  PowderDiffusionArgs a;  // dt 0.5 day, k_m 0.5 /day, s_d0 0.5, 10 m reference: one substep
+  PowderDiffusionArgs a;  // dt 0.5 day, k_m 0.5 /day, s_d0 0.5
+  a.diffusionLengthM = 10.f;  // L_d = dx: the paper's per-cell share, one substep
+  a.minDepthM = 0.f;
   runPowderDiffusion(exec, viewOf(s, delta), a);
   return 1e-3f - s.powderM(4, 4);
 }
@@ -241,6 +251,48 @@ TEST(PowderDiffusion, DiagonalSlopeMovesLikeAnAxisSlope) {
   const float diagonal = powderLeaving(0.7f / std::sqrt(2.f), 0.7f / std::sqrt(2.f));
   EXPECT_NEAR(diagonal, axis, 0.002f * axis);
   EXPECT_EQ(powderLeaving(0.45f, 0.f), 0.f);  // below the rest slope nothing moves
+}
+
+// A film thinner than diffusion_min_depth_m stays on a steep slope; a thicker one slides.
+TEST(PowderDiffusion, ThinFilmSticksThickerPowderSlides) {
+  for (float depth : {0.5e-3f, 5e-3f}) {
+    SnowState s = plane(9, 9, 10.0, 0.f, 2000.f, -5.f);
+    for (int y = 0; y < 9; ++y)
+      for (int x = 0; x < 9; ++x) s.bedrockM(x, y) = 2000.f - 10.f * x;  // slope 1
+    s.powderM(4, 4) = depth;
+    std::vector<float> delta;
+    SerialExec exec;
+    runPowderDiffusion(exec, viewOf(s, delta), PowderDiffusionArgs{});  // min depth 1 mm
+    if (depth < 1e-3f) {
+      EXPECT_EQ(s.powderM(4, 4), depth);
+    } else {
+      EXPECT_LT(s.powderM(4, 4), 0.5f * depth);
+    }
+  }
+}
+
+// The tile masks only skip cells that would not move snow: with and without them the powder
+// ends with the same bytes, on rough terrain where some tiles are active and some are not.
+TEST(PowderDiffusion, TileGatingGivesTheSameBytes) {
+  SnowState gated = test::makeRoughState(150, 90, 5);
+  for (int y = 0; y < 90; ++y)
+    for (int x = 0; x < 150; ++x)
+      if (x > 64) gated.powderM(x, y) = 0.f;  // the right tiles hold no powder
+  SnowState plain = gated;
+  std::vector<float> d1, d2;
+  SnowFieldsView vg = viewOf(gated, d1), vp = viewOf(plain, d2);
+  vp.tileActive = vp.tileNeeded = nullptr;
+  SerialExec exec;
+  PowderDiffusionArgs a;
+  a.dtDays = 2.f;
+  for (int i = 0; i < 10; ++i) {
+    runPowderDiffusion(exec, vg, a);
+    runPowderDiffusion(exec, vp, a);
+  }
+  int inactive = 0;
+  for (int t = 0; t < vg.tilesX() * vg.tilesY(); ++t) inactive += vg.tileActive[t] == 0;
+  EXPECT_GT(inactive, 0);
+  EXPECT_EQ(0, std::memcmp(gated.powderM.data(), plain.powderM.data(), gated.powderM.size() * sizeof(float)));
 }
 
 // A lone heap spreads even though central differences at its top read zero.

@@ -72,7 +72,7 @@ TEST(Season, MeltKernelsSkippedWhenTheWarmestCellIsBelowFreezing) {
   const auto& melt = r.phenomena[1];
   ASSERT_EQ(melt.name, "melt");
   EXPECT_GT(melt.steps, 40u);
-  EXPECT_EQ(melt.skippedSteps, melt.steps);
+  EXPECT_EQ(melt.skippedSteps, melt.steps + 1);  // every step, and the catch-up at the season's end
   EXPECT_EQ(r.meltRemovedM3, 0.0);
 }
 

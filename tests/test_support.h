@@ -61,6 +61,8 @@ inline void expectSameBytes(const SnowState& a, const SnowState& b) {
   EXPECT_EQ(a.windScourM.values(), b.windScourM.values());
   EXPECT_EQ(a.windDepositM.values(), b.windDepositM.values());
   EXPECT_EQ(a.meltedM.values(), b.meltedM.values());
+  EXPECT_EQ(a.avalancheScourM.values(), b.avalancheScourM.values());
+  EXPECT_EQ(a.avalancheDepositM.values(), b.avalancheDepositM.values());
 }
 
 }  // namespace snow::test

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "core/atomic_file.h"
+#include "core/avalanche.h"
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/reference_scenario.h"
@@ -54,18 +55,20 @@ void writeCsv(const BenchOptions& o, const std::string& name, const std::string&
 std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string windBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string sunBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads);
 
 }  // namespace
 
 std::string runBench(const BenchOptions& o, std::ostream& log) {
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  if (o.stage != "all" && o.stage != "season" && o.stage != "wind" && o.stage != "sun")
-    throw InputError("--stage " + o.stage + ": must be sun, wind, season or all");
+  if (o.stage != "all" && o.stage != "season" && o.stage != "wind" && o.stage != "sun" && o.stage != "avalanche")
+    throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche or all");
   std::string out;
   if (o.stage == "all" || o.stage == "sun") out += sunBench(o, log, threads) + "\n";
   if (o.stage == "all" || o.stage == "wind") out += windBench(o, log, threads) + "\n";
-  if (o.stage == "all" || o.stage == "season") out += seasonBench(o, log, threads);
+  if (o.stage == "all" || o.stage == "season") out += seasonBench(o, log, threads) + "\n";
+  if (o.stage == "all" || o.stage == "avalanche") out += avalancheBench(o, log, threads);
   return out;
 }
 
@@ -219,12 +222,12 @@ std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads) {
     throw InputError("--backend cuda: no usable CUDA device: " + cuda::probeDevice().reason);
 
   std::ostringstream table, csv;
-  table << "Season stage, reference scenario (" << o.days << " days; snowfall, melt, stability, powder diffusion; no wind), "
+  table << "Season stage, reference scenario (" << o.days << " days; snowfall, melt, stability, powder diffusion, avalanches; no wind), "
         << (backendName == "cpu" ? machineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
         << "\n\n";
-  table << "| grid | cell (m) | backend | season (s) | snowfall (s) | melt (s) | stability (s) | diffusion (s) | events | mass balance error |\n"
-        << "|---|---|---|---|---|---|---|---|---|---|\n";
-  csv << "size,cell_m,backend,threads,season_s,snowfall_s,melt_s,stability_s,diffusion_s,events,mass_error\n";
+  table << "| grid | cell (m) | backend | season (s) | snowfall (s) | melt (s) | stability (s) | diffusion (s) | avalanches (s) | avalanches | events | mass balance error |\n"
+        << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  csv << "size,cell_m,backend,threads,season_s,snowfall_s,melt_s,stability_s,diffusion_s,avalanche_s,avalanches,events,mass_error\n";
   for (int size : o.sizes) {
     if (size < 8) throw InputError("--sizes: " + std::to_string(size) + " is too small");
     SnowState state = referenceRangeState(size);
@@ -234,23 +237,55 @@ std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads) {
     const auto t0 = std::chrono::steady_clock::now();
     const SeasonReport r = runSeason(*backend, state, config);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    double phase[4] = {0, 0, 0, 0};
+    double phase[5] = {0, 0, 0, 0, 0};
     for (const auto& p : r.phenomena) {
       if (p.name.rfind("snowfall", 0) == 0) phase[0] += p.seconds;
       if (p.name == "melt") phase[1] += p.seconds;
       if (p.name == "powder diffusion") phase[2] += p.seconds;
       if (p.name == "stability") phase[3] += p.seconds;
+      if (p.name == "avalanche") phase[4] += p.seconds;
     }
     const double cell = state.spec.cellSizeXM;
     table << "| " << size << "² | " << format("%.2f", cell) << " | " << backend->name() << " | " << format("%.3f", seconds) << " | "
           << format("%.3f", phase[0]) << " | " << format("%.3f", phase[1]) << " | " << format("%.3f", phase[3]) << " | "
-          << format("%.3f", phase[2]) << " | " << r.events
+          << format("%.3f", phase[2]) << " | " << format("%.3f", phase[4]) << " | " << r.avalanches.size() << " | " << r.events
           << " | " << format("%.1e", r.massBalanceRelativeError()) << " |\n";
     csv << size << "," << cell << "," << backend->name() << "," << threads << "," << seconds << "," << phase[0] << "," << phase[1]
-        << "," << phase[3] << "," << phase[2] << "," << r.events << "," << r.massBalanceRelativeError() << "\n";
+        << "," << phase[3] << "," << phase[2] << "," << phase[4] << "," << r.avalanches.size() << "," << r.events << "," << r.massBalanceRelativeError() << "\n";
     log << "  " << size << "² done in " << format("%.2f", seconds) << " s\n";
   }
   writeCsv(o, "season.csv", csv.str(), table);
+  return table.str();
+}
+
+std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads) {
+  std::string backendName = o.backend;
+  if (backendName == "auto") backendName = cuda::probeDevice().available ? "cuda" : "cpu";
+  if (backendName == "cuda" && !cuda::probeDevice().available)
+    throw InputError("--backend cuda: no usable CUDA device: " + cuda::probeDevice().reason);
+  std::ostringstream table, csv;
+  table << "Avalanche, one release on the embedded range at 5 m cells (core/reference_scenario.h), "
+        << (backendName == "cpu" ? machineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
+        << "\n\n| grid | steps | simulated (s) | ms per step | largest box (cells) | runout (m) | mass error |\n|---|---|---|---|---|---|---|\n";
+  csv << "size,backend,steps,simulated_s,ms_per_step,box_cells,runout_m,mass_error\n";
+  for (int size : o.avalancheSizes) {
+    SnowState s = referenceAvalancheState(size);
+    auto backend = backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
+    backend->upload(s);
+    const double before = backend->totals().totalM3();
+    AvalancheRun run(*backend, ModelParameters{}, s);
+    if (!run.release(size / 2, size / 2, 0.0, 0.0, true)) throw std::runtime_error("the benchmark avalanche did not release");
+    while (!run.step()) {
+    }
+    const AvalancheRecord r = run.settle();
+    const double error = std::abs(backend->totals().totalM3() - before) / before;
+    table << "| " << size << "² | " << r.steps << " | " << format("%.1f", r.simulatedS) << " | " << format("%.3f", r.secondsPerStep() * 1e3)
+          << " | " << r.boxCellsMax << " | " << format("%.0f", r.runoutM) << " | " << format("%.1e", error) << " |\n";
+    csv << size << "," << backend->name() << "," << r.steps << "," << r.simulatedS << "," << r.secondsPerStep() * 1e3 << ","
+        << r.boxCellsMax << "," << r.runoutM << "," << error << "\n";
+    log << "  avalanche on " << size << "² done\n";
+  }
+  writeCsv(o, "avalanche.csv", csv.str(), table);
   return table.str();
 }
 

@@ -9,10 +9,11 @@
 namespace snow {
 
 struct BenchOptions {
-  std::string stage = "all";  // sun | wind | season | all
+  std::string stage = "all";  // sun | wind | season | avalanche | all
   int sunSize = 1024;          // grid of the sun-exposure timing table
   int sunAccuracySize = 256;   // grid of the sun-exposure accuracy table (the Embree reference is costly)
   std::vector<int> sizes{256, 512, 1024, 2048};
+  std::vector<int> avalancheSizes{512, 4096};  // the same avalanche on a small and a large terrain
   double days = 120.0;
   std::string backend = "cpu";  // cpu | cuda | auto
   int threads = 0;              // 0 = all cores

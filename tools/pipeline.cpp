@@ -72,6 +72,8 @@ Grid<float> layerGrid(const SnowState& s, const std::string& name) {
       else if (name == "wind_scour") v = s.windScourM(x, y);
       else if (name == "wind_deposit") v = s.windDepositM(x, y);
       else if (name == "melt") v = s.meltedM(x, y);
+      else if (name == "avalanche_scour") v = s.avalancheScourM(x, y);
+      else if (name == "avalanche_deposit") v = s.avalancheDepositM(x, y);
       else if (name == "stable") v = s.stableM(x, y);
       else if (name == "unstable") v = s.unstableM(x, y);
       else if (name == "powder") v = s.powderM(x, y);
@@ -118,6 +120,8 @@ std::string layerContent(const std::string& name) {
   if (name == "wind_scour") return "snow removed by wind transport since the season start (m)";
   if (name == "wind_deposit") return "snow deposited by wind transport since the season start (m)";
   if (name == "melt") return "snow melted since the season start (m)";
+  if (name == "avalanche_scour") return "snow taken away by avalanches since the season start, net per avalanche (m)";
+  if (name == "avalanche_deposit") return "snow left by avalanches since the season start, net per avalanche (m)";
   if (name == "sun_exposure") return "sun exposure I = I_sun + I_sky + I_ind, hours of equivalent direct sun per day (§4.1)";
   if (name == "temperature") return "air temperature at the surface, T = T0 + k_t A + k_i I (§4.1)";
   if (name == "wind_speed") return "wind speed |W| (venturi and terrain redirection, Eq. 2)";
@@ -311,6 +315,22 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         rel = o.str();
       }
       const double outputDay = frame ? day : scene.days;
+      if (layer == "avalanche_preview") {
+        const Grid<float> surface = layerGrid(s, "surface");
+        const std::string path = (fs::path(options.outDir) / (rel + ".png")).string();
+        writeRgbPng(path, s.spec.width, s.spec.height,
+                    avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM));
+        ManifestFile f;
+        f.path = fs::relative(path, options.outDir).string();
+        f.content = "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)";
+        f.unit = "sRGB";
+        f.format = "PNG, 3 channels uint8, sRGB";
+        f.day = day;
+        f.maxValue = 255.f;
+        manifest.files.push_back(f);
+        result.files.push_back(path);
+        continue;
+      }
       Grid<float> grid;
       if (isWindLayer(layer)) {
         grid = windLayerGrid(s, wind, outputDay, layer, scene.params.windShadowToleranceM);
@@ -347,6 +367,24 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   config.params = scene.params;
   config.weather = scene.weather;
   config.userSnowfalls = scene.userSnowfalls;
+  for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
+    const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: avalanche on day " + fixed(a.day, 1);
+    double xM = a.xM, yM = a.yM;
+    if (a.mapCoordinates) {
+      if (ti.coordinateSystem.rfind("geographic", 0) == 0)
+        throw InputError(where + ": map_position needs a DEM in projected metres; this one is " + ti.coordinateSystem + " (use position_m)");
+      xM = a.xM - ti.spec.originX;
+      yM = ti.spec.originY - a.yM;
+    }
+    const double fx = xM / ti.spec.cellSizeXM, fy = yM / ti.spec.cellSizeYM;
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < ti.spec.width && fy < ti.spec.height))
+      throw InputError(where + ": the rupture point (" + fixed(xM, 1) + " m east, " + fixed(yM, 1) +
+                       " m south of the north-west corner) is outside the terrain (" + fixed(ti.spec.width * ti.spec.cellSizeXM, 1) +
+                       " x " + fixed(ti.spec.height * ti.spec.cellSizeYM, 1) + " m)");
+    const int x = static_cast<int>(fx), y = static_cast<int>(fy);
+    if (!state.validCell(x, y)) throw InputError(where + ": the rupture point falls on a NODATA cell");
+    config.userAvalanches.push_back({a.day, x, y});
+  }
   config.frameDays = scene.outputs.frameDays;
   config.windTransport = wind.hasWind();
   if (exposure || windChanges)
@@ -364,6 +402,17 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     log << "  " << std::left << std::setw(24) << p.name << std::right << std::setw(6) << p.steps << " steps"
         << (p.skippedSteps ? " (" + std::to_string(p.skippedSteps) + " skipped)" : std::string()) << "  " << fixed(p.seconds, 3)
         << " s\n";
+  for (const AvalancheRecord& a : report.avalanches) {
+    log << "  avalanche day " << fixed(a.day, 2) << " at cell (" << a.ruptureX << ", " << a.ruptureY << ")" << (a.user ? " (user)" : "");
+    if (!a.released) {
+      log << ": not released, " << a.why << "\n";
+      continue;
+    }
+    log << ": " << a.releaseCells << " cells released (" << fixed(a.releasedM3, 0) << " m^3), runout " << fixed(a.runoutM, 0)
+        << " m, fall " << fixed(a.fallHeightM, 0) << " m, " << a.steps << " steps of " << fixed(scene.params.avalancheStepS, 2)
+        << " s, " << fixed(a.secondsPerStep() * 1e3, 3) << " ms a step; " << a.why << "\n";
+  }
+  if (report.avalancheTries > 0) log << "  spontaneous avalanche tries: " << report.avalancheTries << "\n";
   log << "  snow: " << std::scientific << std::setprecision(4) << report.final.totalM3() << " m^3 (added "
       << report.snowfallAddedM3 << ", melted " << report.meltRemovedM3 << "), mass balance error " << report.massBalanceRelativeError()
       << std::defaultfloat << "\n";
@@ -390,6 +439,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       << scene.startDay;
     manifest.seasonStartDate = d.str();
   }
+  for (const AvalancheRecord& a : report.avalanches)
+    manifest.avalanches.push_back({a.day, a.ruptureX, a.ruptureY, a.user, a.released, a.why, a.releaseCells, a.footprintCells,
+                                   a.steps, a.releasedM3, a.depositM3, a.runoutM, a.fallHeightM, a.simulatedS});
   manifest.events = report.events;
   manifest.snowfallAddedM3 = report.snowfallAddedM3;
   manifest.meltRemovedM3 = report.meltRemovedM3;

@@ -13,16 +13,22 @@
 // along a diagonal has axis components of 0.49 and never moves at s_d0 = 0.5, while the same
 // slope along an axis does, and powder runs in axis-aligned streaks. We threshold the slope's
 // magnitude instead: with S = |(max(s_+x, s_-x), max(s_+y, s_-y))| (downhill components only),
-// the share leaving p is dt * k_m * (L_ref / dx_min) * max(0, S - s_d0), split among the downhill
+// the share leaving p is dt * k_m * (L_d / dx_min) * max(0, S - s_d0), split among the downhill
 // neighbours in proportion to s_d. On a slope along an axis this is exactly the paper's m_d.
-// The paper sets k_m per event at 10 m cells; the factor L_ref / dx (L_ref = 10 m by default)
-// turns it into a creep speed so that a 2 m and a 10 m run move the same distance of snow per
-// day. Each cell pushes only outward (downhill): the uphill neighbour's own pass pushes toward
+// Read per cell, k_m would move powder k_m cells a day: 5 m at the paper's 10 m cells, 35 m at
+// SRTM's 71 m. The factor L_d / dx turns it into a creep speed in world units, k_m * L_d metres a
+// day per unit of excess slope, so a 2 m and a 10 m run move the same distance of snow per day.
+// L_d = 400 m by default (200 m a day): loose powder sluffs off a steep face within a day or two
+// and does not rest above its rest slope, as in the paper's results ("diffusion and avalanches
+// clear steep slopes"); at the paper's 5 m a day the powder on a 300 m face outlasted the winter. Each cell pushes only outward (downhill): the uphill neighbour's own pass pushes toward
 // it, which is the paper's incoming term. Two limits keep it stable:
 //  - no single shift exceeds a fifth of the height difference, so even a cell shedding to all
 //    four neighbours cannot end below them: no overshoot, no oscillation;
 //  - the outflows are scaled so their sum never exceeds the snapshot P (the paper's rescaling:
 //    no cell goes negative; a cell only gains snow before its own pass).
+// A powder film thinner than diffusion_min_depth_m (1 mm) does not slide: a dusting sticks to
+// rock, and the substeps skip whole 32 x 32 tiles where no cell holds powder above its rest
+// slope (PowderActivityKernel), so the work follows the snow.
 // Snow never enters NODATA cells or leaves the grid, so the step conserves mass exactly up to
 // float rounding.
 #pragma once
@@ -35,7 +41,8 @@ struct PowderDiffusionArgs {
   float dtDays = 0.5f;           // time of this substep
   float diffusionRatePerDay = 0.5f;
   float restSlope = 0.5f;
-  float referenceCellSizeM = 10.f;
+  float diffusionLengthM = 400.f;  // L_d: creep speed k_m * L_d per unit of excess slope
+  float minDepthM = 1e-3f;         // a powder film thinner than this does not slide
   int colour = 0;                // which of the five colour passes
 };
 
@@ -55,6 +62,86 @@ SNOW_HD SNOW_INLINE float giveTo(float& receiver, float amount, float remaining,
   return remaining - gained;
 }
 
+// The downhill slopes toward the four neighbours (drop / distance, 0 uphill) from a surface
+// read through `surfaceAt(index)`, and the excess of the steepest-descent magnitude over the
+// rest slope. Shared by the kernel and by the tile-activity scan, so a tile is skipped exactly
+// when none of its cells would move powder.
+struct PowderSlopes {
+  float drop[4] = {0.f, 0.f, 0.f, 0.f};   // height above each downhill neighbour
+  float slope[4] = {0.f, 0.f, 0.f, 0.f};  // s_d where positive (downhill)
+  float excess = 0.f;
+};
+
+template <class SurfaceAt>
+SNOW_HD SNOW_INLINE PowderSlopes powderSlopes(const SnowFieldsView& v, int x, int y, float restSlope, const SurfaceAt& surfaceAt) {
+  PowderSlopes r;
+  const float ap = surfaceAt(v.index(x, y));
+  for (int d = 0; d < 4; ++d) {
+    const int dx = d == 0 ? 1 : (d == 1 ? -1 : 0), dy = d == 2 ? 1 : (d == 3 ? -1 : 0);
+    const int nx = x + dx, ny = y + dy;
+    if (!v.isValid(nx, ny)) continue;
+    const float dist = dx != 0 ? v.cellSizeXM : v.cellSizeYM;
+    r.drop[d] = maxf(0.f, ap - surfaceAt(v.index(nx, ny)));
+    r.slope[d] = r.drop[d] / dist;
+  }
+  // Steepest descent, one component per axis: an isotropic measure of the slope that also
+  // sees a lone peak (where central differences would read zero).
+  const float sx = maxf(r.slope[0], r.slope[1]), sy = maxf(r.slope[2], r.slope[3]);
+  r.excess = sqrtf(sx * sx + sy * sy) - restSlope;
+  return r;
+}
+
+// One thread per tile: is there a cell with powder above its rest slope? Reads the live state,
+// which equals the snapshot the substep is about to take.
+struct PowderActivityKernel {
+  SnowFieldsView v;
+  float restSlope;
+  float minDepthM;
+  SNOW_HD void operator()(int tx, int ty) const {
+    const int x0 = tx * SnowFieldsView::kTileSize, y0 = ty * SnowFieldsView::kTileSize;
+    const int x1 = minInt(x0 + SnowFieldsView::kTileSize, v.width), y1 = minInt(y0 + SnowFieldsView::kTileSize, v.height);
+    uint8_t active = 0;
+    const SnowFieldsView& view = v;
+    for (int y = y0; y < y1 && !active; ++y)
+      for (int x = x0; x < x1; ++x) {
+        const int i = v.index(x, y);
+        if (!v.valid[i] || !(v.powder[i] > minDepthM)) continue;
+        if (powderSlopes(v, x, y, restSlope, [&view](int j) { return view.surface(j); }).excess > 0.f) {
+          active = 1;
+          break;
+        }
+      }
+    v.tileActive[ty * v.tilesX() + tx] = active;
+  }
+};
+
+// A tile needs the snapshot when it or one of its eight neighbours is active: an active cell
+// reads the snapshot surface of its neighbours, which may lie in the next tile.
+struct TileDilateKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int tx, int ty) const {
+    uint8_t needed = 0;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = tx + dx, ny = ty + dy;
+        if (nx >= 0 && ny >= 0 && nx < v.tilesX() && ny < v.tilesY()) needed |= v.tileActive[ny * v.tilesX() + nx];
+      }
+    v.tileNeeded[ty * v.tilesX() + tx] = needed;
+  }
+};
+
+// Runs `kernel` only on cells whose tile is flagged in `mask` (all cells when mask is null).
+template <class K>
+struct TileGated {
+  K kernel;
+  const uint8_t* mask;
+  int tilesX;
+  SNOW_HD void operator()(int x, int y) const {
+    if (mask && !mask[(y >> SnowFieldsView::kTileShift) * tilesX + (x >> SnowFieldsView::kTileShift)]) return;
+    kernel(x, y);
+  }
+};
+
 // Copies A and P before the colour passes of a substep (per cell, no neighbour reads).
 struct PowderSnapshotKernel {
   SnowFieldsView v;
@@ -73,33 +160,18 @@ struct PowderDiffusionKernel {
     const int i = v.index(x, y);
     if (!v.valid[i]) return;
     const float powder = v.scratchPowder[i];
-    if (!(powder > 0.f)) return;
-    const float ap = v.scratchSurface[i];
-    const int dxs[4] = {1, -1, 0, 0};
-    const int dys[4] = {0, 0, 1, -1};
-    float drop[4] = {0.f, 0.f, 0.f, 0.f};   // height above each downhill neighbour
-    float slope[4] = {0.f, 0.f, 0.f, 0.f};  // s_d where positive (downhill)
-    for (int d = 0; d < 4; ++d) {
-      const int nx = x + dxs[d], ny = y + dys[d];
-      if (!v.isValid(nx, ny)) continue;
-      const float dist = dxs[d] != 0 ? v.cellSizeXM : v.cellSizeYM;
-      drop[d] = maxf(0.f, ap - v.scratchSurface[v.index(nx, ny)]);
-      slope[d] = drop[d] / dist;
-    }
-    // Steepest descent, one component per axis: an isotropic measure of the slope that also
-    // sees a lone peak (where central differences would read zero).
-    const float sx = maxf(slope[0], slope[1]), sy = maxf(slope[2], slope[3]);
-    const float steepest = sqrtf(sx * sx + sy * sy);
-    const float excess = steepest - a.restSlope;
-    const float weightSum = slope[0] + slope[1] + slope[2] + slope[3];
-    if (!(excess > 0.f) || !(weightSum > 0.f)) return;
+    if (!(powder > a.minDepthM)) return;
+    const float* snapshot = v.scratchSurface;
+    const PowderSlopes s = powderSlopes(v, x, y, a.restSlope, [snapshot](int j) { return snapshot[j]; });
+    const float weightSum = s.slope[0] + s.slope[1] + s.slope[2] + s.slope[3];
+    if (!(s.excess > 0.f) || !(weightSum > 0.f)) return;
     const float minCell = minf(v.cellSizeXM, v.cellSizeYM);
-    const float shareTotal = a.dtDays * a.diffusionRatePerDay * (a.referenceCellSizeM / minCell) * excess;
+    const float shareTotal = a.dtDays * a.diffusionRatePerDay * (a.diffusionLengthM / minCell) * s.excess;
     float out[4] = {0.f, 0.f, 0.f, 0.f};
     float total = 0.f;
     for (int d = 0; d < 4; ++d) {
-      if (!(slope[d] > 0.f)) continue;
-      out[d] = minf(shareTotal * powder * (slope[d] / weightSum), 0.2f * drop[d]);
+      if (!(s.slope[d] > 0.f)) continue;
+      out[d] = minf(shareTotal * powder * (s.slope[d] / weightSum), 0.2f * s.drop[d]);
       total += out[d];
     }
     if (!(total > 0.f)) return;
@@ -112,18 +184,20 @@ struct PowderDiffusionKernel {
     float remaining = v.powder[i];
     for (int d = 0; d < 4; ++d) {
       if (!(out[d] > 0.f)) continue;
-      remaining = giveTo(v.powder[v.index(x + dxs[d], y + dys[d])], out[d] * scale, remaining, nullptr);
+      const int nx = x + (d == 0 ? 1 : (d == 1 ? -1 : 0)), ny = y + (d == 2 ? 1 : (d == 3 ? -1 : 0));
+      remaining = giveTo(v.powder[v.index(nx, ny)], out[d] * scale, remaining, nullptr);
     }
     v.powder[i] = remaining;
   }
 };
 
-// Substeps so that a unit excess slope never moves more than a quarter of a cell's powder per
-// direction in one pass: the step is stable for any event length and cell size.
-SNOW_HD SNOW_INLINE int powderDiffusionSubsteps(float dtDays, float ratePerDay, float referenceCellSizeM,
+// Substeps so that powder at a unit excess slope moves at most one cell per substep: the creep
+// speed is then resolved up to the cap of 256 substeps. Stability does not depend on it (the
+// shares are bounded by the powder there and by a fifth of each drop whatever the step).
+SNOW_HD SNOW_INLINE int powderDiffusionSubsteps(float dtDays, float ratePerDay, float diffusionLengthM,
                                                 float minCellSizeM) {
-  const float perStep = dtDays * ratePerDay * referenceCellSizeM / minCellSizeM;
-  const float n = ceilf(perStep / 0.25f);
+  const float perStep = dtDays * ratePerDay * diffusionLengthM / minCellSizeM;
+  const float n = ceilf(perStep);
   return n < 1.f ? 1 : (n > 256.f ? 256 : static_cast<int>(n));
 }
 

@@ -1,0 +1,203 @@
+#include "avalanche.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+
+namespace snow {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+using Clock = std::chrono::steady_clock;
+
+double surfaceAt(const SnowState& s, size_t i) {
+  return static_cast<double>(s.bedrockM.values()[i]) + s.compactedM.values()[i] + s.stableM.values()[i] +
+         s.unstableM.values()[i] + s.powderM.values()[i];
+}
+}  // namespace
+
+AvalancheRun::AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain)
+    : backend_(backend), p_(params), before_(terrain) {}
+
+bool AvalancheRun::release(int x, int y, double day, double seaLevelTemperatureC, bool user) {
+  backend_.download(before_);
+  return releaseFromSnapshot(x, y, day, seaLevelTemperatureC, user);
+}
+
+bool AvalancheRun::trySpontaneous(double cellDraw, double acceptDraw, double day, double seaLevelTemperatureC) {
+  const GridSpec& g = before_.spec;
+  const size_t cell = std::min(static_cast<size_t>(cellDraw * static_cast<double>(g.cellCount())), g.cellCount() - 1);
+  const int x = static_cast<int>(cell % g.width), y = static_cast<int>(cell / g.width);
+  if (!before_.validCell(x, y)) return false;
+  const int x0 = std::max(0, x - 1), y0 = std::max(0, y - 1), x1 = std::min(g.width, x + 2), y1 = std::min(g.height, y + 2);
+  std::vector<float> depth, unstable;
+  backend_.readCells(x0, y0, x1 - x0, y1 - y0, depth, unstable);
+  const int cols = x1 - x0;
+  auto at = [&](int cx, int cy) { return static_cast<size_t>(cy - y0) * cols + (cx - x0); };
+  const double u = unstable[at(x, y)];
+  if (u < p_.avalancheMinUnstableM) return false;
+  const double a = static_cast<double>(before_.bedrockM(x, y)) + depth[at(x, y)];
+  double slope = 0.0;
+  for (int ny = y0; ny < y1; ++ny)
+    for (int nx = x0; nx < x1; ++nx) {
+      if ((nx == x && ny == y) || !before_.validCell(nx, ny)) continue;
+      const double dist = std::hypot((nx - x) * g.cellSizeXM, (ny - y) * g.cellSizeYM);
+      slope = std::max(slope, (a - before_.bedrockM(nx, ny) - depth[at(nx, ny)]) / dist);
+    }
+  const double tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
+  const double probability = std::min(1.0, u * std::max(0.0, slope - tanRest) / std::max(1e-6, 1.0 - tanRest));
+  if (!(acceptDraw < probability)) return false;
+  return release(x, y, day, seaLevelTemperatureC, false);
+}
+
+bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLevelTemperatureC, bool user) {
+  const auto t0 = Clock::now();
+  record_ = AvalancheRecord{};
+  record_.day = day;
+  record_.ruptureX = rx;
+  record_.ruptureY = ry;
+  record_.user = user;
+  active_ = atRest_ = false;
+  const SnowState& s = before_;
+  const int w = s.spec.width, h = s.spec.height;
+  if (rx < 0 || ry < 0 || rx >= w || ry >= h || !s.validCell(rx, ry)) {
+    record_.why = "rupture point outside the terrain";
+    return false;
+  }
+  const double minU = p_.avalancheMinUnstableM;
+  if (s.unstableM(rx, ry) < minU) {
+    record_.why = "no unstable snow at the rupture point (U = " + std::to_string(s.unstableM(rx, ry)) + " m)";
+    return false;
+  }
+  // Release zone: connected unstable snow within the reach of the rupture point.
+  const double reach = p_.avalancheReachMPerM * s.unstableM(rx, ry);
+  std::vector<uint8_t> moving(s.spec.cellCount(), 0);
+  std::deque<int> queue;
+  auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
+  auto holds = [&](int x, int y) {
+    return x >= 0 && y >= 0 && x < w && y < h && s.validCell(x, y) && s.unstableM(x, y) >= minU;
+  };
+  moving[index(rx, ry)] = 1;
+  queue.push_back(ry * w + rx);
+  while (!queue.empty()) {
+    const int c = queue.front();
+    queue.pop_front();
+    const int cx = c % w, cy = c / w;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = cx + dx, ny = cy + dy;
+        if (!holds(nx, ny) || moving[index(nx, ny)]) continue;
+        if (std::hypot((nx - rx) * s.spec.cellSizeXM, (ny - ry) * s.spec.cellSizeYM) > reach) continue;
+        moving[index(nx, ny)] = 1;
+        queue.push_back(ny * w + nx);
+      }
+  }
+  int x0 = w, y0 = h, x1 = 0, y1 = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (moving[index(x, y)]) {
+        ++record_.releaseCells;
+        record_.releasedM3 += (static_cast<double>(s.unstableM(x, y)) + s.powderM(x, y)) * s.spec.cellAreaM2();
+        x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
+      }
+  backend_.avalancheRelease(moving);
+  args_ = AvalancheArgs{};
+  args_.gravity = static_cast<float>(p_.gravityMps2);
+  args_.tanRestAngle = static_cast<float>(std::tan(p_.avalancheRestAngleDeg * kPi / 180.0));
+  args_.viscosity = static_cast<float>(p_.snowViscosityPerS2);
+  args_.dryTemperatureC = static_cast<float>(p_.avalancheDryTemperatureC);
+  args_.wetTemperatureC = static_cast<float>(p_.avalancheWetTemperatureC);
+  args_.seaLevelTemperatureC = static_cast<float>(seaLevelTemperatureC);
+  args_.alphaWet = static_cast<float>(p_.avalancheWetGranularFraction);
+  args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
+  unionBox_ = args_;
+  record_.released = true;
+  active_ = true;
+  lastSpeed_ = 0.f;
+  wallSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
+  return true;
+}
+
+bool AvalancheRun::step() {
+  if (!active_ || atRest_) return true;
+  const auto t0 = Clock::now();
+  const double stepS = p_.avalancheStepS;
+  const double minCell = std::min(before_.spec.cellSizeXM, before_.spec.cellSizeYM);
+  const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
+  const int substeps = static_cast<int>(std::clamp(std::ceil(stepS / maxSubstep), 1.0, 10000.0));
+  AvalancheArgs a = args_;
+  a.dtS = static_cast<float>(stepS / substeps);
+  const std::vector<float> stats = backend_.avalancheSteps(a, substeps);
+  // The grown box this step covered, then the rows' statistics.
+  const size_t n = stats.size() - 4;
+  const int bx0 = static_cast<int>(stats[n]), by0 = static_cast<int>(stats[n + 1]);
+  const int bx1 = static_cast<int>(stats[n + 2]), by1 = static_cast<int>(stats[n + 3]);
+  unionBox_.x0 = std::min(unionBox_.x0, bx0), unionBox_.y0 = std::min(unionBox_.y0, by0);
+  unionBox_.x1 = std::max(unionBox_.x1, bx1), unionBox_.y1 = std::max(unionBox_.y1, by1);
+  record_.boxCellsMax = std::max(record_.boxCellsMax, (bx1 - bx0) * (by1 - by0));
+  float speed = 0.f;
+  int x0 = before_.spec.width, y0 = before_.spec.height, x1 = 0, y1 = 0;
+  for (int r = 0; r < by1 - by0; ++r) {
+    const float* s = &stats[4 * static_cast<size_t>(r)];
+    speed = std::max(speed, s[0]);
+    if (s[3] >= 0.f) {
+      x0 = std::min(x0, static_cast<int>(s[2])), x1 = std::max(x1, static_cast<int>(s[3]) + 1);
+      y0 = std::min(y0, by0 + r), y1 = std::max(y1, by0 + r + 1);
+    }
+  }
+  args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
+  ++record_.steps;
+  record_.substeps += substeps;
+  record_.simulatedS += stepS;
+  lastSpeed_ = speed;
+  record_.maxSpeedMps = std::max(record_.maxSpeedMps, speed);
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  wallSeconds_ += seconds;
+  record_.stepSeconds += seconds;
+  if (x1 <= x0) {
+    record_.why = "all moving snow deposited";
+    atRest_ = true;
+  } else if (speed < p_.avalancheStopSpeedMps) {
+    record_.why = "at rest (fastest pipe " + std::to_string(speed) + " m/s)";
+    atRest_ = true;
+  } else if (record_.simulatedS >= p_.avalancheMaxDurationS) {
+    record_.why = "stopped at the duration cap (fastest pipe still " + std::to_string(speed) + " m/s)";
+    atRest_ = true;
+  }
+  return atRest_;
+}
+
+AvalancheRecord AvalancheRun::settle() {
+  if (!active_) return record_;
+  const auto t0 = Clock::now();
+  backend_.avalancheSettle(unionBox_);
+  active_ = false;
+  SnowState after = before_;
+  backend_.download(after);
+  const SnowState& s = before_;
+  const int w = s.spec.width;
+  const double area = s.spec.cellAreaM2();
+  const double ruptureA = surfaceAt(s, static_cast<size_t>(record_.ruptureY) * w + record_.ruptureX);
+  double lowest = ruptureA;
+  for (int y = unionBox_.y0; y < unionBox_.y1; ++y)
+    for (int x = unionBox_.x0; x < unionBox_.x1; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      if (!s.validCell.values()[i]) continue;
+      const double change = (static_cast<double>(after.stableM.values()[i]) + after.unstableM.values()[i] + after.powderM.values()[i]) -
+                            (static_cast<double>(s.stableM.values()[i]) + s.unstableM.values()[i] + s.powderM.values()[i]);
+      if (std::abs(change) > 1e-3) ++record_.footprintCells;
+      if (change > 0) record_.depositM3 += change * area;
+      if (change > 0.01) {
+        record_.runoutM = std::max(record_.runoutM, std::hypot((x - record_.ruptureX) * s.spec.cellSizeXM,
+                                                               (y - record_.ruptureY) * s.spec.cellSizeYM));
+        lowest = std::min(lowest, surfaceAt(after, i));
+      }
+    }
+  record_.fallHeightM = ruptureA - lowest;
+  wallSeconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
+  record_.seconds = wallSeconds_;
+  return record_;
+}
+
+}  // namespace snow

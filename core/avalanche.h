@@ -1,0 +1,87 @@
+// One avalanche on a SnowBackend (paper §6.1): release, steps of 0.1 s of simulated time until
+// the snow is at rest, deposit. The per-cell work is in kernels/avalanche.h; this host side picks
+// the release zone, the substep length and the active box, and keeps the records.
+//
+// Release (§6.1): at the rupture cell the unstable snow must be at least avalanche_min_unstable_m
+// deep. The release zone is the connected unstable snow within a reach of
+// avalanche_reach_m_per_m x U(rupture) metres of the rupture point. The unstable snow downslope
+// is set moving as the avalanche reaches it: a cell that receives moving snow entrains its own
+// unstable snow and powder (kernels/avalanche.h). (Setting all downslope unstable snow moving at
+// once, a literal reading of §6.1, released whole mountainsides after a storm: every slope above
+// s_U holds some U.) Powder on moving cells joins the flow.
+//
+// Time step: each avalanche step is avalanche_step_s (0.1 s) of simulated time, cut into
+// substeps of at most 0.2 sqrt(L_min / g): the pipe model's pressure waves have angular
+// frequency up to about sqrt(16 g / L), so this keeps the explicit update well inside its
+// stability limit for any terrain and snow depth; the outflow rescaling keeps every cell
+// non-negative whatever the flows. Snow crosses at most one cell a substep, which is what lets
+// the box grow by one cell a substep and no more.
+//
+// At rest: when no pipe carries more than avalanche_stop_speed_mps (flow / pipe cross-section),
+// or after avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
+// stable snow and the records are kept.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "backend.h"
+#include "parameters.h"
+
+namespace snow {
+
+struct AvalancheRecord {
+  double day = 0;
+  int ruptureX = 0, ruptureY = 0;
+  bool user = false;
+  bool released = false;     // false: no unstable snow at the rupture point
+  std::string why;           // why it did not release, or why it stopped
+  int releaseCells = 0;      // cells set moving at release
+  int footprintCells = 0;    // cells whose snow changed by more than 1 mm
+  double releasedM3 = 0;     // unstable snow and powder set moving at release
+  double depositM3 = 0;      // net gain summed over the cells that gained
+  double runoutM = 0;        // horizontal distance from the rupture point to the farthest deposit (> 1 cm)
+  double fallHeightM = 0;    // snow-surface altitude at the rupture point minus that of the lowest deposit
+  int steps = 0, substeps = 0;
+  double simulatedS = 0;     // simulated duration
+  double seconds = 0;        // wall-clock time, release and deposit included
+  double stepSeconds = 0;    // wall-clock time of the steps alone
+  double secondsPerStep() const { return steps > 0 ? stepSeconds / steps : 0.0; }
+  float maxSpeedMps = 0;     // fastest pipe seen (flow / cross-section)
+  int boxCellsMax = 0;       // the largest active box, in cells
+};
+
+class AvalancheRun {
+ public:
+  // `terrain` supplies the grid, bedrock and valid cells (the backend holds the snow).
+  AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain);
+  // Releases at cell (x, y) of the current backend state. Returns false (and says why in the
+  // record) when there is no unstable snow to release there.
+  bool release(int x, int y, double day, double seaLevelTemperatureC, bool user);
+  // A spontaneous release try (§6.1's "low per-cell probability"): the cell drawn uniformly from
+  // `cellDraw`, released when `acceptDraw` < min(1, U / 1 m x (s - tan theta_c) / (1 - tan theta_c)),
+  // s the steepest drop of the snow surface to an 8-neighbour: one metre of unstable snow at 45
+  // degrees always releases, nothing releases below the rest angle. Reads only the 3 x 3 cells.
+  bool trySpontaneous(double cellDraw, double acceptDraw, double day, double seaLevelTemperatureC);
+  bool active() const { return active_; }
+  bool atRest() const { return atRest_; }
+  // One step of avalanche_step_s. Returns true when the snow has come to rest (or the duration
+  // cap is reached); then call settle().
+  bool step();
+  // Deposits the snow and fills the record.
+  AvalancheRecord settle();
+  const AvalancheRecord& record() const { return record_; }
+
+ private:
+  bool releaseFromSnapshot(int x, int y, double day, double seaLevelTemperatureC, bool user);
+  SnowBackend& backend_;
+  const ModelParameters& p_;
+  SnowState before_;
+  AvalancheArgs args_;
+  AvalancheArgs unionBox_;
+  AvalancheRecord record_;
+  bool active_ = false, atRest_ = false;
+  float lastSpeed_ = 0.f;
+  double wallSeconds_ = 0;
+};
+
+}  // namespace snow

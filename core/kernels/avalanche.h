@@ -1,0 +1,257 @@
+// Avalanche flow (paper §6.1 and §7.2): the hydrostatic pipe model over the Moore neighbourhood,
+// with granular friction and viscosity, moving the unstable layer of the cells whose "snow
+// moving" flag is set (powder on top joins it when a cell starts moving).
+//
+// Storage (§7.2): one signed flow per pipe, four pipes owned per cell (east, south-east, south,
+// south-west), flows[4 i + d] in m^3/s, positive from the owner toward the neighbour. Each pipe
+// is written by its owner only; heights are updated by gathering the eight pipes. No atomics.
+//
+// One substep of length dt runs four per-cell passes over the active box:
+//   1. AvalancheFlowKernel: phi += dt c a, a = g (A_p - A_n) / L (rho cancels in dP / (rho dx));
+//      granular friction of norm dt c alpha g tan(theta_c) opposes the flow and sets it to zero
+//      rather than reversing it (static friction: snow on a slope below theta_c never starts);
+//      viscosity -k_v U phi, applied implicitly (phi / (1 + dt (1 - alpha) k_v U)) so that no
+//      k_v can make it oscillate. c = dx dy (the paper's dx^2), L the pipe length (dx, dy or
+//      the diagonal). alpha = 1 for dry snow at or below T_dry, alpha_wet for wet snow at or
+//      above T_wet, linear between, from the source cell's temperature. alpha_wet (0.2) is ours:
+//      with alpha = 0 wet snow has no yield stress, and with the paper's small k_v it keeps
+//      flowing down any slope, however gentle, for as long as it is simulated.
+//   2. AvalancheScaleKernel: the outflow of each cell is scaled so it never takes more than the
+//      unstable snow there (the paper's min(V_out, dx^2 U) / V_out, to all but a millionth).
+//   3. AvalancheApplyScaleKernel: each pipe takes the factor of the cell it drains.
+//   4. AvalancheHeightKernel: U += dt (inflow - outflow) / c. A cell that receives snow starts
+//      moving and its own unstable snow and powder are entrained.
+// A flow may only leave a moving cell that holds snow, so flows never grow where there is
+// nothing to move. The sum of U over the grid changes only by float rounding.
+#pragma once
+#include "../hd.h"
+#include "../snow_state.h"
+
+namespace snow {
+
+struct AvalancheArgs {
+  float dtS = 0.01f;                 // substep, seconds
+  float gravity = 9.81f;
+  float tanRestAngle = 0.57735f;     // tan(theta_c), 30 degrees
+  float viscosity = 5e-4f;           // k_v
+  float dryTemperatureC = -10.f;     // alpha = 1 (granular) at or below
+  float wetTemperatureC = 0.f;       // alpha = alphaWet (mostly viscous) at or above
+  float alphaWet = 0.2f;             // the granular share left in wet snow
+  float seaLevelTemperatureC = 0.f;  // T0 of the day
+  // The box the pass runs over: [x0, x1) x [y0, y1).
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
+// Pipe d of a cell: east, south-east, south, south-west.
+SNOW_HD SNOW_INLINE int pipeDx(int d) { return d == 0 ? 1 : (d == 1 ? 1 : (d == 2 ? 0 : -1)); }
+SNOW_HD SNOW_INLINE int pipeDy(int d) { return d == 0 ? 0 : 1; }
+
+SNOW_HD SNOW_INLINE float avalancheAlpha(const AvalancheArgs& a, float temperatureC) {
+  const float dry = !(a.wetTemperatureC > a.dryTemperatureC)
+                        ? (temperatureC < a.wetTemperatureC ? 1.f : 0.f)
+                        : clampf((a.wetTemperatureC - temperatureC) / (a.wetTemperatureC - a.dryTemperatureC), 0.f, 1.f);
+  return a.alphaWet + (1.f - a.alphaWet) * dry;
+}
+
+// Calls kernel(x0 + x, y0 + y) for the cells of the box, so any Exec runs over the box only.
+template <class K>
+struct InBox {
+  K kernel;
+  int x0, y0;
+  SNOW_HD void operator()(int x, int y) const { kernel(x0 + x, y0 + y); }
+};
+
+struct AvalancheFlowKernel {
+  SnowFieldsView v;
+  AvalancheArgs a;
+  SNOW_HD bool source(int i) const { return v.moving[i] != 0 && v.unstable[i] > 0.f; }
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    float* f = v.flows + 4 * static_cast<size_t>(i);
+    if (!v.valid[i]) {
+      f[0] = f[1] = f[2] = f[3] = 0.f;
+      return;
+    }
+    const bool here = source(i);
+    const float ap = v.surface(i);
+    const float c = v.cellSizeXM * v.cellSizeYM;
+    for (int d = 0; d < 4; ++d) {
+      const int nx = x + pipeDx(d), ny = y + pipeDy(d);
+      if (!v.isValid(nx, ny)) {
+        f[d] = 0.f;
+        continue;
+      }
+      const int n = v.index(nx, ny);
+      const bool there = source(n);
+      if (!here && !there) {
+        f[d] = 0.f;
+        continue;
+      }
+      const float lx = pipeDx(d) != 0 ? v.cellSizeXM : 0.f, ly = pipeDy(d) != 0 ? v.cellSizeYM : 0.f;
+      const float length = sqrtf(lx * lx + ly * ly);
+      float phi = f[d] + a.dtS * c * a.gravity * (ap - v.surface(n)) / length;
+      const int src = phi > 0.f ? i : n;
+      if (!(phi != 0.f) || !(phi > 0.f ? here : there)) {
+        f[d] = 0.f;
+        continue;
+      }
+      const float alpha = avalancheAlpha(a, a.seaLevelTemperatureC + v.temperatureBase[src]);
+      const float friction = a.dtS * c * alpha * a.gravity * a.tanRestAngle;
+      const float magnitude = fabsf(phi);
+      if (magnitude <= friction) {
+        f[d] = 0.f;
+        continue;
+      }
+      phi = phi > 0.f ? magnitude - friction : friction - magnitude;
+      phi = phi / (1.f + a.dtS * (1.f - alpha) * a.viscosity * v.unstable[src]);
+      f[d] = phi;
+    }
+  }
+};
+
+// Outflow of a cell in one substep, from its own pipes (positive) and its neighbours' (negative).
+struct AvalancheScaleKernel {
+  SnowFieldsView v;
+  AvalancheArgs a;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    float out = 0.f;
+    const float* f = v.flows + 4 * static_cast<size_t>(i);
+    for (int d = 0; d < 4; ++d) out += maxf(0.f, f[d]);
+    for (int d = 0; d < 4; ++d) {
+      const int nx = x - pipeDx(d), ny = y - pipeDy(d);  // the neighbour whose pipe d ends here
+      if (!v.inside(nx, ny)) continue;
+      out += maxf(0.f, -v.flows[4 * static_cast<size_t>(v.index(nx, ny)) + d]);
+    }
+    const float volumeOut = a.dtS * out;
+    const float available = v.cellSizeXM * v.cellSizeYM * v.unstable[i] * (1.f - 1e-6f);
+    v.scratchPowder[i] = volumeOut > available ? (volumeOut > 0.f ? available / volumeOut : 0.f) : 1.f;
+  }
+};
+
+struct AvalancheApplyScaleKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    float* f = v.flows + 4 * static_cast<size_t>(i);
+    for (int d = 0; d < 4; ++d) {
+      if (f[d] > 0.f) {
+        f[d] *= v.scratchPowder[i];
+      } else if (f[d] < 0.f) {
+        f[d] *= v.scratchPowder[v.index(x + pipeDx(d), y + pipeDy(d))];
+      }
+    }
+  }
+};
+
+struct AvalancheHeightKernel {
+  SnowFieldsView v;
+  AvalancheArgs a;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    if (!v.valid[i]) return;
+    float in = 0.f, out = 0.f;
+    const float* f = v.flows + 4 * static_cast<size_t>(i);
+    for (int d = 0; d < 4; ++d) {
+      if (f[d] > 0.f) out += f[d]; else in -= f[d];
+      const int nx = x - pipeDx(d), ny = y - pipeDy(d);
+      if (!v.inside(nx, ny)) continue;
+      const float g = v.flows[4 * static_cast<size_t>(v.index(nx, ny)) + d];
+      if (g > 0.f) in += g; else out -= g;
+    }
+    if (in == 0.f && out == 0.f) return;
+    const float c = v.cellSizeXM * v.cellSizeYM;
+    float u = v.unstable[i];
+    if (in > 0.f && !v.moving[i]) {  // snow arrives: the cell starts moving and entrains its own
+      v.moving[i] = 1;
+      u = u + v.powder[i];
+      v.powder[i] = 0.f;
+    }
+    u = u + a.dtS * in / c - a.dtS * out / c;
+    v.unstable[i] = maxf(0.f, u);
+  }
+};
+
+// After a step's substeps: zero the pipes neither of whose ends holds moving snow (what the flow
+// pass would do next). The host then shrinks the box to the moving snow; every cell more than
+// one cell outside it has only such pipes, so the cells the next box reads but does not write
+// carry no stale flows.
+struct AvalancheClearIdleKernel {
+  SnowFieldsView v;
+  SNOW_HD bool source(int i) const { return v.moving[i] != 0 && v.unstable[i] > 0.f; }
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    float* f = v.flows + 4 * static_cast<size_t>(i);
+    const bool here = source(i);
+    for (int d = 0; d < 4; ++d) {
+      const int nx = x + pipeDx(d), ny = y + pipeDy(d);
+      if (!here && (!v.inside(nx, ny) || !source(v.index(nx, ny)))) f[d] = 0.f;
+    }
+  }
+};
+
+// One thread per row of the box: the fastest pipe, the deepest moving snow and the columns of
+// the moving snow, for the host to pick the next substep and the next box.
+struct AvalancheRowStatsKernel {
+  SnowFieldsView v;
+  AvalancheArgs a;
+  SNOW_HD void operator()(int, int row) const {
+    const int y = a.y0 + row;
+    float speed = 0.f, depth = 0.f;
+    int lo = v.width, hi = -1;
+    const float c = v.cellSizeXM * v.cellSizeYM;
+    for (int x = a.x0; x < a.x1; ++x) {
+      const int i = v.index(x, y);
+      const float* f = v.flows + 4 * static_cast<size_t>(i);
+      for (int d = 0; d < 4; ++d) speed = maxf(speed, fabsf(f[d]) / c);
+      if (v.moving[i] && v.unstable[i] > 0.f) {
+        depth = maxf(depth, v.unstable[i]);
+        if (x < lo) lo = x;
+        hi = x;
+      }
+    }
+    float* s = v.rowStats + 4 * static_cast<size_t>(y);
+    s[0] = speed;
+    s[1] = depth;
+    s[2] = static_cast<float>(lo);
+    s[3] = static_cast<float>(hi);
+  }
+};
+
+// At release: U + P of every cell (for the scour and deposit records), flows cleared, and the
+// released cells' powder joined to their unstable snow.
+struct AvalancheReleaseKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    v.avalancheBefore[i] = v.unstable[i] + v.powder[i];
+    float* f = v.flows + 4 * static_cast<size_t>(i);
+    f[0] = f[1] = f[2] = f[3] = 0.f;
+    if (v.moving[i] && v.valid[i]) {
+      v.unstable[i] = v.unstable[i] + v.powder[i];
+      v.powder[i] = 0.f;
+    }
+  }
+};
+
+// At rest: the moving snow is deposited as stable snow (avalanche debris is dense and fused),
+// the net change of each cell is recorded as scour or deposit, flows and flags cleared.
+struct AvalancheSettleKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    float* f = v.flows + 4 * static_cast<size_t>(i);
+    f[0] = f[1] = f[2] = f[3] = 0.f;
+    if (!v.valid[i]) return;
+    const float net = (v.unstable[i] + v.powder[i]) - v.avalancheBefore[i];
+    if (net > 0.f) v.avalancheDeposit[i] = v.avalancheDeposit[i] + net;
+    if (net < 0.f) v.avalancheScour[i] = v.avalancheScour[i] - net;
+    if (v.moving[i]) {
+      v.stable[i] = v.stable[i] + v.unstable[i];
+      v.unstable[i] = 0.f;
+      v.moving[i] = 0;
+    }
+  }
+};
+
+}  // namespace snow

@@ -1,0 +1,281 @@
+// Avalanches (paper §6.1): angle of repose, static friction, wet against dry, mass, stability,
+// thread independence.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/avalanche.h"
+#include "core/cpu_backend.h"
+#include "core/rng.h"
+#include "bakers/grid_writer.h"
+#include "tools/pipeline.h"
+#include "test_support.h"
+
+using namespace snow;
+
+namespace {
+
+constexpr double kTan30 = 0.57735026918962584;
+
+// Bedrock from f(x, y) in metres, cells of `cell` metres, temperature base (T at T0 = 0).
+template <class F>
+SnowState terrain(int w, int h, double cell, float temperatureC, F f) {
+  SnowState s;
+  GridSpec spec;
+  spec.width = w;
+  spec.height = h;
+  spec.cellSizeXM = spec.cellSizeYM = cell;
+  s.allocate(spec);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) s.bedrockM(x, y) = static_cast<float>(f(x * cell, y * cell));
+  s.temperatureBaseC.fill(temperatureC);
+  return s;
+}
+
+double totalSnow(const SnowState& s) {
+  double t = 0;
+  for (int y = 0; y < s.spec.height; ++y)
+    for (int x = 0; x < s.spec.width; ++x)
+      if (s.validCell(x, y)) t += s.depthM(x, y);
+  return t * s.spec.cellAreaM2();
+}
+
+struct Outcome {
+  AvalancheRecord record;
+  SnowState state;
+};
+
+Outcome runAvalanche(SnowState s, int x, int y, const ModelParameters& p = ModelParameters{},
+                     std::unique_ptr<SnowBackend> backend = createCpuBackend()) {
+  backend->upload(s);
+  AvalancheRun run(*backend, p, s);
+  Outcome o;
+  if (run.release(x, y, 0.0, 0.0, true)) {
+    while (!run.step()) {
+    }
+  }
+  o.record = run.settle();
+  backend->download(s);
+  o.state = std::move(s);
+  return o;
+}
+
+void expectFiniteNonNegative(const SnowState& s) {
+  for (const Grid<float>* g : {&s.compactedM, &s.stableM, &s.unstableM, &s.powderM})
+    for (float v : g->values()) {
+      ASSERT_TRUE(std::isfinite(v));
+      ASSERT_GE(v, 0.f);
+    }
+}
+
+// Steepest surface slope between 8-neighbours where either cell holds snow.
+double maxSnowSlope(const SnowState& s) {
+  double m = 0;
+  for (int y = 0; y + 1 < s.spec.height; ++y)
+    for (int x = 0; x + 1 < s.spec.width; ++x)
+      for (auto [dx, dy] : {std::pair{1, 0}, std::pair{0, 1}, std::pair{1, 1}}) {
+        const int nx = x + dx, ny = y + dy;
+        if (s.depthM(x, y) < 1e-3f && s.depthM(nx, ny) < 1e-3f) continue;
+        const double a = s.bedrockM(x, y) + s.depthM(x, y), b = s.bedrockM(nx, ny) + s.depthM(nx, ny);
+        m = std::max(m, std::abs(a - b) / std::hypot(dx * s.spec.cellSizeXM, dy * s.spec.cellSizeYM));
+      }
+  return m;
+}
+
+}  // namespace
+
+// A cone of dry unstable snow (slopes of 1.5) on a flat plane settles until no slope in the
+// snow surface exceeds tan(theta_c) by more than 15 %, and keeps its mass.
+TEST(Avalanche, DryConeSettlesToTheRestAngle) {
+  SnowState s = terrain(61, 61, 1.0, -20.f, [](double, double) { return 1000.0; });
+  for (int y = 0; y < 61; ++y)
+    for (int x = 0; x < 61; ++x) s.unstableM(x, y) = static_cast<float>(std::max(0.0, 12.0 - 1.5 * std::hypot(x - 30.0, y - 30.0)));
+  const double before = totalSnow(s);
+  ModelParameters p;
+  p.avalancheReachMPerM = 100.0;
+  const Outcome o = runAvalanche(s, 30, 30, p);
+  ASSERT_TRUE(o.record.released) << o.record.why;
+  std::printf("[ measure ] cone: %d steps, %.1f s simulated, %s; max slope %.3f (tan 30 = %.3f), mass %.3e relative\n",
+              o.record.steps, o.record.simulatedS, o.record.why.c_str(), maxSnowSlope(o.state), kTan30,
+              std::abs(totalSnow(o.state) - before) / before);
+  expectFiniteNonNegative(o.state);
+  EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before);
+  EXPECT_LE(maxSnowSlope(o.state), kTan30 * 1.15);
+  EXPECT_LT(o.state.depthM(30, 30), 12.f);  // it did flow
+}
+
+// Unstable snow 1 m deep on an inclined plane: below the rest angle nothing moves at all (the
+// snow covers the whole plane, so there is no steep edge to slump); well above it the release
+// zone empties.
+TEST(Avalanche, InclinedPlaneFlowsOnlyAboveTheRestAngle) {
+  for (double slope : {0.4, 1.2}) {
+    SnowState s = terrain(40, 120, 2.0, -20.f, [slope](double, double y) { return 2000.0 - slope * std::min(y, 160.0); });
+    for (int y = slope < kTan30 ? 0 : 10; y < (slope < kTan30 ? 120 : 40); ++y)
+      for (int x = slope < kTan30 ? 0 : 10; x < (slope < kTan30 ? 40 : 30); ++x) s.unstableM(x, y) = 1.f;
+    const SnowState start = s;
+    const Outcome o = runAvalanche(s, 20, 25);
+    ASSERT_TRUE(o.record.released);
+    double moved = 0, left = 0;
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 40; ++x) {
+        moved += std::abs(o.state.depthM(x, y) - start.depthM(x, y));
+        if (y >= 10 && y < 40 && x >= 10 && x < 30) left += o.state.depthM(x, y);
+      }
+    std::printf("[ measure ] slope %.1f: %d steps, moved %.3f m summed, %.1f m left in the zone (of 600)\n", slope,
+                o.record.steps, moved, left);
+    if (slope < kTan30) {
+      EXPECT_EQ(moved, 0.0);
+    } else {
+      EXPECT_LT(left, 0.1 * 600.0);
+      EXPECT_GT(o.record.runoutM, 100.0);
+    }
+  }
+}
+
+// The same release, cold (dry, granular) and warm (wet, viscous with the paper's small k_v): the
+// wet one runs out farther and its deposit is thinner. This is what the model says: granular
+// friction stops dry snow on the runout as soon as its slope is below theta_c, while wet snow
+// only loses speed to viscosity and spreads until its surface is nearly flat.
+TEST(Avalanche, WetSnowRunsOutFartherAndThinnerThanDry) {
+  auto slope = [](double, double y) { return y < 120.0 ? 2000.0 - 1.0 * y : 2000.0 - 120.0 - 0.05 * (y - 120.0); };
+  Outcome result[2];
+  for (int wet = 0; wet < 2; ++wet) {
+    SnowState s = terrain(40, 200, 2.0, wet ? 5.f : -20.f, slope);
+    for (int y = 5; y < 30; ++y)
+      for (int x = 12; x < 28; ++x) s.unstableM(x, y) = 1.5f;
+    result[wet] = runAvalanche(s, 20, 15);
+  }
+  float maxDeposit[2] = {0, 0};
+  for (int wet = 0; wet < 2; ++wet)
+    for (float v : result[wet].state.stableM.values()) maxDeposit[wet] = std::max(maxDeposit[wet], v);
+  std::printf("[ measure ] dry: runout %.0f m, deepest deposit %.2f m, %s; wet: runout %.0f m, deepest %.2f m, %s\n",
+              result[0].record.runoutM, maxDeposit[0], result[0].record.why.c_str(), result[1].record.runoutM, maxDeposit[1],
+              result[1].record.why.c_str());
+  EXPECT_GT(result[1].record.runoutM, result[0].record.runoutM + 10.0);
+  EXPECT_LT(maxDeposit[1], maxDeposit[0]);
+}
+
+// Random rough terrains (cliffs, spikes, NODATA holes) with random releases, a release at the
+// top of a vertical cliff and 1 m of snow on 5 m cells: no NaN, no negative snow, mass kept,
+// flows bounded by free fall from the highest snow.
+TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
+  double worst = 0;
+  for (int k = 0; k < 12; ++k) {
+    SnowState s = test::makeRoughState(48, 40, 100 + k);
+    const RandomKey key{static_cast<uint64_t>(k)};
+    for (int y = 0; y < 40; ++y)
+      for (int x = 0; x < 48; ++x)
+        if (s.validCell(x, y)) s.unstableM(x, y) = 1.f + 2.f * key.uniform(0, static_cast<uint32_t>(y * 48 + x), RngStream::Test);
+    int rx = 24, ry = 20;
+    for (int t = 0; t < 100 && !s.validCell(rx, ry); ++t) rx = (rx + 7) % 48, ry = (ry + 3) % 40;
+    const double before = totalSnow(s);
+    ModelParameters p;
+    p.avalancheMaxDurationS = 60.0;
+    if (k % 2) p.avalancheDryTemperatureC = 50.0, p.avalancheWetTemperatureC = 60.0;  // all wet
+    const Outcome o = runAvalanche(s, rx, ry, p);
+    expectFiniteNonNegative(o.state);
+    const double err = std::abs(totalSnow(o.state) - before) / before;
+    worst = std::max(worst, err);
+    EXPECT_LT(err, 1e-5) << k;
+  }
+  // A vertical cliff: a slope of 0.8 ending in a 200 m drop between two 5 m cells.
+  SnowState cliff = terrain(30, 60, 5.0, -20.f, [](double, double y) { return y < 100.0 ? 3000.0 - 0.8 * y : 2720.0 - 0.1 * (y - 100.0); });
+  for (int y = 0; y < 20; ++y)
+    for (int x = 5; x < 25; ++x) cliff.unstableM(x, y) = 1.f;
+  const double before = totalSnow(cliff);
+  const Outcome o = runAvalanche(cliff, 15, 18);
+  expectFiniteNonNegative(o.state);
+  EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before);
+  std::printf("[ measure ] random terrains: worst mass error %.2e; cliff: %d steps, %s, runout %.0f m\n", worst,
+              o.record.steps, o.record.why.c_str(), o.record.runoutM);
+}
+
+// The TBB backend (2 threads) and the serial one give the same bytes.
+TEST(Avalanche, SameBytesSerialAndThreaded) {
+  SnowState s = test::makeRoughState(64, 50, 7);
+  for (int y = 0; y < 50; ++y)
+    for (int x = 0; x < 64; ++x)
+      if (s.validCell(x, y)) s.unstableM(x, y) = 1.5f;
+  int rx = 30, ry = 25;
+  while (!s.validCell(rx, ry)) ++rx;
+  const Outcome a = runAvalanche(s, rx, ry, ModelParameters{}, createSerialBackend());
+  const Outcome b = runAvalanche(s, rx, ry, ModelParameters{}, createCpuBackend());
+  ASSERT_GT(a.record.steps, 1);
+  test::expectSameBytes(a.state, b.state);
+  EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float)));
+}
+
+// No unstable snow at the rupture point: nothing is released and the record says why.
+TEST(Avalanche, NoUnstableSnowNoRelease) {
+  SnowState s = terrain(10, 10, 5.0, -20.f, [](double, double y) { return 1000.0 - y; });
+  const Outcome o = runAvalanche(s, 5, 5);
+  EXPECT_FALSE(o.record.released);
+  EXPECT_NE(o.record.why.find("no unstable snow"), std::string::npos);
+}
+
+// A real release: Tyrol (avaWog, 5 m). Three weeks of cold storms build unstable snow on the
+// steep upper slopes (too cold for stability changes above 1500 m); on day 21 a user avalanche
+// at 2330 m runs down the gully below and stops at its foot. Checked: released volume stays
+// (mass), the runout and fall are those of a real path (hundreds of metres), the deposit lies
+// far below the rupture and in a hollow of the terrain (bedrock below the mean of a 50 m ring
+// around it), and the bake's preview shows it.
+TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
+  const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaWog_5m.asc";
+  if (!std::filesystem::exists(dem)) GTEST_SKIP() << "shared data not found: ../shared/data/dem/tyrol_avaWog_5m.asc";
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "snowbake_tyrol_avalanche_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string scene = (dir / "tyrol.toml").string();
+  std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n[season]\nstart_date = 2026-01-01\ndays = 22\n"
+                       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = -6.0\n"
+                       << "[[weather.snowfall]]\nstart_day = 1\nend_day = 20\n"
+                       << "[[events]]\ntype = \"avalanche\"\nday = 21\nposition_m = [1877, 2352]\n"
+                       << "[parameters]\nrain_snow_limit_m = 1000\navalanche_rate_per_km2_per_day = 0\n"
+                       << "[outputs]\nlayers = [\"bedrock\", \"avalanche_deposit\", \"avalanche_scour\", \"avalanche_preview\"]\n";
+  BakeOptions o;
+  o.scene = scene;
+  o.outDir = (dir / "out").string();
+  o.backend = "cpu";
+  o.useCache = false;
+  o.progress = false;
+  std::ostringstream log;
+  const BakeResult r = runBake(o, log);
+  ASSERT_EQ(r.season.avalanches.size(), 1u);
+  const AvalancheRecord& a = r.season.avalanches[0];
+  ASSERT_TRUE(a.released) << a.why;
+  const Grid<float> bed = readFloatImage((dir / "out" / "bedrock.exr").string());
+  const Grid<float> deposit = readFloatImage((dir / "out" / "avalanche_deposit.exr").string());
+  const Grid<float> scour = readFloatImage((dir / "out" / "avalanche_scour.exr").string());
+  double depositM3 = 0, scourM3 = 0, depositAltitude = 0, hollow = 0, weight = 0;
+  const int w = bed.width(), h = bed.height();
+  for (int y = 10; y < h - 10; ++y)
+    for (int x = 10; x < w - 10; ++x) {
+      depositM3 += deposit(x, y) * 25.0;
+      scourM3 += scour(x, y) * 25.0;
+      if (deposit(x, y) < 0.5f) continue;
+      double ring = 0;
+      for (int k = 0; k < 16; ++k) ring += bed(x + static_cast<int>(std::lround(10 * std::cos(k * 0.3927))),
+                                               y + static_cast<int>(std::lround(10 * std::sin(k * 0.3927))));
+      hollow += (ring / 16 - bed(x, y)) * deposit(x, y);
+      depositAltitude += bed(x, y) * deposit(x, y);
+      weight += deposit(x, y);
+    }
+  std::printf("[ measure ] Tyrol release: %d cells, %.0f m^3; runout %.0f m, fall %.0f m, %d steps (%.0f s simulated), "
+              "%.3f ms a step; deposit %.0f m^3 (scour %.0f), deposit mean altitude %.0f m, %.1f m below its 50 m ring\n",
+              a.releaseCells, a.releasedM3, a.runoutM, a.fallHeightM, a.steps, a.simulatedS, a.secondsPerStep() * 1e3, depositM3,
+              scourM3, depositAltitude / weight, hollow / weight);
+  EXPECT_NEAR(depositM3, scourM3, 1e-3 * scourM3);  // net changes of one avalanche balance
+  EXPECT_GT(a.runoutM, 400.0);
+  EXPECT_GT(a.fallHeightM, 200.0);
+  ASSERT_GT(weight, 0);
+  EXPECT_LT(depositAltitude / weight, 2330.0 - 200.0);
+  EXPECT_GT(hollow / weight, 0.5);  // in a hollow: the gully's floor
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "avalanche_preview.png"));
+  fs::remove_all(dir);
+}
