@@ -174,14 +174,27 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
     int rx = 24, ry = 20;
     for (int t = 0; t < 100 && !s.validCell(rx, ry); ++t) rx = (rx + 7) % 48, ry = (ry + 3) % 40;
     const double before = totalSnow(s);
+    // Parameters drawn across their documented ranges (core/parameters.cpp).
     ModelParameters p;
+    auto draw = [&](int j, double lo, double hi) { return lo + (hi - lo) * key.uniform(1000 + k, static_cast<uint32_t>(j), RngStream::Test); };
     p.avalancheMaxDurationS = 60.0;
+    p.avalancheRestAngleDeg = draw(0, 1.0, 80.0);
+    p.snowViscosityPerS2 = draw(1, 0.0, 10.0);
+    p.avalancheWetGranularFraction = draw(2, 0.0, 1.0);
+    p.avalancheStepS = draw(3, 0.001, 10.0);
+    p.avalancheReachMPerM = draw(4, 0.0, 10000.0);
+    p.avalancheStopSpeedMps = draw(5, 1e-4, 1.0);
     if (k % 2) p.avalancheDryTemperatureC = 50.0, p.avalancheWetTemperatureC = 60.0;  // all wet
     const Outcome o = runAvalanche(s, rx, ry, p);
     expectFiniteNonNegative(o.state);
     const double err = std::abs(totalSnow(o.state) - before) / before;
     worst = std::max(worst, err);
     EXPECT_LT(err, 1e-5) << k;
+    // Bounded flow: no pipe faster than free fall over the terrain's relief (plus the snow).
+    float lo = 1e30f, hi = -1e30f;
+    for (size_t i = 0; i < s.bedrockM.size(); ++i)
+      if (s.validCell.values()[i]) lo = std::min(lo, s.bedrockM.values()[i]), hi = std::max(hi, s.bedrockM.values()[i] + 3.f);
+    EXPECT_LT(o.record.maxSpeedMps, std::sqrt(2.0 * 9.8 * (hi - lo)) + 1.0) << k;
   }
   // A vertical cliff: a slope of 0.8 ending in a 200 m drop between two 5 m cells.
   SnowState cliff = terrain(30, 60, 5.0, -20.f, [](double, double y) { return y < 100.0 ? 3000.0 - 0.8 * y : 2720.0 - 0.1 * (y - 100.0); });
@@ -191,6 +204,7 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
   const Outcome o = runAvalanche(cliff, 15, 18);
   expectFiniteNonNegative(o.state);
   EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before);
+  EXPECT_LT(o.record.maxSpeedMps, std::sqrt(2.0 * 9.8 * 400.0));
   std::printf("[ measure ] random terrains: worst mass error %.2e; cliff: %d steps, %s, runout %.0f m\n", worst,
               o.record.steps, o.record.why.c_str(), o.record.runoutM);
 }

@@ -304,3 +304,20 @@ TEST(Cli, SunOffSkipsTheExposure) {
   EXPECT_NE(r.err.find("sun exposure off"), std::string::npos) << r.err;
   fs::remove_all(dir);
 }
+
+// Avalanche events that cannot be honoured are refused with the scene file, its line and why;
+// the earlier bake's files stay.
+TEST(Cli, BadAvalancheEventsAreRefusedWithFileLineAndReason) {
+  const fs::path dir = workDir();
+  const std::string scene = (dir / "scene.toml").string();
+  auto write = [&](const std::string& event) {
+    std::ofstream(scene) << "[terrain]\nbuiltin = \"ridged\"\nsize = 64\n[season]\ndays = 5\n[[events]]\ntype = \"avalanche\"\nday = 2\n"
+                         << event << "\n";
+    return scene;
+  };
+  expectRefused(dir, write(""), {scene, "position_m"});
+  expectRefused(dir, write("position_m = [5000, 10]"), {scene + ":6", "outside the terrain", "640.0 x 640.0 m"});
+  expectRefused(dir, write("position_m = [10]"), {scene, "position_m", "two numbers"});
+  expectRefused(dir, write("position_m = [10, 10]\nmap_position = [1, 2]"), {scene, "one of them"});
+  fs::remove_all(dir);
+}
