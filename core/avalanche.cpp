@@ -9,6 +9,23 @@ namespace snow {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+
+Grid<float> depthGrid(const SnowState& s) {
+  Grid<float> d(s.spec.width, s.spec.height, 0.f);
+  for (size_t i = 0; i < d.size(); ++i)
+    d.values()[i] = s.compactedM.values()[i] + s.stableM.values()[i] + s.unstableM.values()[i] + s.powderM.values()[i];
+  return d;
+}
+
+GridCrop crop(const Grid<float>& g, int x0, int y0, int x1, int y1) {
+  GridCrop c;
+  c.x0 = x0;
+  c.y0 = y0;
+  c.grid = Grid<float>(std::max(0, x1 - x0), std::max(0, y1 - y0), 0.f);
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) c.grid(x - x0, y - y0) = g(x, y);
+  return c;
+}
 using Clock = std::chrono::steady_clock;
 
 double surfaceAt(const SnowState& s, size_t i) {
@@ -113,6 +130,17 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
   unionBox_ = args_;
   record_.released = true;
+  if (keepMaps_) {
+    record_.maps = std::make_shared<AvalancheMaps>();
+    Grid<float> zone(w, h, 0.f);
+    for (size_t i = 0; i < moving.size(); ++i) zone.values()[i] = moving[i] ? 1.f : 0.f;
+    record_.maps->release = crop(zone, x0, y0, x1, y1);
+    if (frameIntervalS_ > 0.0) {
+      record_.maps->depthAtRelease = depthGrid(s);
+      record_.maps->frames.push_back({0.0, crop(record_.maps->depthAtRelease, x0, y0, x1, y1)});
+      nextFrameS_ = frameIntervalS_;
+    }
+  }
   active_ = true;
   lastSpeed_ = 0.f;
   wallSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -155,6 +183,10 @@ bool AvalancheRun::step() {
   const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   wallSeconds_ += seconds;
   record_.stepSeconds += seconds;
+  if (record_.maps && frameIntervalS_ > 0.0 && record_.simulatedS + 1e-9 >= nextFrameS_) {
+    captureFrame();
+    while (nextFrameS_ <= record_.simulatedS + 1e-9) nextFrameS_ += frameIntervalS_;
+  }
   if (x1 <= x0) {
     record_.why = "all moving snow deposited";
     atRest_ = true;
@@ -166,6 +198,13 @@ bool AvalancheRun::step() {
     atRest_ = true;
   }
   return atRest_;
+}
+
+void AvalancheRun::captureFrame() {
+  SnowState now = before_;
+  backend_.download(now);
+  const Grid<float> d = depthGrid(now);
+  record_.maps->frames.push_back({record_.simulatedS, crop(d, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
 }
 
 AvalancheRecord AvalancheRun::settle() {
@@ -195,6 +234,22 @@ AvalancheRecord AvalancheRun::settle() {
       }
     }
   record_.fallHeightM = ruptureA - lowest;
+  if (record_.maps) {
+    Grid<float> scour(w, s.spec.height, 0.f), deposit(w, s.spec.height, 0.f);
+    for (int y = unionBox_.y0; y < unionBox_.y1; ++y)
+      for (int x = unionBox_.x0; x < unionBox_.x1; ++x) {
+        const size_t i = static_cast<size_t>(y) * w + x;
+        if (!s.validCell.values()[i]) continue;
+        const float change = (after.stableM.values()[i] + after.unstableM.values()[i] + after.powderM.values()[i]) -
+                             (s.stableM.values()[i] + s.unstableM.values()[i] + s.powderM.values()[i]);
+        if (change > 0.f) deposit.values()[i] = change;
+        if (change < 0.f) scour.values()[i] = -change;
+      }
+    record_.maps->scour = crop(scour, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
+    record_.maps->deposit = crop(deposit, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
+    if (frameIntervalS_ > 0.0)
+      record_.maps->frames.push_back({record_.simulatedS, crop(depthGrid(after), unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
+  }
   wallSeconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
   record_.seconds = wallSeconds_;
   return record_;

@@ -21,13 +21,30 @@
 // or after avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
 // stable snow and the records are kept.
 #pragma once
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "backend.h"
 #include "parameters.h"
 
 namespace snow {
+
+// A crop of a grid: values for the cells [x0, x0 + grid.width()) x [y0, y0 + grid.height()).
+struct GridCrop {
+  int x0 = 0, y0 = 0;
+  Grid<float> grid;
+};
+
+// On request: the avalanche's own maps (release zone 1/0, net scour and deposit in metres) and
+// frames of its motion (snow depth C + S + U + P every frameIntervalS of simulated time), each
+// cropped to where the avalanche was; `depthAtRelease` is the full grid they paste onto.
+struct AvalancheMaps {
+  GridCrop release, scour, deposit;
+  Grid<float> depthAtRelease;
+  std::vector<std::pair<double, GridCrop>> frames;  // (simulated seconds, depth)
+};
 
 struct AvalancheRecord {
   double day = 0;
@@ -48,6 +65,7 @@ struct AvalancheRecord {
   double secondsPerStep() const { return steps > 0 ? stepSeconds / steps : 0.0; }
   float maxSpeedMps = 0;     // fastest pipe seen (flow / cross-section)
   int boxCellsMax = 0;       // the largest active box, in cells
+  std::shared_ptr<AvalancheMaps> maps;  // when asked for (AvalancheRun::keepMaps)
 };
 
 class AvalancheRun {
@@ -70,6 +88,12 @@ class AvalancheRun {
   // Deposits the snow and fills the record.
   AvalancheRecord settle();
   const AvalancheRecord& record() const { return record_; }
+  // Keep each avalanche's maps, and frames of its motion every `frameIntervalS` simulated
+  // seconds (0: no frames). Frames download the state: they cost O(grid) each.
+  void keepMaps(bool maps, double frameIntervalS) {
+    keepMaps_ = maps || frameIntervalS > 0.0;
+    frameIntervalS_ = frameIntervalS;
+  }
 
  private:
   bool releaseFromSnapshot(int x, int y, double day, double seaLevelTemperatureC, bool user);
@@ -81,6 +105,9 @@ class AvalancheRun {
   AvalancheRecord record_;
   bool active_ = false, atRest_ = false;
   float lastSpeed_ = 0.f;
+  bool keepMaps_ = false;
+  double frameIntervalS_ = 0.0, nextFrameS_ = 0.0;
+  void captureFrame();
   double wallSeconds_ = 0;
 };
 

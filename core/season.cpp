@@ -185,6 +185,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   // by unstable depth and slope above the rest angle), and the scene's user releases. A zoomed
   // phenomenon: while one runs, its steps of 0.1 s are the only events (§3.1's temporal zoom).
   AvalancheRun avalanche(backend, p, state);
+  avalanche.keepMaps(cfg.avalancheMaps, cfg.avalancheFrameIntervalS);
   std::deque<UserAvalanche> pendingAvalanches;
   int avalancheId = -1;
   {

@@ -26,6 +26,8 @@ struct SeasonConfig {
   WeatherTimeline weather;
   std::vector<SnowfallPeriod> userSnowfalls;  // storms requested as user events
   std::vector<UserAvalanche> userAvalanches;  // avalanches requested as user events
+  bool avalancheMaps = false;                 // keep each avalanche's maps in its record
+  double avalancheFrameIntervalS = 0.0;       // and frames of its motion (0: none)
   std::vector<double> frameDays;              // days at which to hand the state to onFrame
   // Per-day static fields: when set, called at the start of every season day (0, 1, 2, ...) to
   // refill the state's static fields for that day (temperature from that day's sun exposure,

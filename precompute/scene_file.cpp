@@ -109,6 +109,8 @@ const std::vector<Rule>& sceneRules() {
       {"outputs", Kind::Table},
       {"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices},
       {"outputs.format", Kind::String, -kInf, kInf, {"exr", "tiff"}},
+      {"outputs.avalanche_maps", Kind::Bool},
+      {"outputs.avalanche_frame_interval_s", Kind::Number, 0.01, 3600},
       {"outputs.frames_days", Kind::NumberArray, 0, 3650},
       {"run", Kind::Table},
       {"run.seed", Kind::Integer, 0, 9.007199254740992e15},
@@ -487,6 +489,8 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
     for (auto&& e : *layers->as_array()) scene.outputs.layers.push_back(e.as_string()->get());
   }
   if (auto f = root["outputs"]["format"].value<std::string>()) scene.outputs.format = *f;
+  if (auto v = root["outputs"]["avalanche_maps"].value<bool>()) scene.outputs.avalancheMaps = *v;
+  if (auto v = root["outputs"]["avalanche_frame_interval_s"].value<double>()) scene.outputs.avalancheFrameIntervalS = *v;
   if (const toml::node* frames = root["outputs"]["frames_days"].node()) {
     for (auto&& e : *frames->as_array()) {
       const double day = e.value<double>().value();

@@ -251,7 +251,8 @@ TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
                        << "[[weather.snowfall]]\nstart_day = 1\nend_day = 20\n"
                        << "[[events]]\ntype = \"avalanche\"\nday = 21\nposition_m = [1877, 2352]\n"
                        << "[parameters]\nrain_snow_limit_m = 1000\navalanche_rate_per_km2_per_day = 0\n"
-                       << "[outputs]\nlayers = [\"bedrock\", \"avalanche_deposit\", \"avalanche_scour\", \"avalanche_preview\"]\n";
+                       << "[outputs]\nlayers = [\"bedrock\", \"avalanche_deposit\", \"avalanche_scour\", \"avalanche_preview\"]\n"
+                       << "avalanche_maps = true\navalanche_frame_interval_s = 30\n";
   BakeOptions o;
   o.scene = scene;
   o.outDir = (dir / "out").string();
@@ -291,5 +292,32 @@ TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
   EXPECT_LT(depositAltitude / weight, 2330.0 - 200.0);
   EXPECT_GT(hollow / weight, 0.5);  // in a hollow: the gully's floor
   EXPECT_TRUE(std::filesystem::exists(dir / "out" / "avalanche_preview.png"));
+  // The avalanche's own maps: its release zone has the released cells, its scour and deposit are
+  // the season's (it is the only avalanche); frames every 30 s plus the first and the last, each
+  // holding the same snow.
+  const Grid<float> release = readFloatImage((dir / "out" / "avalanches" / "001_release.exr").string());
+  const Grid<float> ownDeposit = readFloatImage((dir / "out" / "avalanches" / "001_deposit.exr").string());
+  double released = 0;
+  for (float v : release.values()) released += v;
+  EXPECT_EQ(released, a.releaseCells);
+  float worst = 0.f;  // the same net change, summed in another order
+  for (size_t i = 0; i < deposit.size(); ++i) worst = std::max(worst, std::abs(ownDeposit.values()[i] - deposit.values()[i]));
+  EXPECT_LT(worst, 1e-4f);
+  const int frames = static_cast<int>(a.simulatedS / 30.0 + 1e-9) + 2;
+  double first = -1;
+  for (int k = 0; k < frames; ++k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "depth.%04d.exr", k);
+    const fs::path f = dir / "out" / "avalanches" / "001" / name;
+    ASSERT_TRUE(fs::exists(f)) << f;
+    const Grid<float> d = readFloatImage(f.string());
+    double total = 0;
+    for (float v : d.values()) total += v;
+    if (first < 0) first = total;
+    EXPECT_NEAR(total, first, 1e-5 * first) << k;
+  }
+  char extra[32];
+  std::snprintf(extra, sizeof extra, "depth.%04d.exr", frames);
+  EXPECT_FALSE(fs::exists(dir / "out" / "avalanches" / "001" / extra));
   fs::remove_all(dir);
 }

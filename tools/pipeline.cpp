@@ -367,6 +367,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   config.params = scene.params;
   config.weather = scene.weather;
   config.userSnowfalls = scene.userSnowfalls;
+  config.avalancheMaps = scene.outputs.avalancheMaps;
+  config.avalancheFrameIntervalS = scene.outputs.avalancheFrameIntervalS;
   for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
     const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: avalanche on day " + fixed(a.day, 1);
     double xM = a.xM, yM = a.yM;
@@ -420,6 +422,45 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   // 5. Outputs
   t0 = Clock::now();
   writeLayers(state, -1.0);
+  // Each avalanche's own maps and frames (outputs.avalanche_maps, outputs.avalanche_frame_interval_s),
+  // full-size so they line up with the layers: avalanches/NNN_<map>, avalanches/NNN/depth.FFFF.
+  int avalancheNumber = 0;
+  for (const AvalancheRecord& a : report.avalanches) {
+    if (!a.released) continue;
+    ++avalancheNumber;
+    if (!a.maps) continue;
+    std::ostringstream stem;
+    stem << "avalanches/" << std::setw(3) << std::setfill('0') << avalancheNumber;
+    auto write = [&](const std::string& rel, Grid<float> full, const GridCrop& c, const std::string& content, const std::string& unit,
+                     double day) {
+      for (int y = 0; y < c.grid.height(); ++y)
+        for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
+      fs::create_directories((fs::path(options.outDir) / rel).parent_path());
+      const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, full, "value");
+      ManifestFile f;
+      f.path = fs::relative(img.path, options.outDir).string();
+      f.content = content;
+      f.unit = unit;
+      f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
+      f.day = day;
+      f.minValue = img.minValue;
+      f.maxValue = img.maxValue;
+      manifest.files.push_back(f);
+      result.files.push_back(img.path);
+    };
+    const Grid<float> zero(state.spec.width, state.spec.height, 0.f);
+    const std::string which = "avalanche " + std::to_string(avalancheNumber) + " (day " + fixed(a.day, 2) + ")";
+    write(stem.str() + "_release", zero, a.maps->release, which + ": release zone (1 released, 0 not)", "1", a.day);
+    write(stem.str() + "_scour", zero, a.maps->scour, which + ": snow taken away, net (m)", "m", a.day);
+    write(stem.str() + "_deposit", zero, a.maps->deposit, which + ": snow left, net (m)", "m", a.day);
+    for (size_t k = 0; k < a.maps->frames.size(); ++k) {
+      std::ostringstream rel;
+      rel << stem.str() << "/depth." << std::setw(4) << std::setfill('0') << k;
+      const auto& [seconds, c] = a.maps->frames[k];
+      write(rel.str(), a.maps->depthAtRelease, c,
+            which + ": snow depth C+S+U+P at " + fixed(seconds, 2) + " s after the release (m)", "m", a.day + seconds / 86400.0);
+    }
+  }
   manifest.programVersion = programVersion();
   manifest.sceneSource = scene.sourceName;
   manifest.sceneName = scene.name;
