@@ -35,7 +35,7 @@ double surfaceAt(const SnowState& s, size_t i) {
 }  // namespace
 
 AvalancheRun::AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain)
-    : backend_(backend), p_(params), before_(terrain) {}
+    : backend_(backend), p_(params), before_(terrain), after_(terrain) {}
 
 bool AvalancheRun::release(int x, int y, double day, double seaLevelTemperatureC, bool user) {
   backend_.download(before_);
@@ -201,9 +201,8 @@ bool AvalancheRun::step() {
 }
 
 void AvalancheRun::captureFrame() {
-  SnowState now = before_;
-  backend_.download(now);
-  const Grid<float> d = depthGrid(now);
+  backend_.download(after_);
+  const Grid<float> d = depthGrid(after_);
   record_.maps->frames.push_back({record_.simulatedS, crop(d, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
 }
 
@@ -212,8 +211,8 @@ AvalancheRecord AvalancheRun::settle() {
   const auto t0 = Clock::now();
   backend_.avalancheSettle(unionBox_);
   active_ = false;
-  SnowState after = before_;
-  backend_.download(after);
+  backend_.download(after_);
+  const SnowState& after = after_;
   const SnowState& s = before_;
   const int w = s.spec.width;
   const double area = s.spec.cellAreaM2();

@@ -99,7 +99,7 @@ class AvalancheRun {
   bool releaseFromSnapshot(int x, int y, double day, double seaLevelTemperatureC, bool user);
   SnowBackend& backend_;
   const ModelParameters& p_;
-  SnowState before_;
+  SnowState before_, after_;  // the state at release and a reusable buffer for later downloads
   AvalancheArgs args_;
   AvalancheArgs unionBox_;
   AvalancheRecord record_;
