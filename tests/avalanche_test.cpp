@@ -13,7 +13,7 @@
 #include "core/cpu_backend.h"
 #include "core/rng.h"
 #include "bakers/grid_writer.h"
-#include "tools/pipeline.h"
+#include "bake_support.h"
 #include "test_support.h"
 
 using namespace snow;
@@ -242,25 +242,17 @@ TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
   const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaWog_5m.asc";
   if (!std::filesystem::exists(dem)) GTEST_SKIP() << "shared data not found: ../shared/data/dem/tyrol_avaWog_5m.asc";
   namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "snowbake_tyrol_avalanche_test";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const std::string scene = (dir / "tyrol.toml").string();
-  std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n[season]\nstart_date = 2026-01-01\ndays = 22\n"
-                       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = -6.0\n"
-                       << "[[weather.snowfall]]\nstart_day = 1\nend_day = 20\n"
-                       << "[[events]]\ntype = \"avalanche\"\nday = 21\nposition_m = [1877, 2352]\n"
-                       << "[parameters]\nrain_snow_limit_m = 1000\navalanche_rate_per_km2_per_day = 0\n"
-                       << "[outputs]\nlayers = [\"bedrock\", \"avalanche_deposit\", \"avalanche_scour\", \"avalanche_preview\"]\n"
-                       << "avalanche_maps = true\navalanche_frame_interval_s = 30\n";
-  BakeOptions o;
-  o.scene = scene;
-  o.outDir = (dir / "out").string();
-  o.backend = "cpu";
-  o.useCache = false;
-  o.progress = false;
-  std::ostringstream log;
-  const BakeResult r = runBake(o, log);
+  std::ostringstream text;
+  text << "[terrain]\nfile = \"" << dem << "\"\n[season]\nstart_date = 2026-01-01\ndays = 22\n"
+       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = -6.0\n"
+       << "[[weather.snowfall]]\nstart_day = 1\nend_day = 20\n"
+       << "[[events]]\ntype = \"avalanche\"\nday = 21\nposition_m = [1877, 2352]\n"
+       << "[parameters]\nrain_snow_limit_m = 1000\navalanche_rate_per_km2_per_day = 0\n"
+       << "[outputs]\nlayers = [\"bedrock\", \"avalanche_deposit\", \"avalanche_scour\", \"avalanche_preview\"]\n"
+       << "avalanche_maps = true\navalanche_frame_interval_s = 30\n";
+  const test::Bake bake = test::bakeSceneText("tyrol_avalanche_test", text.str());
+  const fs::path dir = bake.dir;
+  const BakeResult& r = bake.result;
   ASSERT_EQ(r.season.avalanches.size(), 1u);
   const AvalancheRecord& a = r.season.avalanches[0];
   ASSERT_TRUE(a.released) << a.why;

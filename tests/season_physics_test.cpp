@@ -13,6 +13,7 @@
 #include "core/reference_scenario.h"
 #include "precompute/wind.h"
 #include "precompute/wind_timeline.h"
+#include "bake_support.h"
 #include "tools/pipeline.h"
 
 using namespace snow;
@@ -72,23 +73,15 @@ struct TyrolOutcome {
   double volumeM3 = 0, coveredFraction = 0;
 };
 TyrolOutcome tyrolWinter(const std::string& dem, const std::string& resample) {
-  const fs::path dir = fs::temp_directory_path() / "snowbake_tyrol_resolution_test";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const std::string scene = (dir / "tyrol.toml").string();
-  std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n" << resample << "[season]\nstart_date = 2025-12-01\ndays = 60\n"
-                       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 12.0\nwind_direction_deg = 300\nwind_speed_mps = 8\n"
-                       << "[[weather.keyframe]]\nday = 60\nsea_level_temperature_c = 16.0\nwind_direction_deg = 300\nwind_speed_mps = 8\n"
-                       << "[[weather.snowfall]]\nstart_day = 5\nend_day = 9\n[[weather.snowfall]]\nstart_day = 30\nend_day = 33\n"
-                       << "[parameters]\nrain_snow_limit_m = 1300\n[outputs]\nlayers = [\"depth\", \"valid_mask\"]\n";
-  BakeOptions o;
-  o.scene = scene;
-  o.outDir = (dir / "out").string();
-  o.backend = "cpu";
-  o.useCache = false;
-  o.progress = false;
-  std::ostringstream log;
-  const BakeResult result = runBake(o, log);
+  std::ostringstream text;
+  text << "[terrain]\nfile = \"" << dem << "\"\n" << resample << "[season]\nstart_date = 2025-12-01\ndays = 60\n"
+       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 12.0\nwind_direction_deg = 300\nwind_speed_mps = 8\n"
+       << "[[weather.keyframe]]\nday = 60\nsea_level_temperature_c = 16.0\nwind_direction_deg = 300\nwind_speed_mps = 8\n"
+       << "[[weather.snowfall]]\nstart_day = 5\nend_day = 9\n[[weather.snowfall]]\nstart_day = 30\nend_day = 33\n"
+       << "[parameters]\nrain_snow_limit_m = 1300\n[outputs]\nlayers = [\"depth\", \"valid_mask\"]\n";
+  const test::Bake bake = test::bakeSceneText("tyrol_resolution_test", text.str());
+  const fs::path dir = bake.dir;
+  const BakeResult& result = bake.result;
   const Grid<float> depth = readFloatImage((dir / "out" / "depth.exr").string());
   const Grid<float> valid = readFloatImage((dir / "out" / "valid_mask.exr").string());
   double covered = 0, cells = 0;
@@ -128,24 +121,14 @@ FrontRange frontRangeWinter() {
   const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/front_range_srtm3.asc";
   if (!fs::exists(dem)) return r;
   r.available = true;
-  const fs::path dir = fs::temp_directory_path() / "snowbake_front_range_test";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const std::string scene = (dir / "front_range.toml").string();
-  std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n[season]\nstart_date = 2025-11-01\ndays = 75\n"
-                       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 26.0\nwind_direction_deg = 280\nwind_speed_mps = 6\n"
-                       << "[[weather.snowfall]]\nstart_day = 8\nend_day = 11\n[[weather.snowfall]]\nstart_day = 22\nend_day = 26\n"
-                       << "[[weather.snowfall]]\nstart_day = 40\nend_day = 43\n[[weather.snowfall]]\nstart_day = 55\nend_day = 59\n"
-                       << "[[weather.snowfall]]\nstart_day = 66\nend_day = 69\n"
-                       << "[parameters]\nrain_snow_limit_m = 2300\n[outputs]\nlayers = [\"depth\", \"powder\", \"bedrock\"]\n";
-  BakeOptions o;
-  o.scene = scene;
-  o.outDir = (dir / "out").string();
-  o.backend = "cpu";
-  o.useCache = false;
-  o.progress = false;
-  std::ostringstream log;
-  runBake(o, log);
+  std::ostringstream text;
+  text << "[terrain]\nfile = \"" << dem << "\"\n[season]\nstart_date = 2025-11-01\ndays = 75\n"
+       << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 26.0\nwind_direction_deg = 280\nwind_speed_mps = 6\n"
+       << "[[weather.snowfall]]\nstart_day = 8\nend_day = 11\n[[weather.snowfall]]\nstart_day = 22\nend_day = 26\n"
+       << "[[weather.snowfall]]\nstart_day = 40\nend_day = 43\n[[weather.snowfall]]\nstart_day = 55\nend_day = 59\n"
+       << "[[weather.snowfall]]\nstart_day = 66\nend_day = 69\n"
+       << "[parameters]\nrain_snow_limit_m = 2300\n[outputs]\nlayers = [\"depth\", \"powder\", \"bedrock\"]\n";
+  const fs::path dir = test::bakeSceneText("front_range_test", text.str()).dir;
   const Grid<float> depth = readFloatImage((dir / "out" / "depth.exr").string());
   const Grid<float> powder = readFloatImage((dir / "out" / "powder.exr").string());
   const Grid<float> bed = readFloatImage((dir / "out" / "bedrock.exr").string());

@@ -303,6 +303,19 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   BakeResult result;
   std::vector<std::string> layers = scene.outputs.layers;
   if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
+  // Lists a written float image in the manifest and the result.
+  auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
+    ManifestFile f;
+    f.path = fs::relative(img.path, options.outDir).string();
+    f.content = content;
+    f.unit = unit;
+    f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
+    f.day = day;
+    f.minValue = img.minValue;
+    f.maxValue = img.maxValue;
+    manifest.files.push_back(f);
+    result.files.push_back(img.path);
+  };
   auto writeLayers = [&](const SnowState& s, double day) {
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
@@ -347,17 +360,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       } else {
         grid = layerGrid(s, layer);
       }
-      const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer);
-      ManifestFile f;
-      f.path = fs::relative(img.path, options.outDir).string();
-      f.content = layerContent(layer);
-      f.unit = layerUnit(layer);
-      f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
-      f.day = day;
-      f.minValue = img.minValue;
-      f.maxValue = img.maxValue;
-      manifest.files.push_back(f);
-      result.files.push_back(img.path);
+      listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer), layerContent(layer),
+                layerUnit(layer), day);
     }
   };
 
@@ -436,17 +440,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       for (int y = 0; y < c.grid.height(); ++y)
         for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
       fs::create_directories((fs::path(options.outDir) / rel).parent_path());
-      const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, full, "value");
-      ManifestFile f;
-      f.path = fs::relative(img.path, options.outDir).string();
-      f.content = content;
-      f.unit = unit;
-      f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
-      f.day = day;
-      f.minValue = img.minValue;
-      f.maxValue = img.maxValue;
-      manifest.files.push_back(f);
-      result.files.push_back(img.path);
+      listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, full, "value"), content, unit, day);
     };
     const Grid<float> zero(state.spec.width, state.spec.height, 0.f);
     const std::string which = "avalanche " + std::to_string(avalancheNumber) + " (day " + fixed(a.day, 2) + ")";

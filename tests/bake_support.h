@@ -1,0 +1,38 @@
+// Bakes a scene written from text into a fresh temporary folder, on the CPU without cache:
+// what the physics tests on real DEMs need. (Not in test_support.h: the GPU test binary
+// includes that one and links no pipeline.)
+#pragma once
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tools/pipeline.h"
+
+namespace snow::test {
+
+struct Bake {
+  std::filesystem::path dir;  // holds scene.toml and out/
+  BakeResult result;
+  std::filesystem::path out() const { return dir / "out"; }
+};
+
+inline Bake bakeSceneText(const std::string& name, const std::string& sceneText) {
+  Bake b;
+  b.dir = std::filesystem::temp_directory_path() / ("snowbake_" + name);
+  std::filesystem::remove_all(b.dir);
+  std::filesystem::create_directories(b.dir);
+  const std::string scene = (b.dir / "scene.toml").string();
+  std::ofstream(scene) << sceneText;
+  BakeOptions o;
+  o.scene = scene;
+  o.outDir = b.out().string();
+  o.backend = "cpu";
+  o.useCache = false;
+  o.progress = false;
+  std::ostringstream log;
+  b.result = runBake(o, log);
+  return b;
+}
+
+}  // namespace snow::test
