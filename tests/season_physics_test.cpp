@@ -194,7 +194,7 @@ TEST(SeasonPhysics, FrontRangeDepthFollowsAltitudeAndAspect) {
 // slopes at or below s_d0. The slope is the snow surface's (powder fills gullies on steep rock
 // until its own surface is at rest, as it should), measured with the kernel's steepest-descent
 // components. Powder creeps at a speed proportional to its excess slope, so just above s_d0 it is
-// still on its way: measured 0.004 m above 2 s_d0, 0.015 m at 1.5-2 s_d0, 0.063 m at rest.
+// still on its way: measured 0.005 m above 2 s_d0, 0.022 m at 1.5-2 s_d0, 0.054 m at rest.
 TEST(SeasonPhysics, FrontRangePowderLeavesSteepSlopes) {
   const FrontRange r = frontRangeWinter();
   if (!r.available) GTEST_SKIP() << "shared data not found: ../shared/data/dem/front_range_srtm3.asc";
