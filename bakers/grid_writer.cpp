@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <stdexcept>
 
 #include "core/atomic_file.h"
@@ -34,6 +35,82 @@ WrittenImage writeFloatImage(const std::string& base, const std::string& format,
       throw std::runtime_error("cannot write " + result.path + ": " + out->geterror());
   });
   return result;
+}
+
+WrittenImage writeNormalised(const std::string& base, const std::string& encoding, const Grid<float>& grid) {
+  if (encoding != "png16" && encoding != "png8" && encoding != "r16") throw std::invalid_argument("unknown encoding '" + encoding + "'");
+  WrittenImage result;
+  result.path = base + (encoding == "png16" ? ".16.png" : encoding == "png8" ? ".8.png" : ".r16");
+  if (!grid.empty()) {
+    const auto [lo, hi] = std::minmax_element(grid.values().begin(), grid.values().end());
+    result.minValue = *lo;
+    result.maxValue = *hi;
+  }
+  const double levels = encoding == "png8" ? 255.0 : 65535.0;
+  const double span = static_cast<double>(result.maxValue) - result.minValue;
+  auto quantise = [&](float v) {
+    return span > 0.0 ? std::lround((static_cast<double>(v) - result.minValue) / span * levels) : 0L;
+  };
+  writeAtomically(result.path, [&](const std::string& temp) {
+    if (encoding == "r16") {
+      std::string bytes(grid.size() * 2, '\0');
+      for (size_t i = 0; i < grid.size(); ++i) {
+        const auto q = static_cast<uint16_t>(quantise(grid.values()[i]));
+        bytes[2 * i] = static_cast<char>(q & 0xff);
+        bytes[2 * i + 1] = static_cast<char>(q >> 8);
+      }
+      std::ofstream out(temp, std::ios::binary);
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      if (!out) throw std::runtime_error("cannot write " + result.path);
+      return;
+    }
+    auto out = OIIO::ImageOutput::create("png");
+    if (!out) throw std::runtime_error("cannot create a PNG writer for " + result.path + ": " + OIIO::geterror());
+    const bool eight = encoding == "png8";
+    OIIO::ImageSpec spec(grid.width(), grid.height(), 1, eight ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+    spec.attribute("oiio:ColorSpace", "Linear");
+    spec.attribute("Software", "snowbake");
+    spec.attribute("DateTime", "");
+    std::vector<uint16_t> wide(eight ? 0 : grid.size());
+    std::vector<uint8_t> narrow(eight ? grid.size() : 0);
+    for (size_t i = 0; i < grid.size(); ++i) {
+      if (eight) narrow[i] = static_cast<uint8_t>(quantise(grid.values()[i]));
+      else wide[i] = static_cast<uint16_t>(quantise(grid.values()[i]));
+    }
+    const bool ok = out->open(temp, spec) &&
+                    (eight ? out->write_image(OIIO::TypeDesc::UINT8, narrow.data()) : out->write_image(OIIO::TypeDesc::UINT16, wide.data())) &&
+                    out->close();
+    if (!ok) throw std::runtime_error("cannot write " + result.path + ": " + out->geterror());
+  });
+  return result;
+}
+
+std::string normalisedFormat(const std::string& encoding, int width, int height) {
+  if (encoding == "png16") return "PNG, 1 channel uint16, linear: value = min + (max - min) * p / 65535";
+  if (encoding == "png8") return "PNG, 1 channel uint8, linear: value = min + (max - min) * p / 255";
+  return "raw uint16 little-endian, " + std::to_string(width) + " x " + std::to_string(height) +
+         ", row 0 north, no header: value = min + (max - min) * p / 65535";
+}
+
+void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids) {
+  if (grids.empty()) return;
+  const int w = grids[0]->width(), h = grids[0]->height(), n = static_cast<int>(grids.size());
+  std::vector<float> interleaved(static_cast<size_t>(w) * h * n);
+  for (int c = 0; c < n; ++c)
+    for (size_t i = 0; i < grids[c]->size(); ++i) interleaved[i * n + c] = grids[c]->values()[i];
+  writeAtomically(path, [&](const std::string& temp) {
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) throw std::runtime_error("cannot create an EXR writer for " + path + ": " + OIIO::geterror());
+    OIIO::ImageSpec spec(w, h, n, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.alpha_channel = -1;
+    spec.attribute("oiio:ColorSpace", "Linear");
+    spec.attribute("compression", "zip");
+    spec.attribute("Software", "snowbake");
+    spec.attribute("DateTime", "");
+    if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) || !out->close())
+      throw std::runtime_error("cannot write " + path + ": " + out->geterror());
+  });
 }
 
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb) {

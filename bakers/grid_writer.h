@@ -18,6 +18,18 @@ struct WrittenImage {
 WrittenImage writeFloatImage(const std::string& pathWithoutExtension, const std::string& format, const Grid<float>& grid,
                              const std::string& channelName);
 
+// A grid normalised to its own range [min, max] and quantised: "png16" (1-channel 16-bit PNG,
+// `<base>.16.png`), "png8" (8-bit PNG mask for engines' weight layers, `<base>.8.png`) or "r16"
+// (raw little-endian uint16, row 0 north, `<base>.r16`: Unity and Unreal heightmap import).
+// value = min + (max - min) * p / (2^bits - 1); min and max are returned for the manifest. Linear
+// data, never sRGB. Written atomically.
+WrittenImage writeNormalised(const std::string& pathWithoutExtension, const std::string& encoding, const Grid<float>& grid);
+// How writeNormalised encodes, for the manifest.
+std::string normalisedFormat(const std::string& encoding, int width, int height);
+
+// Several grids of one size as the named channels of one 32-bit float EXR (zip). Written atomically.
+void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids);
+
 // An 8-bit sRGB PNG preview, three bytes per pixel, row 0 at the north edge. Written atomically.
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb);
 

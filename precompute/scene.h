@@ -18,6 +18,8 @@ struct OutputRequest {
   std::vector<std::string> layers{"compacted", "stable", "unstable", "powder", "depth"};
   std::string format = "exr";      // "exr" or "tiff": 32-bit float, one channel, metres
   std::vector<double> frameDays;   // also write the layers at these days (0 = season start)
+  std::vector<std::string> encodings;  // also each layer as png16 / png8 / r16, normalised to its range
+  bool multichannelExr = false;        // also all layers as the channels of one EXR (layers.exr)
   bool avalancheMaps = false;      // each avalanche's release zone, scour and deposit
   double avalancheFrameIntervalS = 0.0;  // frames of each avalanche's motion (0: none)
 };

@@ -109,6 +109,8 @@ const std::vector<Rule>& sceneRules() {
       {"outputs", Kind::Table},
       {"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices},
       {"outputs.format", Kind::String, -kInf, kInf, {"exr", "tiff"}},
+      {"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}},
+      {"outputs.multichannel_exr", Kind::Bool},
       {"outputs.avalanche_maps", Kind::Bool},
       {"outputs.avalanche_frame_interval_s", Kind::Number, 0.01, 3600},
       {"outputs.frames_days", Kind::NumberArray, 0, 3650},
@@ -490,6 +492,9 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   }
   if (auto f = root["outputs"]["format"].value<std::string>()) scene.outputs.format = *f;
   if (auto v = root["outputs"]["avalanche_maps"].value<bool>()) scene.outputs.avalancheMaps = *v;
+  if (const toml::node* enc = root["outputs"]["encodings"].node())
+    for (auto&& e : *enc->as_array()) scene.outputs.encodings.push_back(e.as_string()->get());
+  if (auto v = root["outputs"]["multichannel_exr"].value<bool>()) scene.outputs.multichannelExr = *v;
   if (auto v = root["outputs"]["avalanche_frame_interval_s"].value<double>()) scene.outputs.avalancheFrameIntervalS = *v;
   if (const toml::node* frames = root["outputs"]["frames_days"].node()) {
     for (auto&& e : *frames->as_array()) {

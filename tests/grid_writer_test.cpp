@@ -6,6 +6,12 @@
 #include <sstream>
 #include <thread>
 
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "bake_support.h"
 #include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
 
@@ -75,4 +81,59 @@ TEST(AtomicFile, FailedWriteLeavesTheOldFileAndNoTemporary) {
   writeTextAtomically(path, "new");
   EXPECT_EQ(bytesOf(path), "new");
   fs::remove_all(dir);
+}
+
+// The normalised encodings and the multi-channel EXR, read back by OpenImageIO (and the raw file
+// by hand): each decodes, with the manifest's range, to the float layer within half a step of
+// its quantisation; the EXR's channels are the layers, named, bit for bit.
+TEST(GridWriter, EncodingsAndMultiChannelExrReadBackToTheLayers) {
+  const test::Bake bake = test::bakeSceneText("encodings_test",
+                                              "[terrain]\nbuiltin = \"ridged\"\nsize = 96\n[season]\ndays = 20\n"
+                                              "[[weather.snowfall]]\nstart_day = 1\nend_day = 15\n[parameters]\nrain_snow_limit_m = 900\n"
+                                              "[outputs]\nlayers = [\"depth\", \"powder\", \"surface\"]\n"
+                                              "encodings = [\"png16\", \"png8\", \"r16\"]\nmultichannel_exr = true\n");
+  const auto manifest = nlohmann::json::parse(std::ifstream(bake.out() / "manifest.json"));
+  auto range = [&](const std::string& file) {
+    for (const auto& f : manifest["files"])
+      if (f["path"] == file) return std::pair<double, double>{f["min"].get<double>(), f["max"].get<double>()};
+    ADD_FAILURE() << file << " not in the manifest";
+    return std::pair<double, double>{0, 0};
+  };
+  auto oiioRead = [](const std::string& path, int& w, int& h) {
+    auto in = OIIO::ImageInput::open(path);
+    EXPECT_TRUE(in) << path;
+    w = in->spec().width, h = in->spec().height;
+    std::vector<float> v(static_cast<size_t>(w) * h * in->spec().nchannels);
+    EXPECT_TRUE(in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::FLOAT, v.data()));
+    return std::make_pair(v, in->spec().channelnames);
+  };
+  int w = 0, h = 0;
+  const auto [all, names] = oiioRead((bake.out() / "layers.exr").string(), w, h);
+  ASSERT_EQ(names, (std::vector<std::string>{"depth", "powder", "surface"}));
+  for (int c = 0; c < 3; ++c) {
+    const std::string layer = names[c];
+    const Grid<float> ref = readFloatImage((bake.out() / (layer + ".exr")).string());
+    for (size_t i = 0; i < ref.size(); ++i) ASSERT_EQ(all[i * 3 + c], ref.values()[i]) << layer;
+    const auto [lo, hi] = range(layer + ".16.png");
+    ASSERT_GT(hi, lo) << layer;
+    for (const auto& [suffix, levels] : {std::pair<std::string, double>{".16.png", 65535.0}, {".8.png", 255.0}}) {
+      int pw = 0, ph = 0;
+      const auto [pixels, _] = oiioRead((bake.out() / (layer + suffix)).string(), pw, ph);
+      ASSERT_EQ(pw, ref.width());
+      double worst = 0;
+      for (size_t i = 0; i < ref.size(); ++i)
+        worst = std::max(worst, std::abs(lo + (hi - lo) * std::round(pixels[i] * levels) / levels - ref.values()[i]));
+      EXPECT_LE(worst, 0.5 * (hi - lo) / levels * 1.001 + 1e-6 * std::abs(hi)) << layer << suffix;
+    }
+    std::ifstream raw(bake.out() / (layer + ".r16"), std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(raw)), std::istreambuf_iterator<char>());
+    ASSERT_EQ(bytes.size(), ref.size() * 2);
+    double worst = 0;
+    for (size_t i = 0; i < ref.size(); ++i) {
+      const unsigned p = static_cast<unsigned char>(bytes[2 * i]) | (static_cast<unsigned char>(bytes[2 * i + 1]) << 8);
+      worst = std::max(worst, std::abs(lo + (hi - lo) * p / 65535.0 - ref.values()[i]));
+    }
+    EXPECT_LE(worst, 0.5 * (hi - lo) / 65535.0 * 1.001 + 1e-6 * std::abs(hi)) << layer << ".r16";
+  }
+  std::filesystem::remove_all(bake.dir);
 }

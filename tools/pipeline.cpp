@@ -319,6 +319,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   auto writeLayers = [&](const SnowState& s, double day) {
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
+    std::vector<std::string> channelNames;
+    std::vector<Grid<float>> channels;
     for (const auto& layer : layers) {
       if (frame && layer == "valid_mask") continue;
       std::string rel = layer;
@@ -362,6 +364,42 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       }
       listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer), layerContent(layer),
                 layerUnit(layer), day);
+      for (const std::string& encoding : scene.outputs.encodings) {
+        const WrittenImage img = writeNormalised((fs::path(options.outDir) / rel).string(), encoding, grid);
+        ManifestFile f;
+        f.path = fs::relative(img.path, options.outDir).string();
+        f.content = layerContent(layer);
+        f.unit = layerUnit(layer);
+        f.format = normalisedFormat(encoding, grid.width(), grid.height());
+        f.day = day;
+        f.minValue = img.minValue;
+        f.maxValue = img.maxValue;
+        manifest.files.push_back(f);
+        result.files.push_back(img.path);
+      }
+      if (scene.outputs.multichannelExr) {
+        channelNames.push_back(layer);
+        channels.push_back(std::move(grid));
+      }
+    }
+    if (!channels.empty()) {
+      std::ostringstream rel;
+      rel << "layers";
+      if (frame) rel.str(""), rel << "frames/layers." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+      const std::string path = (fs::path(options.outDir) / (rel.str() + ".exr")).string();
+      std::vector<const Grid<float>*> grids;
+      for (const auto& g : channels) grids.push_back(&g);
+      writeMultiChannelExr(path, channelNames, grids);
+      ManifestFile f;
+      f.path = fs::relative(path, options.outDir).string();
+      std::string names;
+      for (const auto& n : channelNames) names += (names.empty() ? "" : ", ") + n;
+      f.content = "all layers as named channels: " + names;
+      f.unit = "per channel, as the single-layer files";
+      f.format = "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (zip), linear";
+      f.day = day;
+      manifest.files.push_back(f);
+      result.files.push_back(path);
     }
   };
 
