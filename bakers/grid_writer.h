@@ -27,6 +27,10 @@ WrittenImage writeNormalised(const std::string& pathWithoutExtension, const std:
 // How writeNormalised encodes, for the manifest.
 std::string normalisedFormat(const std::string& encoding, int width, int height);
 
+// Bilinear resampling of a cell-centred grid to width x height cells over the same extent (the
+// displacement maps at a requested resolution). Edge cells clamp. Exact for linear fields.
+Grid<float> resampleBilinear(const Grid<float>& grid, int width, int height);
+
 // Several grids of one size as the named channels of one 32-bit float EXR (zip). Written atomically.
 void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids);
 

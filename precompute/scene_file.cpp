@@ -111,6 +111,7 @@ const std::vector<Rule>& sceneRules() {
       {"outputs.format", Kind::String, -kInf, kInf, {"exr", "tiff"}},
       {"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}},
       {"outputs.multichannel_exr", Kind::Bool},
+      {"outputs.displacement_size", Kind::NumberArray, 1, 65536},
       {"outputs.avalanche_maps", Kind::Bool},
       {"outputs.avalanche_frame_interval_s", Kind::Number, 0.01, 3600},
       {"outputs.frames_days", Kind::NumberArray, 0, 3650},
@@ -495,6 +496,14 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   if (const toml::node* enc = root["outputs"]["encodings"].node())
     for (auto&& e : *enc->as_array()) scene.outputs.encodings.push_back(e.as_string()->get());
   if (auto v = root["outputs"]["multichannel_exr"].value<bool>()) scene.outputs.multichannelExr = *v;
+  if (const toml::node* size = root["outputs"]["displacement_size"].node()) {
+    const toml::array& a = *size->as_array();
+    if (a.size() != 2 || a[0].value<double>().value() != std::floor(a[0].value<double>().value()) ||
+        a[1].value<double>().value() != std::floor(a[1].value<double>().value()))
+      fail(source, *size, "outputs.displacement_size", "needs whole numbers [width, height]");
+    scene.outputs.displacementWidth = static_cast<int>(a[0].value<double>().value());
+    scene.outputs.displacementHeight = static_cast<int>(a[1].value<double>().value());
+  }
   if (auto v = root["outputs"]["avalanche_frame_interval_s"].value<double>()) scene.outputs.avalancheFrameIntervalS = *v;
   if (const toml::node* frames = root["outputs"]["frames_days"].node()) {
     for (auto&& e : *frames->as_array()) {

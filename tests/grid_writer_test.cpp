@@ -137,3 +137,33 @@ TEST(GridWriter, EncodingsAndMultiChannelExrReadBackToTheLayers) {
   }
   std::filesystem::remove_all(bake.dir);
 }
+
+// Bilinear resampling reproduces a linear field exactly away from the clamped edge, keeps the
+// extent, and the bake writes the displacement maps at the requested size.
+TEST(GridWriter, DisplacementMapsAtTheRequestedResolution) {
+  Grid<float> ramp(40, 30, 0.f);
+  for (int y = 0; y < 30; ++y)
+    for (int x = 0; x < 40; ++x) ramp(x, y) = 2.f * x + 3.f * y + 100.f;
+  const Grid<float> up = resampleBilinear(ramp, 160, 90);
+  ASSERT_EQ(up.width(), 160);
+  ASSERT_EQ(up.height(), 90);
+  for (int y = 3; y < 87; ++y)
+    for (int x = 4; x < 156; ++x) {
+      const double sx = (x + 0.5) * 40 / 160 - 0.5, sy = (y + 0.5) * 30 / 90 - 0.5;
+      ASSERT_NEAR(up(x, y), 2 * sx + 3 * sy + 100, 1e-4) << x << "," << y;
+    }
+  const test::Bake bake = test::bakeSceneText("displacement_test",
+                                              "[terrain]\nbuiltin = \"ridged\"\nsize = 64\n[season]\ndays = 10\n"
+                                              "[[weather.snowfall]]\nstart_day = 1\nend_day = 8\n[parameters]\nrain_snow_limit_m = 900\n"
+                                              "[outputs]\nlayers = [\"depth\"]\ndisplacement_size = [256, 200]\n");
+  const Grid<float> depth = readFloatImage((bake.out() / "depth.exr").string());
+  const Grid<float> disp = readFloatImage((bake.out() / "displacement_depth.exr").string());
+  ASSERT_EQ(disp.width(), 256);
+  ASSERT_EQ(disp.height(), 200);
+  double a = 0, b = 0;
+  for (float v : depth.values()) a += v;
+  for (float v : disp.values()) b += v;
+  EXPECT_NEAR(b / disp.size(), a / depth.size(), 0.02 * a / depth.size() + 1e-6);  // same mean depth
+  EXPECT_TRUE(fs::exists(bake.out() / "displacement_surface.exr"));
+  fs::remove_all(bake.dir);
+}

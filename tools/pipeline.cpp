@@ -382,6 +382,21 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         channels.push_back(std::move(grid));
       }
     }
+    if (scene.outputs.displacementWidth > 0) {
+      // Displacement maps at the requested resolution: snow depth (for a displacement modifier on
+      // the terrain) and the snow surface's height, bilinear from the grid.
+      for (const std::string what : {"depth", "surface"}) {
+        std::ostringstream rel;
+        rel << "displacement_" << what;
+        if (frame) rel << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+        const Grid<float> g = resampleBilinear(layerGrid(s, what), scene.outputs.displacementWidth, scene.outputs.displacementHeight);
+        const fs::path base = fs::path(options.outDir) / (frame ? "frames" : "") / rel.str();
+        listImage(writeFloatImage(base.string(), scene.outputs.format, g, what),
+                  layerContent(what) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                      " over the same extent",
+                  "m", day);
+      }
+    }
     if (!channels.empty()) {
       std::ostringstream rel;
       rel << "layers";
