@@ -21,6 +21,8 @@ struct OutputRequest {
   std::vector<std::string> encodings;  // also each layer as png16 / png8 / r16, normalised to its range
   bool multichannelExr = false;        // also all layers as the channels of one EXR (layers.exr)
   int displacementWidth = 0, displacementHeight = 0;  // displacement maps at this size (0: none)
+  bool vdb = false;                    // the snow body as an OpenVDB file (snow.vdb)
+  double vdbVoxelSizeM = 0.0;          // 0: the grid's smaller cell size
   bool avalancheMaps = false;      // each avalanche's release zone, scour and deposit
   double avalancheFrameIntervalS = 0.0;  // frames of each avalanche's motion (0: none)
 };

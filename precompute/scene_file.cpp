@@ -111,6 +111,8 @@ const std::vector<Rule>& sceneRules() {
       {"outputs.format", Kind::String, -kInf, kInf, {"exr", "tiff"}},
       {"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}},
       {"outputs.multichannel_exr", Kind::Bool},
+      {"outputs.vdb", Kind::Bool},
+      {"outputs.vdb_voxel_size_m", Kind::Number, 0.01, 1000},
       {"outputs.displacement_size", Kind::NumberArray, 1, 65536},
       {"outputs.avalanche_maps", Kind::Bool},
       {"outputs.avalanche_frame_interval_s", Kind::Number, 0.01, 3600},
@@ -496,6 +498,8 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   if (const toml::node* enc = root["outputs"]["encodings"].node())
     for (auto&& e : *enc->as_array()) scene.outputs.encodings.push_back(e.as_string()->get());
   if (auto v = root["outputs"]["multichannel_exr"].value<bool>()) scene.outputs.multichannelExr = *v;
+  if (auto v = root["outputs"]["vdb"].value<bool>()) scene.outputs.vdb = *v;
+  if (auto v = root["outputs"]["vdb_voxel_size_m"].value<double>()) scene.outputs.vdbVoxelSizeM = *v;
   if (const toml::node* size = root["outputs"]["displacement_size"].node()) {
     const toml::array& a = *size->as_array();
     if (a.size() != 2 || a[0].value<double>().value() != std::floor(a[0].value<double>().value()) ||

@@ -18,6 +18,7 @@
 #include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
 #include "bakers/manifest.h"
+#include "bakers/vdb_writer.h"
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/hash.h"
@@ -396,6 +397,25 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                       " over the same extent",
                   "m", day);
       }
+    }
+    if (scene.outputs.vdb) {
+      std::ostringstream rel;
+      rel << (frame ? "frames/snow." : "snow");
+      if (frame) rel << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+      VdbOptions vo;
+      vo.voxelSizeM = scene.outputs.vdbVoxelSizeM > 0.0 ? scene.outputs.vdbVoxelSizeM : std::min(s.spec.cellSizeXM, s.spec.cellSizeYM);
+      const std::string path = (fs::path(options.outDir) / (rel.str() + ".vdb")).string();
+      const VdbSummary v = writeSnowVdb(path, s, vo);
+      ManifestFile f;
+      f.path = fs::relative(path, options.outDir).string();
+      f.content = "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
+                  fixed(vo.compactedKgPerM3, 0) + "/" + fixed(vo.stableKgPerM3, 0) + "/" + fixed(vo.unstableKgPerM3, 0) + "/" +
+                  fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude";
+      f.unit = "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")";
+      f.format = "OpenVDB";
+      f.day = day;
+      manifest.files.push_back(f);
+      result.files.push_back(path);
     }
     if (!channels.empty()) {
       std::ostringstream rel;

@@ -1,0 +1,106 @@
+#include "vdb_writer.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/TopologyToLevelSet.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/atomic_file.h"
+#include "core/hash.h"
+
+namespace snow {
+
+VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOptions& o) {
+  openvdb::initialize();
+  if (!(o.voxelSizeM > 0.0)) throw std::runtime_error("VDB voxel size must be positive");
+  const double vs = o.voxelSizeM;
+  const int w = s.spec.width, h = s.spec.height;
+  const double dx = s.spec.cellSizeXM, dy = s.spec.cellSizeYM;
+  const auto transform = openvdb::math::Transform::createLinearTransform(vs);
+  auto fog = openvdb::FloatGrid::create(0.f);
+  auto topology = openvdb::BoolGrid::create(false);
+  const char* layerNames[4] = {"compacted", "stable", "unstable", "powder"};
+  const double layerDensity[4] = {o.compactedKgPerM3, o.stableKgPerM3, o.unstableKgPerM3, o.powderKgPerM3};
+  openvdb::FloatGrid::Ptr layers[4];
+  for (int l = 0; l < 4; ++l) layers[l] = openvdb::FloatGrid::create(0.f);
+  auto fogAcc = fog->getAccessor();
+  auto topoAcc = topology->getAccessor();
+  VdbSummary summary;
+  summary.path = path;
+  const int ni = static_cast<int>(std::ceil(w * dx / vs)), nj = static_cast<int>(std::ceil(h * dy / vs));
+  for (int j = 0; j < nj; ++j) {
+    const double yNorth = (j + 0.5) * vs;  // metres north of the south edge
+    const int row = h - 1 - std::min(h - 1, static_cast<int>(yNorth / dy));
+    for (int i = 0; i < ni; ++i) {
+      const int col = std::min(w - 1, static_cast<int>((i + 0.5) * vs / dx));
+      if (!s.validCell(col, row)) continue;
+      const double bed = s.bedrockM(col, row);
+      const double top[4] = {bed + s.compactedM(col, row), bed + s.compactedM(col, row) + s.stableM(col, row),
+                             bed + s.compactedM(col, row) + s.stableM(col, row) + s.unstableM(col, row),
+                             bed + s.depthM(col, row)};
+      if (!(top[3] > bed)) continue;
+      const int k0 = static_cast<int>(std::ceil(bed / vs - 0.5)), k1 = static_cast<int>(std::floor(top[3] / vs - 0.5));
+      for (int k = k0; k <= k1; ++k) {
+        const double z = (k + 0.5) * vs;
+        if (!(z > bed && z < top[3])) continue;
+        const openvdb::Coord c(i, j, k);
+        fogAcc.setValue(c, 1.f);
+        topoAcc.setValue(c, true);
+        int l = 0;
+        while (l < 3 && z >= top[l]) ++l;
+        layers[l]->getAccessor().setValue(c, static_cast<float>(layerDensity[l]));
+        ++summary.snowVoxels;
+      }
+    }
+  }
+  openvdb::GridPtrVec grids;
+  auto sdf = summary.snowVoxels > 0 ? openvdb::tools::topologyToLevelSet(*topology, 3, 0)
+                                    : openvdb::createLevelSet<openvdb::FloatGrid>(vs, 3.0);
+  sdf->setTransform(transform);
+  sdf->setName("snow_sdf");
+  sdf->setGridClass(openvdb::GRID_LEVEL_SET);
+  grids.push_back(sdf);
+  fog->setTransform(transform);
+  fog->setName("density");
+  fog->setGridClass(openvdb::GRID_FOG_VOLUME);
+  grids.push_back(fog);
+  for (int l = 0; l < 4; ++l) {
+    layers[l]->setTransform(transform);
+    layers[l]->setName(layerNames[l]);
+    layers[l]->setGridClass(openvdb::GRID_FOG_VOLUME);
+    layers[l]->insertMeta("density_kg_per_m3", openvdb::FloatMetadata(static_cast<float>(layerDensity[l])));
+    grids.push_back(layers[l]);
+  }
+  writeAtomically(path, [&](const std::string& temp) {
+    openvdb::io::File file(temp);
+    file.write(grids);
+    const std::string tag = file.getUniqueTag();
+    file.close();
+    // OpenVDB stamps each file with a random UUID; replace it with one derived from the content
+    // so the same bake gives the same bytes.
+    std::ifstream in(temp, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    const size_t at = bytes.find(tag);
+    if (tag.size() == 36 && at != std::string::npos && at < 256) {
+      std::string rest = bytes;
+      rest.replace(at, tag.size(), std::string(tag.size(), '0'));
+      const uint64_t a = Fnv1a64().add(rest).value(), b = Fnv1a64().add("snowbake").add(rest).value();
+      char uuid[40];
+      std::snprintf(uuid, sizeof uuid, "%08x-%04x-%04x-%04x-%012llx", static_cast<unsigned>(a >> 32), static_cast<unsigned>((a >> 16) & 0xffff),
+                    static_cast<unsigned>(a & 0xffff), static_cast<unsigned>(b >> 48), static_cast<unsigned long long>(b & 0xffffffffffffull));
+      bytes.replace(at, tag.size(), std::string(uuid, 36));
+      std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      if (!out) throw std::runtime_error("cannot write " + path);
+    }
+  });
+  return summary;
+}
+
+}  // namespace snow

@@ -1,0 +1,85 @@
+// The OpenVDB baker, read back by OpenVDB: grid names, classes and voxel size, the level set's
+// zero crossing within one voxel of the snow surface, layer densities, same bytes twice.
+#include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+
+#include "bakers/vdb_writer.h"
+
+using namespace snow;
+namespace fs = std::filesystem;
+
+TEST(Vdb, SnowBodyReadsBackWithItsSurfaceWithinAVoxel) {
+  SnowState s;
+  GridSpec spec;
+  spec.width = 24;
+  spec.height = 16;
+  spec.cellSizeXM = spec.cellSizeYM = 2.0;
+  s.allocate(spec);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 24; ++x) {
+      s.bedrockM(x, y) = 1000.f + 0.5f * x + 0.25f * y;
+      s.compactedM(x, y) = 0.2f;
+      s.stableM(x, y) = 0.6f + 0.05f * x;
+      s.unstableM(x, y) = 0.3f;
+      s.powderM(x, y) = 0.4f;
+    }
+  const fs::path dir = fs::temp_directory_path() / "snowbake_vdb_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  VdbOptions o;
+  o.voxelSizeM = 0.25;
+  const std::string path = (dir / "snow.vdb").string();
+  const VdbSummary summary = writeSnowVdb(path, s, o);
+  EXPECT_GT(summary.snowVoxels, 0u);
+
+  openvdb::initialize();
+  openvdb::io::File file(path);
+  file.open();
+  auto sdf = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("snow_sdf"));
+  auto density = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("density"));
+  auto powder = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("powder"));
+  auto stable = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("stable"));
+  ASSERT_TRUE(sdf && density && powder && stable);
+  for (const char* name : {"compacted", "unstable"}) EXPECT_TRUE(file.readGrid(name)) << name;
+  file.close();
+  EXPECT_EQ(sdf->getGridClass(), openvdb::GRID_LEVEL_SET);
+  EXPECT_EQ(density->getGridClass(), openvdb::GRID_FOG_VOLUME);
+  EXPECT_NEAR(sdf->voxelSize()[0], 0.25, 1e-12);
+  EXPECT_NEAR(density->voxelSize()[2], 0.25, 1e-12);
+
+  // Along the vertical through the centre of each cell, the level set changes sign within one
+  // voxel of the snow surface (and of the bedrock below).
+  auto acc = sdf->getConstAccessor();
+  double worst = 0;
+  for (int row = 2; row < 14; row += 3)
+    for (int col = 2; col < 22; col += 3) {
+      const double xm = (col + 0.5) * 2.0, yNorth = (16 - row - 0.5) * 2.0;
+      const int i = static_cast<int>(xm / 0.25), j = static_cast<int>(yNorth / 0.25);
+      const double surface = s.bedrockM(col, row) + s.depthM(col, row);
+      double crossing = -1;
+      for (int k = static_cast<int>((surface - 3) / 0.25); k < static_cast<int>((surface + 3) / 0.25); ++k)
+        if (acc.getValue(openvdb::Coord(i, j, k)) < 0.f && acc.getValue(openvdb::Coord(i, j, k + 1)) >= 0.f) crossing = (k + 1) * 0.25;
+      ASSERT_GT(crossing, 0) << col << "," << row;
+      worst = std::max(worst, std::abs(crossing - surface));
+      // The top voxel inside is powder (100 kg/m^3), one at mid-depth of the stable layer is stable.
+      const int kTop = static_cast<int>(std::floor(surface / 0.25 - 0.5));
+      EXPECT_FLOAT_EQ(powder->getConstAccessor().getValue(openvdb::Coord(i, j, kTop)), 100.f);
+      const double midStable = s.bedrockM(col, row) + s.compactedM(col, row) + 0.5 * s.stableM(col, row);
+      EXPECT_FLOAT_EQ(stable->getConstAccessor().getValue(openvdb::Coord(i, j, static_cast<int>(midStable / 0.25))), 350.f);
+      EXPECT_EQ(density->getConstAccessor().getValue(openvdb::Coord(i, j, kTop)), 1.f);
+    }
+  EXPECT_LE(worst, 0.25);
+  std::printf("[ measure ] level set zero crossing vs snow surface: worst %.3f m (voxel 0.25 m)\n", worst);
+
+  // Same bytes when written again (the random file UUID is replaced by one from the content).
+  const std::string again = (dir / "again.vdb").string();
+  writeSnowVdb(again, s, o);
+  std::ifstream a(path, std::ios::binary), b(again, std::ios::binary);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(a), {}), std::string(std::istreambuf_iterator<char>(b), {}));
+  fs::remove_all(dir);
+}
