@@ -2,6 +2,8 @@
 // what the physics tests on real DEMs need. (Not in test_support.h: the GPU test binary
 // includes that one and links no pipeline.)
 #pragma once
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -19,7 +21,10 @@ struct Bake {
 
 inline Bake bakeSceneText(const std::string& name, const std::string& sceneText) {
   Bake b;
-  b.dir = std::filesystem::temp_directory_path() / ("snowbake_" + name);
+  // One folder per test and name: ctest runs tests in parallel processes.
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  b.dir = std::filesystem::temp_directory_path() /
+          ("snowbake_" + name + "_" + (info ? std::string(info->test_suite_name()) + "." + info->name() : std::string("main")));
   std::filesystem::remove_all(b.dir);
   std::filesystem::create_directories(b.dir);
   const std::string scene = (b.dir / "scene.toml").string();
