@@ -167,6 +167,63 @@ std::vector<uint8_t> avalanchePreviewRgb(const Grid<float>& a, const Grid<uint8_
   return rgb;
 }
 
+std::vector<uint8_t> snowPreviewRgb(const SnowState& s, const double sun[3]) {
+  const int w = s.spec.width, h = s.spec.height;
+  std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3, 0);
+  float lo = 1e30f, hi = -1e30f;
+  for (size_t i = 0; i < s.bedrockM.size(); ++i)
+    if (s.validCell.values()[i]) lo = std::min(lo, s.bedrockM.values()[i]), hi = std::max(hi, s.bedrockM.values()[i]);
+  auto surface = [&](int x, int y) {
+    x = std::clamp(x, 0, w - 1), y = std::clamp(y, 0, h - 1);
+    return static_cast<double>(s.bedrockM(x, y)) + s.depthM(x, y);
+  };
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      if (!s.validCell(x, y)) continue;
+      // Normal of the snow surface; +y of the grid is south, the sun's y is north.
+      const double gx = (surface(x + 1, y) - surface(x - 1, y)) / (2 * s.spec.cellSizeXM);
+      const double gNorth = (surface(x, y - 1) - surface(x, y + 1)) / (2 * s.spec.cellSizeYM);
+      const double n = std::sqrt(gx * gx + gNorth * gNorth + 1.0);
+      const double lit = std::max(0.0, (-gx * sun[0] - gNorth * sun[1] + sun[2]) / n);
+      const double light = 0.35 + 0.75 * lit;
+      double c[3];
+      const double depth = s.depthM(x, y);
+      if (depth > 0.01) {
+        const double* tint;
+        static const double powder[3] = {1.0, 1.0, 1.0}, unstable[3] = {0.85, 0.92, 1.0}, stable[3] = {0.97, 0.95, 0.88},
+                            compacted[3] = {0.78, 0.78, 0.80};
+        tint = s.powderM(x, y) > 0.005f ? powder : s.unstableM(x, y) > 0.005f ? unstable : s.stableM(x, y) > 0.005f ? stable : compacted;
+        for (int k = 0; k < 3; ++k) c[k] = tint[k] * 0.92;
+      } else {
+        const double t = hi > lo ? (s.bedrockM(x, y) - lo) / (hi - lo) : 0.0;
+        static const double low[3] = {0.30, 0.45, 0.22}, mid[3] = {0.45, 0.36, 0.25}, top[3] = {0.55, 0.53, 0.50};
+        for (int k = 0; k < 3; ++k) c[k] = t < 0.5 ? low[k] + (mid[k] - low[k]) * t * 2 : mid[k] + (top[k] - mid[k]) * (t - 0.5) * 2;
+      }
+      uint8_t* p = &rgb[(static_cast<size_t>(y) * w + x) * 3];
+      for (int k = 0; k < 3; ++k) {
+        const double linear = std::clamp(c[k] * light, 0.0, 1.0);
+        const double srgb = linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1 / 2.4) - 0.055;
+        p[k] = static_cast<uint8_t>(std::lround(255 * srgb));
+      }
+    }
+  return rgb;
+}
+
+std::vector<uint8_t> contactSheetRgb(const std::vector<std::vector<uint8_t>>& images, int w, int h, int columns, int& sw, int& sh) {
+  const int gap = 4, n = static_cast<int>(images.size());
+  columns = std::max(1, std::min(columns, n));
+  const int rows = (n + columns - 1) / columns;
+  sw = columns * w + (columns + 1) * gap;
+  sh = rows * h + (rows + 1) * gap;
+  std::vector<uint8_t> sheet(static_cast<size_t>(sw) * sh * 3, 96);
+  for (int k = 0; k < n; ++k) {
+    const int ox = gap + (k % columns) * (w + gap), oy = gap + (k / columns) * (h + gap);
+    for (int y = 0; y < h; ++y)
+      std::copy_n(&images[k][static_cast<size_t>(y) * w * 3], static_cast<size_t>(w) * 3, &sheet[(static_cast<size_t>(oy + y) * sw + ox) * 3]);
+  }
+  return sheet;
+}
+
 Grid<float> readFloatImage(const std::string& path) {
   auto in = OIIO::ImageInput::open(path);
   if (!in) throw std::runtime_error("cannot open " + path + ": " + OIIO::geterror());

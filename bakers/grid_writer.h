@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "core/snow_state.h"
 
 namespace snow {
 
@@ -41,6 +42,16 @@ void writeRgbPng(const std::string& path, int width, int height, const std::vect
 // avalanche scour tinted red (full at 1 m) and deposit tinted blue (full at 2 m); NODATA black.
 std::vector<uint8_t> avalanchePreviewRgb(const Grid<float>& surfaceM, const Grid<uint8_t>& valid, const Grid<float>& scourM,
                                          const Grid<float>& depositM, double cellSizeXM, double cellSizeYM);
+
+// A shaded-relief preview of the snow-covered terrain: bare ground coloured by altitude (green
+// low, brown, grey rock high, over the grid's own range), snow shaded by its top layer (powder
+// white, unstable pale blue, stable cream, compacted grey), both lit by a sun at `sunDirection`
+// (unit vector x east, y north, z up) with some sky light; NODATA black. 8-bit sRGB, 3 channels.
+std::vector<uint8_t> snowPreviewRgb(const SnowState& state, const double sunDirection[3]);
+
+// Tiles RGB images of one size into a contact sheet `columns` wide (a grey gap between them).
+std::vector<uint8_t> contactSheetRgb(const std::vector<std::vector<uint8_t>>& images, int width, int height, int columns,
+                                     int& sheetWidth, int& sheetHeight);
 
 // Reads one channel of a float image back (for tests and `snowbake info`).
 Grid<float> readFloatImage(const std::string& path);

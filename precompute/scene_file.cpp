@@ -49,7 +49,7 @@ const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable
                                                 "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
                                                 "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
                                                 "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit",
-                                                "avalanche_preview"};
+                                                "avalanche_preview", "preview"};
 
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {

@@ -167,3 +167,41 @@ TEST(GridWriter, DisplacementMapsAtTheRequestedResolution) {
   EXPECT_TRUE(fs::exists(bake.out() / "displacement_surface.exr"));
   fs::remove_all(bake.dir);
 }
+
+// Previews per frame day and the season's contact sheet, read back by OpenImageIO: sizes, and
+// snow-covered cells brighter than bare ones (the preview shows the snow).
+TEST(GridWriter, PreviewsAndContactSheet) {
+  const test::Bake bake = test::bakeSceneText("preview_test",
+                                              "[terrain]\nbuiltin = \"ridged\"\nsize = 80\n[season]\ndays = 30\n"
+                                              "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 16\n[[weather.snowfall]]\nstart_day = 1\nend_day = 10\n[parameters]\nrain_snow_limit_m = 1800\n"
+                                              "[outputs]\nlayers = [\"depth\", \"preview\"]\nframes_days = [10, 20]\n");
+  auto read = [](const fs::path& p, int& w, int& h) {
+    auto in = OIIO::ImageInput::open(p.string());
+    EXPECT_TRUE(in) << p;
+    w = in->spec().width, h = in->spec().height;
+    EXPECT_EQ(in->spec().nchannels, 3);
+    std::vector<uint8_t> v(static_cast<size_t>(w) * h * 3);
+    EXPECT_TRUE(in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, v.data()));
+    return v;
+  };
+  int w = 0, h = 0;
+  const std::vector<uint8_t> rgb = read(bake.out() / "preview.png", w, h);
+  ASSERT_EQ(w, 80);
+  ASSERT_EQ(h, 80);
+  const Grid<float> depth = readFloatImage((bake.out() / "depth.exr").string());
+  double snow = 0, snowN = 0, bare = 0, bareN = 0;
+  for (size_t i = 0; i < depth.size(); ++i) {
+    const double luma = rgb[3 * i] + rgb[3 * i + 1] + rgb[3 * i + 2];
+    if (depth.values()[i] > 0.05f) snow += luma, snowN += 1;
+    if (depth.values()[i] <= 0.001f) bare += luma, bareN += 1;
+  }
+  ASSERT_GT(snowN, 50);
+  ASSERT_GT(bareN, 50);
+  EXPECT_GT(snow / snowN, 1.3 * bare / bareN);
+  EXPECT_TRUE(fs::exists(bake.out() / "frames" / "preview.0010.png"));
+  int sw = 0, sh = 0;
+  read(bake.out() / "contact_sheet.png", sw, sh);
+  EXPECT_EQ(sw, 2 * 80 + 3 * 4);  // three previews (two frames and the end): two columns, two rows
+  EXPECT_EQ(sh, 2 * 80 + 3 * 4);
+  fs::remove_all(bake.dir);
+}

@@ -19,6 +19,7 @@
 #include "bakers/grid_writer.h"
 #include "bakers/manifest.h"
 #include "bakers/vdb_writer.h"
+#include "precompute/solar.h"
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/hash.h"
@@ -304,6 +305,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   BakeResult result;
   std::vector<std::string> layers = scene.outputs.layers;
   if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
+  std::vector<std::vector<uint8_t>> previews;  // for the contact sheet, in the order written
+  int previewWidth = 0, previewHeight = 0;
   // Lists a written float image in the manifest and the result.
   auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
     ManifestFile f;
@@ -331,6 +334,34 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         rel = o.str();
       }
       const double outputDay = frame ? day : scene.days;
+      if (layer == "preview") {
+        // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
+        SunPosition sun = sunPosition(latitude, scene.startDayOfYear() + outputDay, 12.0);
+        double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
+        if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
+        const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
+        const std::string path = (fs::path(options.outDir) / (rel + ".png")).string();
+        writeRgbPng(path, s.spec.width, s.spec.height, rgb);
+        ManifestFile f;
+        f.path = fs::relative(path, options.outDir).string();
+        f.content = "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, unstable pale blue, stable cream, compacted grey)";
+        f.unit = "sRGB";
+        f.format = "PNG, 3 channels uint8, sRGB";
+        f.day = day;
+        f.maxValue = 255.f;
+        manifest.files.push_back(f);
+        result.files.push_back(path);
+        // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
+        const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
+        const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
+        std::vector<uint8_t> thumb(static_cast<size_t>(tw) * th * 3);
+        for (int y = 0; y < th; ++y)
+          for (int x = 0; x < tw; ++x)
+            std::copy_n(&rgb[(static_cast<size_t>(y * stride) * s.spec.width + x * stride) * 3], 3, &thumb[(static_cast<size_t>(y) * tw + x) * 3]);
+        previews.push_back(std::move(thumb));
+        previewWidth = tw, previewHeight = th;
+        continue;
+      }
       if (layer == "avalanche_preview") {
         const Grid<float> surface = layerGrid(s, "surface");
         const std::string path = (fs::path(options.outDir) / (rel + ".png")).string();
@@ -499,6 +530,22 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   // 5. Outputs
   t0 = Clock::now();
   writeLayers(state, -1.0);
+  if (previews.size() > 1) {
+    int sw = 0, sh = 0;
+    const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(previews.size()))));
+    const std::vector<uint8_t> sheet = contactSheetRgb(previews, previewWidth, previewHeight, columns, sw, sh);
+    const std::string path = (fs::path(options.outDir) / "contact_sheet.png").string();
+    writeRgbPng(path, sw, sh, sheet);
+    ManifestFile f;
+    f.path = "contact_sheet.png";
+    f.content = "contact sheet of the season: the previews of the frame days in order, then the season's end, " +
+                std::to_string(columns) + " to a row";
+    f.unit = "sRGB";
+    f.format = "PNG, 3 channels uint8, sRGB";
+    f.maxValue = 255.f;
+    manifest.files.push_back(f);
+    result.files.push_back(path);
+  }
   // Each avalanche's own maps and frames (outputs.avalanche_maps, outputs.avalanche_frame_interval_s),
   // full-size so they line up with the layers: avalanches/NNN_<map>, avalanches/NNN/depth.FFFF.
   int avalancheNumber = 0;
