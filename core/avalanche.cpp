@@ -200,6 +200,12 @@ bool AvalancheRun::step() {
   return atRest_;
 }
 
+AvalancheRecord AvalancheRun::runToRest() {
+  while (active_ && !step()) {
+  }
+  return settle();
+}
+
 void AvalancheRun::captureFrame() {
   backend_.download(after_);
   const Grid<float> d = depthGrid(after_);

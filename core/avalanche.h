@@ -87,6 +87,8 @@ class AvalancheRun {
   bool step();
   // Deposits the snow and fills the record.
   AvalancheRecord settle();
+  // Steps until at rest, then settles; the record (also of a release that did not happen).
+  AvalancheRecord runToRest();
   const AvalancheRecord& record() const { return record_; }
   // Keep each avalanche's maps, and frames of its motion every `frameIntervalS` simulated
   // seconds (0: no frames). Frames download the state: they cost O(grid) each.

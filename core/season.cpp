@@ -5,6 +5,8 @@
 #include <cmath>
 
 #include <deque>
+#include <functional>
+#include <optional>
 
 #include "rng.h"
 #include "scheduler.h"
@@ -109,83 +111,53 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     });
     addPhenomenon(std::move(s));
   }
-  {
-    // State changes (§5.2), always active: melt, skipped on days when even the warmest cell is
-    // below T_0melt, and stability changes, skipped when it is below T_freeze and there is no
-    // wind loading.
+  // Continuous phenomena, always active: `body(slot, day, dt)` runs at each step over the time
+  // since the previous one, and once more at the season's end.
+  auto addContinuous = [&](const char* name, double stepsPerDay, std::function<void(int, double, double)> body) {
     PhenomenonSpec s;
-    s.name = "melt";
+    s.name = name;
     s.alwaysActive = true;
-    s.stepsPerDay = p.stateChangeStepsPerDay;
+    s.stepsPerDay = stepsPerDay;
     const int slot = static_cast<int>(reports.size());
-    auto over = [&, slot](double day) {
-      const double dt = sinceLast(slot, day);
-      const WeatherState w = cfg.weather.at(day);
-      if (w.seaLevelTemperatureC + maxTemperatureBase <= p.meltThresholdC) {
-        ++reports[slot].skippedSteps;
-        return;
-      }
-      timed(slot, [&] { report.meltRemovedM3 -= backend.melt(makeMeltArgs(p, dt, w)); });
-    };
+    auto over = [&sinceLast, slot, body](double day) { body(slot, day, sinceLast(slot, day)); };
     s.onStep = [over](const EventContext& e) { over(e.day); };
     catchUp.push_back(over);
     addPhenomenon(std::move(s));
-  }
-  {
-    PhenomenonSpec s;
-    s.name = "stability";
-    s.alwaysActive = true;
-    s.stepsPerDay = p.stateChangeStepsPerDay;
-    const int slot = static_cast<int>(reports.size());
-    auto over = [&, slot](double day) {
-      const double dt = sinceLast(slot, day);
-      const WeatherState w = cfg.weather.at(day);
-      if (w.seaLevelTemperatureC + maxTemperatureBase <= p.freezeTemperatureC && !(cfg.windTransport && p.windInstabilityPerMps2 > 0)) {
-        ++reports[slot].skippedSteps;
-        return;
-      }
-      timed(slot, [&] { backend.stabilityChange(makeStabilityArgs(p, dt, w)); });
-    };
-    s.onStep = [over](const EventContext& e) { over(e.day); };
-    catchUp.push_back(over);
-    addPhenomenon(std::move(s));
-  }
-  if (cfg.windTransport) {
-    // Wind transport (§5.4), always active while the season has wind.
-    PhenomenonSpec s;
-    s.name = "wind transport";
-    s.alwaysActive = true;
-    s.stepsPerDay = p.windTransportStepsPerDay;
-    const int slot = static_cast<int>(reports.size());
-    auto over = [&, slot](double day) {
-      const double dt = sinceLast(slot, day);
+  };
+  // State changes (§5.2): melt, skipped on days when even the warmest cell is below T_0melt, and
+  // stability changes, skipped when it is below T_freeze and there is no wind loading.
+  addContinuous("melt", p.stateChangeStepsPerDay, [&](int slot, double day, double dt) {
+    const WeatherState w = cfg.weather.at(day);
+    if (w.seaLevelTemperatureC + maxTemperatureBase <= p.meltThresholdC) {
+      ++reports[slot].skippedSteps;
+      return;
+    }
+    timed(slot, [&] { report.meltRemovedM3 -= backend.melt(makeMeltArgs(p, dt, w)); });
+  });
+  addContinuous("stability", p.stateChangeStepsPerDay, [&](int slot, double day, double dt) {
+    const WeatherState w = cfg.weather.at(day);
+    if (w.seaLevelTemperatureC + maxTemperatureBase <= p.freezeTemperatureC && !(cfg.windTransport && p.windInstabilityPerMps2 > 0)) {
+      ++reports[slot].skippedSteps;
+      return;
+    }
+    timed(slot, [&] { backend.stabilityChange(makeStabilityArgs(p, dt, w)); });
+  });
+  // Wind transport (§5.4), only while the season has wind.
+  if (cfg.windTransport)
+    addContinuous("wind transport", p.windTransportStepsPerDay, [&](int slot, double, double dt) {
       if (dt > 0.0) timed(slot, [&] { backend.windTransport(makeWindTransportArgs(p, dt)); });
-    };
-    s.onStep = [over](const EventContext& e) { over(e.day); };
-    catchUp.push_back(over);
-    addPhenomenon(std::move(s));
-  }
-  {
-    // Powder diffusion (§5.3), always active.
-    PhenomenonSpec s;
-    s.name = "powder diffusion";
-    s.alwaysActive = true;
-    s.stepsPerDay = p.diffusionStepsPerDay;
-    const int slot = static_cast<int>(reports.size());
-    auto over = [&, slot](double day) {
-      const double dt = sinceLast(slot, day);
-      if (dt > 0.0) timed(slot, [&] { backend.powderDiffusion(makePowderDiffusionArgs(p, dt)); });
-    };
-    s.onStep = [over](const EventContext& e) { over(e.day); };
-    catchUp.push_back(over);
-    addPhenomenon(std::move(s));
-  }
+    });
+  // Powder diffusion (§5.3).
+  addContinuous("powder diffusion", p.diffusionStepsPerDay, [&](int slot, double, double dt) {
+    if (dt > 0.0) timed(slot, [&] { backend.powderDiffusion(makePowderDiffusionArgs(p, dt)); });
+  });
 
-  // Avalanches (§6.1): spontaneous releases at about one a week per km^2 (rupture cell weighted
-  // by unstable depth and slope above the rest angle), and the scene's user releases. A zoomed
-  // phenomenon: while one runs, its steps of 0.1 s are the only events (§3.1's temporal zoom).
-  AvalancheRun avalanche(backend, p, state);
-  avalanche.keepMaps(cfg.avalancheMaps, cfg.avalancheFrameIntervalS);
+  // Avalanches (§6.1): spontaneous release tries at about one a week per km^2 (each at a random
+  // cell, released with a probability from its unstable depth and slope above the rest angle),
+  // and the scene's user releases. A zoomed phenomenon: while one runs, its steps of 0.1 s are
+  // the only events (§3.1's temporal zoom). The runner (which keeps host copies of the state)
+  // exists only when the season can have avalanches.
+  std::optional<AvalancheRun> avalanche;
   std::deque<UserAvalanche> pendingAvalanches;
   int avalancheId = -1;
   {
@@ -194,6 +166,8 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     const double areaKm2 = validCells * state.spec.cellAreaM2() * 1e-6;
     const double startsPerDay = p.avalancheRatePerKm2PerDay * areaKm2;
     if (startsPerDay > 0.0 || !cfg.userAvalanches.empty()) {
+      avalanche.emplace(backend, p, state);
+      avalanche->keepMaps(cfg.avalancheMaps, cfg.avalancheFrameIntervalS);
       PhenomenonSpec s;
       s.name = "avalanche";
       s.zoomed = true;
@@ -206,34 +180,29 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
           if (!pendingAvalanches.empty()) {
             const UserAvalanche u = pendingAvalanches.front();
             pendingAvalanches.pop_front();
-            avalanche.release(u.x, u.y, e.day, t0, true);
-            if (!avalanche.active()) report.avalanches.push_back(avalanche.record());
+            avalanche->release(u.x, u.y, e.day, t0, true);
+            if (!avalanche->active()) report.avalanches.push_back(avalanche->record());
           } else {
             const RandomKey key{cfg.seed};
             const Philox4x32 r = key.draw(e.eventIndex, 0, RngStream::Avalanche);
             ++report.avalancheTries;
-            avalanche.trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), uniformOpenDouble(r.v[2], r.v[3]), e.day, t0);
+            avalanche->trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), uniformOpenDouble(r.v[2], r.v[3]), e.day, t0);
           }
         });
       };
       s.onStep = [&, slot](const EventContext&) {
-        if (avalanche.active()) timed(slot, [&] { avalanche.step(); });
+        if (avalanche->active()) timed(slot, [&] { avalanche->step(); });
       };
-      s.finished = [&] { return !avalanche.active() || avalanche.atRest(); };
+      s.finished = [&] { return !avalanche->active() || avalanche->atRest(); };
       s.onStop = [&, slot](const EventContext&) {
-        if (avalanche.active()) timed(slot, [&] { report.avalanches.push_back(avalanche.settle()); });
+        if (avalanche->active()) timed(slot, [&] { report.avalanches.push_back(avalanche->settle()); });
         // User releases that came while this one ran: run them now, one after the other.
         while (!pendingAvalanches.empty()) {
           const UserAvalanche u = pendingAvalanches.front();
           pendingAvalanches.pop_front();
           timed(slot, [&] {
-            if (avalanche.release(u.x, u.y, u.day, cfg.weather.at(u.day).seaLevelTemperatureC, true)) {
-              while (!avalanche.step()) {
-              }
-              report.avalanches.push_back(avalanche.settle());
-            } else {
-              report.avalanches.push_back(avalanche.record());
-            }
+            avalanche->release(u.x, u.y, u.day, cfg.weather.at(u.day).seaLevelTemperatureC, true);
+            report.avalanches.push_back(avalanche->runToRest());
           });
         }
       };

@@ -55,11 +55,8 @@ Outcome runAvalanche(SnowState s, int x, int y, const ModelParameters& p = Model
   backend->upload(s);
   AvalancheRun run(*backend, p, s);
   Outcome o;
-  if (run.release(x, y, 0.0, 0.0, true)) {
-    while (!run.step()) {
-    }
-  }
-  o.record = run.settle();
+  run.release(x, y, 0.0, 0.0, true);
+  o.record = run.runToRest();
   backend->download(s);
   o.state = std::move(s);
   return o;

@@ -275,9 +275,7 @@ std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads
     const double before = backend->totals().totalM3();
     AvalancheRun run(*backend, ModelParameters{}, s);
     if (!run.release(size / 2, size / 2, 0.0, 0.0, true)) throw std::runtime_error("the benchmark avalanche did not release");
-    while (!run.step()) {
-    }
-    const AvalancheRecord r = run.settle();
+    const AvalancheRecord r = run.runToRest();
     const double error = std::abs(backend->totals().totalM3() - before) / before;
     table << "| " << size << "² | " << r.steps << " | " << format("%.1f", r.simulatedS) << " | " << format("%.3f", r.secondsPerStep() * 1e3)
           << " | " << r.boxCellsMax << " | " << format("%.0f", r.runoutM) << " | " << format("%.1e", error) << " |\n";

@@ -155,10 +155,8 @@ namespace {
 AvalancheRecord avalancheOn(SnowBackend& backend, SnowState& s, int rx, int ry) {
   backend.upload(s);
   AvalancheRun run(backend, ModelParameters{}, s);
-  if (run.release(rx, ry, 0.0, -5.0, true))
-    while (!run.step()) {
-    }
-  const AvalancheRecord r = run.settle();
+  run.release(rx, ry, 0.0, -5.0, true);
+  const AvalancheRecord r = run.runToRest();
   backend.download(s);
   return r;
 }
