@@ -307,19 +307,27 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
   std::vector<std::vector<uint8_t>> previews;  // for the contact sheet, in the order written
   int previewWidth = 0, previewHeight = 0;
-  // Lists a written float image in the manifest and the result.
-  auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
+  // Lists a written file in the manifest and the result.
+  auto listFile = [&](const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
+                      double day, float minValue, float maxValue) {
     ManifestFile f;
-    f.path = fs::relative(img.path, options.outDir).string();
+    f.path = fs::relative(path, options.outDir).string();
     f.content = content;
     f.unit = unit;
-    f.format = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear";
+    f.format = format;
     f.day = day;
-    f.minValue = img.minValue;
-    f.maxValue = img.maxValue;
+    f.minValue = minValue;
+    f.maxValue = maxValue;
     manifest.files.push_back(f);
-    result.files.push_back(img.path);
+    result.files.push_back(path);
   };
+  // A written float image (EXR or TIFF, as the scene asks).
+  auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
+    listFile(img.path, content, unit,
+             scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear", day,
+             img.minValue, img.maxValue);
+  };
+  const std::string rgbPngFormat = "PNG, 3 channels uint8, sRGB";
   auto writeLayers = [&](const SnowState& s, double day) {
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
@@ -342,15 +350,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
         const std::string path = (fs::path(options.outDir) / (rel + ".png")).string();
         writeRgbPng(path, s.spec.width, s.spec.height, rgb);
-        ManifestFile f;
-        f.path = fs::relative(path, options.outDir).string();
-        f.content = "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, unstable pale blue, stable cream, compacted grey)";
-        f.unit = "sRGB";
-        f.format = "PNG, 3 channels uint8, sRGB";
-        f.day = day;
-        f.maxValue = 255.f;
-        manifest.files.push_back(f);
-        result.files.push_back(path);
+        listFile(path,
+                 "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, "
+                 "unstable pale blue, stable cream, compacted grey)",
+                 "sRGB", rgbPngFormat, day, 0.f, 255.f);
         // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
         const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
         const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
@@ -367,15 +370,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         const std::string path = (fs::path(options.outDir) / (rel + ".png")).string();
         writeRgbPng(path, s.spec.width, s.spec.height,
                     avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM));
-        ManifestFile f;
-        f.path = fs::relative(path, options.outDir).string();
-        f.content = "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)";
-        f.unit = "sRGB";
-        f.format = "PNG, 3 channels uint8, sRGB";
-        f.day = day;
-        f.maxValue = 255.f;
-        manifest.files.push_back(f);
-        result.files.push_back(path);
+        listFile(path, "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)", "sRGB", rgbPngFormat,
+                 day, 0.f, 255.f);
         continue;
       }
       Grid<float> grid;
@@ -398,16 +394,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                 layerUnit(layer), day);
       for (const std::string& encoding : scene.outputs.encodings) {
         const WrittenImage img = writeNormalised((fs::path(options.outDir) / rel).string(), encoding, grid);
-        ManifestFile f;
-        f.path = fs::relative(img.path, options.outDir).string();
-        f.content = layerContent(layer);
-        f.unit = layerUnit(layer);
-        f.format = normalisedFormat(encoding, grid.width(), grid.height());
-        f.day = day;
-        f.minValue = img.minValue;
-        f.maxValue = img.maxValue;
-        manifest.files.push_back(f);
-        result.files.push_back(img.path);
+        listFile(img.path, layerContent(layer), layerUnit(layer), normalisedFormat(encoding, grid.width(), grid.height()), day,
+                 img.minValue, img.maxValue);
       }
       if (scene.outputs.multichannelExr) {
         channelNames.push_back(layer);
@@ -437,16 +425,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       vo.voxelSizeM = scene.outputs.vdbVoxelSizeM > 0.0 ? scene.outputs.vdbVoxelSizeM : std::min(s.spec.cellSizeXM, s.spec.cellSizeYM);
       const std::string path = (fs::path(options.outDir) / (rel.str() + ".vdb")).string();
       const VdbSummary v = writeSnowVdb(path, s, vo);
-      ManifestFile f;
-      f.path = fs::relative(path, options.outDir).string();
-      f.content = "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
+      listFile(path, "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
                   fixed(vo.compactedKgPerM3, 0) + "/" + fixed(vo.stableKgPerM3, 0) + "/" + fixed(vo.unstableKgPerM3, 0) + "/" +
-                  fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude";
-      f.unit = "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")";
-      f.format = "OpenVDB";
-      f.day = day;
-      manifest.files.push_back(f);
-      result.files.push_back(path);
+                  fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude",
+               "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", day, 0.f, 0.f);
     }
     if (!channels.empty()) {
       std::ostringstream rel;
@@ -456,16 +438,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       std::vector<const Grid<float>*> grids;
       for (const auto& g : channels) grids.push_back(&g);
       writeMultiChannelExr(path, channelNames, grids);
-      ManifestFile f;
-      f.path = fs::relative(path, options.outDir).string();
       std::string names;
       for (const auto& n : channelNames) names += (names.empty() ? "" : ", ") + n;
-      f.content = "all layers as named channels: " + names;
-      f.unit = "per channel, as the single-layer files";
-      f.format = "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (zip), linear";
-      f.day = day;
-      manifest.files.push_back(f);
-      result.files.push_back(path);
+      listFile(path, "all layers as named channels: " + names, "per channel, as the single-layer files",
+               "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (zip), linear", day, 0.f, 0.f);
     }
   };
 
@@ -536,15 +512,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     const std::vector<uint8_t> sheet = contactSheetRgb(previews, previewWidth, previewHeight, columns, sw, sh);
     const std::string path = (fs::path(options.outDir) / "contact_sheet.png").string();
     writeRgbPng(path, sw, sh, sheet);
-    ManifestFile f;
-    f.path = "contact_sheet.png";
-    f.content = "contact sheet of the season: the previews of the frame days in order, then the season's end, " +
-                std::to_string(columns) + " to a row";
-    f.unit = "sRGB";
-    f.format = "PNG, 3 channels uint8, sRGB";
-    f.maxValue = 255.f;
-    manifest.files.push_back(f);
-    result.files.push_back(path);
+    listFile(path,
+             "contact sheet of the season: the previews of the frame days in order, then the season's end, " + std::to_string(columns) +
+                 " to a row",
+             "sRGB", rgbPngFormat, -1.0, 0.f, 255.f);
   }
   // Each avalanche's own maps and frames (outputs.avalanche_maps, outputs.avalanche_frame_interval_s),
   // full-size so they line up with the layers: avalanches/NNN_<map>, avalanches/NNN/depth.FFFF.
