@@ -143,18 +143,27 @@ void writeRgbPng(const std::string& path, int width, int height, const std::vect
   });
 }
 
+namespace {
+// Lambert term of the surface under a light from `toLight` (unit vector x east, y north, z up),
+// from central differences; `at(x, y)` clamps at the edges. Not clamped to [0, 1].
+template <class SurfaceAt>
+double lambert(const SurfaceAt& at, int x, int y, double dx, double dy, const double toLight[3]) {
+  const double gx = (at(x + 1, y) - at(x - 1, y)) / (2 * dx), gNorth = (at(x, y - 1) - at(x, y + 1)) / (2 * dy);
+  const double n = std::sqrt(gx * gx + gNorth * gNorth + 1.0);
+  return (-gx * toLight[0] - gNorth * toLight[1] + toLight[2]) / n;
+}
+}  // namespace
+
 std::vector<uint8_t> avalanchePreviewRgb(const Grid<float>& a, const Grid<uint8_t>& valid, const Grid<float>& scour,
                                          const Grid<float>& deposit, double dx, double dy) {
   const int w = a.width(), h = a.height();
   std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3, 0);
-  const double lx = -0.5, ly = -0.5, lz = 0.7071;  // light from the north-west, 45 degrees up
+  const double fromNorthWest[3] = {-0.5, 0.5, 0.7071};  // 45 degrees up
   auto at = [&](int x, int y) { return static_cast<double>(a(std::clamp(x, 0, w - 1), std::clamp(y, 0, h - 1))); };
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       if (!valid(x, y)) continue;
-      const double gx = (at(x + 1, y) - at(x - 1, y)) / (2 * dx), gy = (at(x, y + 1) - at(x, y - 1)) / (2 * dy);
-      const double n = std::sqrt(gx * gx + gy * gy + 1.0);
-      const double shade = std::clamp((-gx * lx - gy * ly + lz) / n, 0.0, 1.0);
+      const double shade = std::clamp(lambert(at, x, y, dx, dy, fromNorthWest), 0.0, 1.0);
       double r = 0.25 + 0.7 * shade, g = r, b = r;
       const double s = std::clamp(scour(x, y) / 1.0, 0.0, 1.0), d = std::clamp(deposit(x, y) / 2.0, 0.0, 1.0);
       r = r * (1 - s) + 0.9 * s, g = g * (1 - s) + 0.15 * s, b = b * (1 - s) + 0.1 * s;
@@ -180,11 +189,7 @@ std::vector<uint8_t> snowPreviewRgb(const SnowState& s, const double sun[3]) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       if (!s.validCell(x, y)) continue;
-      // Normal of the snow surface; +y of the grid is south, the sun's y is north.
-      const double gx = (surface(x + 1, y) - surface(x - 1, y)) / (2 * s.spec.cellSizeXM);
-      const double gNorth = (surface(x, y - 1) - surface(x, y + 1)) / (2 * s.spec.cellSizeYM);
-      const double n = std::sqrt(gx * gx + gNorth * gNorth + 1.0);
-      const double lit = std::max(0.0, (-gx * sun[0] - gNorth * sun[1] + sun[2]) / n);
+      const double lit = std::max(0.0, lambert(surface, x, y, s.spec.cellSizeXM, s.spec.cellSizeYM, sun));
       const double light = 0.35 + 0.75 * lit;
       double c[3];
       const double depth = s.depthM(x, y);

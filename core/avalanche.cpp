@@ -12,8 +12,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 Grid<float> depthGrid(const SnowState& s) {
   Grid<float> d(s.spec.width, s.spec.height, 0.f);
-  for (size_t i = 0; i < d.size(); ++i)
-    d.values()[i] = s.compactedM.values()[i] + s.stableM.values()[i] + s.unstableM.values()[i] + s.powderM.values()[i];
+  for (int y = 0; y < s.spec.height; ++y)
+    for (int x = 0; x < s.spec.width; ++x) d(x, y) = s.depthM(x, y);
   return d;
 }
 

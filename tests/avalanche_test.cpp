@@ -22,21 +22,6 @@ namespace {
 
 constexpr double kTan30 = 0.57735026918962584;
 
-// Bedrock from f(x, y) in metres, cells of `cell` metres, temperature base (T at T0 = 0).
-template <class F>
-SnowState terrain(int w, int h, double cell, float temperatureC, F f) {
-  SnowState s;
-  GridSpec spec;
-  spec.width = w;
-  spec.height = h;
-  spec.cellSizeXM = spec.cellSizeYM = cell;
-  s.allocate(spec);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) s.bedrockM(x, y) = static_cast<float>(f(x * cell, y * cell));
-  s.temperatureBaseC.fill(temperatureC);
-  return s;
-}
-
 double totalSnow(const SnowState& s) {
   double t = 0;
   for (int y = 0; y < s.spec.height; ++y)
@@ -89,7 +74,7 @@ double maxSnowSlope(const SnowState& s) {
 // A cone of dry unstable snow (slopes of 1.5) on a flat plane settles until no slope in the
 // snow surface exceeds tan(theta_c) by more than 15 %, and keeps its mass.
 TEST(Avalanche, DryConeSettlesToTheRestAngle) {
-  SnowState s = terrain(61, 61, 1.0, -20.f, [](double, double) { return 1000.0; });
+  SnowState s = test::terrainFrom(61, 61, 1.0, -20.f, [](double, double) { return 1000.0; });
   for (int y = 0; y < 61; ++y)
     for (int x = 0; x < 61; ++x) s.unstableM(x, y) = static_cast<float>(std::max(0.0, 12.0 - 1.5 * std::hypot(x - 30.0, y - 30.0)));
   const double before = totalSnow(s);
@@ -111,7 +96,7 @@ TEST(Avalanche, DryConeSettlesToTheRestAngle) {
 // zone empties.
 TEST(Avalanche, InclinedPlaneFlowsOnlyAboveTheRestAngle) {
   for (double slope : {0.4, 1.2}) {
-    SnowState s = terrain(40, 120, 2.0, -20.f, [slope](double, double y) { return 2000.0 - slope * std::min(y, 160.0); });
+    SnowState s = test::terrainFrom(40, 120, 2.0, -20.f, [slope](double, double y) { return 2000.0 - slope * std::min(y, 160.0); });
     for (int y = slope < kTan30 ? 0 : 10; y < (slope < kTan30 ? 120 : 40); ++y)
       for (int x = slope < kTan30 ? 0 : 10; x < (slope < kTan30 ? 40 : 30); ++x) s.unstableM(x, y) = 1.f;
     const SnowState start = s;
@@ -142,7 +127,7 @@ TEST(Avalanche, WetSnowRunsOutFartherAndThinnerThanDry) {
   auto slope = [](double, double y) { return y < 120.0 ? 2000.0 - 1.0 * y : 2000.0 - 120.0 - 0.05 * (y - 120.0); };
   Outcome result[2];
   for (int wet = 0; wet < 2; ++wet) {
-    SnowState s = terrain(40, 200, 2.0, wet ? 5.f : -20.f, slope);
+    SnowState s = test::terrainFrom(40, 200, 2.0, wet ? 5.f : -20.f, slope);
     for (int y = 5; y < 30; ++y)
       for (int x = 12; x < 28; ++x) s.unstableM(x, y) = 1.5f;
     result[wet] = runAvalanche(s, 20, 15);
@@ -194,7 +179,7 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
     EXPECT_LT(o.record.maxSpeedMps, std::sqrt(2.0 * 9.8 * (hi - lo)) + 1.0) << k;
   }
   // A vertical cliff: a slope of 0.8 ending in a 200 m drop between two 5 m cells.
-  SnowState cliff = terrain(30, 60, 5.0, -20.f, [](double, double y) { return y < 100.0 ? 3000.0 - 0.8 * y : 2720.0 - 0.1 * (y - 100.0); });
+  SnowState cliff = test::terrainFrom(30, 60, 5.0, -20.f, [](double, double y) { return y < 100.0 ? 3000.0 - 0.8 * y : 2720.0 - 0.1 * (y - 100.0); });
   for (int y = 0; y < 20; ++y)
     for (int x = 5; x < 25; ++x) cliff.unstableM(x, y) = 1.f;
   const double before = totalSnow(cliff);
@@ -223,7 +208,7 @@ TEST(Avalanche, SameBytesSerialAndThreaded) {
 
 // No unstable snow at the rupture point: nothing is released and the record says why.
 TEST(Avalanche, NoUnstableSnowNoRelease) {
-  SnowState s = terrain(10, 10, 5.0, -20.f, [](double, double y) { return 1000.0 - y; });
+  SnowState s = test::terrainFrom(10, 10, 5.0, -20.f, [](double, double y) { return 1000.0 - y; });
   const Outcome o = runAvalanche(s, 5, 5);
   EXPECT_FALSE(o.record.released);
   EXPECT_NE(o.record.why.find("no unstable snow"), std::string::npos);

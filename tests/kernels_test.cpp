@@ -13,18 +13,7 @@ using namespace snow;
 namespace {
 
 SnowState plane(int w, int h, double cell, float slopeX, float base, float temperatureBase) {
-  SnowState s;
-  GridSpec spec;
-  spec.width = w;
-  spec.height = h;
-  spec.cellSizeXM = spec.cellSizeYM = cell;
-  s.allocate(spec);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      s.bedrockM(x, y) = base + slopeX * static_cast<float>(x * cell);
-      s.temperatureBaseC(x, y) = temperatureBase;
-    }
-  return s;
+  return test::terrainFrom(w, h, cell, temperatureBase, [=](double xm, double) { return base + slopeX * static_cast<float>(xm); });
 }
 
 SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {

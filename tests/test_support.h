@@ -10,6 +10,22 @@
 
 namespace snow::test {
 
+// Square cells of `cell` metres, bedrock f(x_m, y_m) (metres east and south of the north-west
+// corner), no snow, temperature base `temperatureC` everywhere (T at T0 = 0).
+template <class F>
+SnowState terrainFrom(int w, int h, double cell, float temperatureC, F f) {
+  SnowState s;
+  GridSpec spec;
+  spec.width = w;
+  spec.height = h;
+  spec.cellSizeXM = spec.cellSizeYM = cell;
+  s.allocate(spec);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) s.bedrockM(x, y) = static_cast<float>(f(x * cell, y * cell));
+  s.temperatureBaseC.fill(temperatureC);
+  return s;
+}
+
 // A rough random terrain with cliffs, a one-cell spike, a flat plateau, NODATA holes and random
 // snow in every layer: a state on which every kernel has something to do.
 inline SnowState makeRoughState(int w, int h, uint64_t seed, double cellSizeXM = 5.0, double cellSizeYM = 5.0,
