@@ -9,6 +9,7 @@
 #include <iterator>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include "core/atomic_file.h"
 #include "core/hash.h"
@@ -28,6 +29,8 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
   const double layerDensity[4] = {o.compactedKgPerM3, o.stableKgPerM3, o.unstableKgPerM3, o.powderKgPerM3};
   openvdb::FloatGrid::Ptr layers[4];
   for (int l = 0; l < 4; ++l) layers[l] = openvdb::FloatGrid::create(0.f);
+  std::vector<openvdb::FloatGrid::Accessor> layerAcc;
+  for (int l = 0; l < 4; ++l) layerAcc.push_back(layers[l]->getAccessor());
   auto fogAcc = fog->getAccessor();
   auto topoAcc = topology->getAccessor();
   VdbSummary summary;
@@ -53,7 +56,7 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
         topoAcc.setValue(c, true);
         int l = 0;
         while (l < 3 && z >= top[l]) ++l;
-        layers[l]->getAccessor().setValue(c, static_cast<float>(layerDensity[l]));
+        layerAcc[l].setValue(c, static_cast<float>(layerDensity[l]));
         ++summary.snowVoxels;
       }
     }
