@@ -20,7 +20,8 @@ std::string manifestToJson(const Manifest& m) {
                   {"origin_x", m.grid.originX},
                   {"origin_y", m.grid.originY},
                   {"row_order", "north to south"}};
-  j["run"] = {{"seed", m.seed},
+  j["run"] = {{"mode", m.mode},
+              {"seed", m.seed},
               {"backend", m.backend},
               {"latitude_deg", m.latitudeDeg},
               {"season_start", m.seasonStartDate},
@@ -37,6 +38,22 @@ std::string manifestToJson(const Manifest& m) {
                           {"released_m3", a.releasedM3}, {"deposit_m3", a.depositM3}, {"runout_m", a.runoutM},
                           {"fall_height_m", a.fallHeightM}, {"steps", a.steps}, {"simulated_s", a.simulatedS}});
   j["run"]["avalanches"] = avalanches;
+  if (m.mode == "occlusion") {
+    const ManifestOcclusion& o = m.occlusion;
+    ordered_json sun = ordered_json::array();
+    for (const auto& [hour, weight] : o.sunHoursAndWeights) sun.push_back({{"solar_hour", hour}, {"weight", weight}});
+    j["run"]["occlusion"] = {{"method", "Foldes & Benes 2007: ambient occlusion (Eq. 1) and sun-trajectory dissipation (Eqs. 2-3)"},
+                             {"s_max_m", o.sMaxM},
+                             {"tau_ambient", o.tauAmbient},
+                             {"tau_sun", o.tauSun},
+                             {"ao_rays", o.aoRays},
+                             {"ao_radius_m", o.aoRadiusM},
+                             {"day", o.day},
+                             {"day_of_year", o.dayOfYear},
+                             {"turbidity", o.turbidity},
+                             {"sun_positions", sun},
+                             {"mesh_source", o.meshSource}};
+  }
   j["mass_balance_m3"] = {{"initial_snow", m.initialSnowM3},
                           {"snowfall_added", m.snowfallAddedM3},
                           {"melt_removed", m.meltRemovedM3},

@@ -3,6 +3,7 @@
 // bake gives the same bytes.
 #pragma once
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/grid.h"
@@ -32,7 +33,17 @@ struct ManifestAvalanche {
   double releasedM3 = 0, depositM3 = 0, runoutM = 0, fallHeightM = 0, simulatedS = 0;
 };
 
+// mode = "occlusion": the settings the snow cover came from.
+struct ManifestOcclusion {
+  double sMaxM = 0, tauAmbient = 0, tauSun = 0, aoRadiusM = 0, day = 0, dayOfYear = 0, turbidity = 0;
+  int aoRays = 0;
+  std::vector<std::pair<double, double>> sunHoursAndWeights;  // solar hour, normalised luminance weight
+  std::string meshSource;  // the input mesh whose vertices carry the snow (mesh terrains), or empty
+};
+
 struct Manifest {
+  std::string mode = "season";
+  ManifestOcclusion occlusion;
   std::string programVersion;
   std::string sceneSource;
   std::string sceneName;

@@ -44,7 +44,7 @@ RayScene::RayScene(const Grid<float>& heights, const GridSpec& spec, const std::
   const int w = spec.width, h = spec.height;
   // Tiles share their border vertices, so the surface is continuous across them.
   const int step = tileVertices - 1;
-  for (int j0 = 0;; j0 += step) {
+  for (int j0 = 0; w > 0 && h > 0; j0 += step) {
     const int th = std::min(tileVertices, h - j0);
     for (int i0 = 0;; i0 += step) {
       const int tw = std::min(tileVertices, w - i0);

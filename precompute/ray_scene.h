@@ -16,6 +16,7 @@ namespace snow {
 
 class RayScene {
  public:
+  // An empty grid (width or height 0) gives a scene of the meshes alone.
   // `tileVertices` limits the grid tiles' side (Embree's limit is 32767); tests use small tiles.
   RayScene(const Grid<float>& heights, const GridSpec& spec, const std::vector<TriangleMesh>& occluders = {},
            int tileVertices = 32767);

@@ -22,15 +22,30 @@ struct OutputRequest {
   bool multichannelExr = false;        // also all layers as the channels of one EXR (layers.exr)
   int displacementWidth = 0, displacementHeight = 0;  // displacement maps at this size (0: none)
   bool vdb = false;                    // the snow body as an OpenVDB file (snow.vdb)
+  std::vector<std::string> meshes;     // the snow surface as meshes: ply / obj / glb (snow_surface.EXT)
   double vdbVoxelSizeM = 0.0;          // 0: the grid's smaller cell size
   bool avalancheMaps = false;      // each avalanche's release zone, scour and deposit
   double avalancheFrameIntervalS = 0.0;  // frames of each avalanche's motion (0: none)
+};
+
+// mode = "occlusion": Foldes & Benes 2007 (precompute/occlusion.h), no season.
+struct OcclusionParameters {
+  double sMaxM = 1.0;
+  double tauAmbient = 1.25;
+  double tauSun = 0.75;
+  int sunPositions = 10;
+  int aoRays = 0;                 // 0: by precompute.sun_quality (64 / 256 / 1024)
+  double aoRadiusM = 0.0;         // 0: unlimited
+  std::optional<double> day;      // season day of the sun trajectory; default the season's middle
+  double turbidity = 3.0;
 };
 
 struct Scene {
   std::string sourceName;   // the scene file path, or "preset:default"
   std::string baseDir;      // folder relative terrain paths are resolved against
   std::string name = "snowbake scene";
+  std::string mode = "season";  // season | occlusion
+  OcclusionParameters occlusion;
   TerrainSource terrain;
   std::vector<OccluderSource> occluders;
   std::optional<double> latitudeDeg;  // site latitude; defaults to the DEM's when it has one

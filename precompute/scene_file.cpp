@@ -49,11 +49,25 @@ const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable
                                                 "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
                                                 "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
                                                 "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit",
-                                                "avalanche_preview", "preview"};
+                                                "avalanche_preview", "preview", "ambient_occlusion", "sun_visibility",
+                                                "occlusion_accumulation", "occlusion_dissipation"};
+// Layers only occlusion mode has.
+const std::vector<std::string> kOcclusionLayers = {"ambient_occlusion", "sun_visibility", "occlusion_accumulation",
+                                                   "occlusion_dissipation"};
 
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {
       {"name", Kind::String},
+      {"mode", Kind::String, -kInf, kInf, {"season", "occlusion"}},
+      {"occlusion", Kind::Table},
+      {"occlusion.s_max_m", Kind::Number, 0, 1000},
+      {"occlusion.tau_ambient", Kind::Number, 0, 10},
+      {"occlusion.tau_sun", Kind::Number, 0, 10},
+      {"occlusion.sun_positions", Kind::Integer, 0, 1000},
+      {"occlusion.ao_rays", Kind::Integer, 0, 65536},
+      {"occlusion.ao_radius_m", Kind::Number, 0, 1e7},
+      {"occlusion.day", Kind::Number, 0, 3650},
+      {"occlusion.turbidity", Kind::Number, 1.7, 10},
       {"terrain", Kind::Table},
       {"terrain.file", Kind::String},
       {"terrain.builtin", Kind::String, -kInf, kInf, {"ridged"}},
@@ -112,6 +126,7 @@ const std::vector<Rule>& sceneRules() {
       {"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}},
       {"outputs.multichannel_exr", Kind::Bool},
       {"outputs.vdb", Kind::Bool},
+      {"outputs.meshes", Kind::StringArray, -kInf, kInf, {"ply", "obj", "glb"}},
       {"outputs.vdb_voxel_size_m", Kind::Number, 0.01, 1000},
       {"outputs.displacement_size", Kind::NumberArray, 1, 65536},
       {"outputs.avalanche_maps", Kind::Bool},
@@ -499,6 +514,8 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
     for (auto&& e : *enc->as_array()) scene.outputs.encodings.push_back(e.as_string()->get());
   if (auto v = root["outputs"]["multichannel_exr"].value<bool>()) scene.outputs.multichannelExr = *v;
   if (auto v = root["outputs"]["vdb"].value<bool>()) scene.outputs.vdb = *v;
+  if (const toml::node* meshes = root["outputs"]["meshes"].node())
+    for (auto&& e : *meshes->as_array()) scene.outputs.meshes.push_back(e.as_string()->get());
   if (auto v = root["outputs"]["vdb_voxel_size_m"].value<double>()) scene.outputs.vdbVoxelSizeM = *v;
   if (const toml::node* size = root["outputs"]["displacement_size"].node()) {
     const toml::array& a = *size->as_array();
@@ -515,6 +532,38 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       if (day > scene.days) fail(source, e, "outputs.frames_days", "day " + std::to_string(day) + " is after the season's end");
       scene.outputs.frameDays.push_back(day);
     }
+  }
+  if (auto v = root["mode"].value<std::string>()) scene.mode = *v;
+  {
+    OcclusionParameters& o = scene.occlusion;
+    o.sMaxM = number(root["occlusion"]["s_max_m"], o.sMaxM);
+    o.tauAmbient = number(root["occlusion"]["tau_ambient"], o.tauAmbient);
+    o.tauSun = number(root["occlusion"]["tau_sun"], o.tauSun);
+    o.sunPositions = static_cast<int>(root["occlusion"]["sun_positions"].value<int64_t>().value_or(o.sunPositions));
+    o.aoRays = static_cast<int>(root["occlusion"]["ao_rays"].value<int64_t>().value_or(o.aoRays));
+    o.aoRadiusM = number(root["occlusion"]["ao_radius_m"], o.aoRadiusM);
+    if (const toml::node* day = root["occlusion"]["day"].node()) {
+      o.day = number(root["occlusion"]["day"], 0.0);
+      if (*o.day > scene.days) fail(source, *day, "occlusion.day", "day " + std::to_string(*o.day) + " is after the season's end");
+    }
+    o.turbidity = number(root["occlusion"]["turbidity"], o.turbidity);
+  }
+  if (scene.mode == "occlusion") {
+    // No season: the outputs that only a season makes are errors, not silently empty files.
+    for (const auto& layer : scene.outputs.layers)
+      for (const char* seasonOnly : {"wind_scour", "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit", "avalanche_preview",
+                                     "sun_exposure", "temperature", "wind_speed", "wind_direction", "wind_shadow_depth", "wind_shadow_mask"})
+        if (layer == seasonOnly)
+          fail(source, *root["outputs"]["layers"].node(), "outputs.layers", "'" + layer + "' needs a season; mode = \"occlusion\" has none");
+    if (!scene.outputs.frameDays.empty())
+      fail(source, *root["outputs"]["frames_days"].node(), "outputs.frames_days", "mode = \"occlusion\" has no season to take frames of");
+    if (scene.outputs.avalancheMaps || scene.outputs.avalancheFrameIntervalS > 0)
+      throw InputError(source + ": outputs.avalanche_*: mode = \"occlusion\" has no avalanches");
+    if (!scene.userAvalanches.empty()) throw InputError(source + ": events: mode = \"occlusion\" has no season for avalanche events");
+  } else {
+    for (const auto& layer : scene.outputs.layers)
+      if (std::find(kOcclusionLayers.begin(), kOcclusionLayers.end(), layer) != kOcclusionLayers.end())
+        fail(source, *root["outputs"]["layers"].node(), "outputs.layers", "'" + layer + "' needs mode = \"occlusion\"");
   }
   if (auto v = root["precompute"]["sun"].value<bool>()) scene.sunExposure = *v;
   if (auto v = root["precompute"]["sun_quality"].value<std::string>()) scene.sunQuality = *v;

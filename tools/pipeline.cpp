@@ -10,6 +10,7 @@
 #include <iostream>
 #include <fstream>
 #include <iomanip>
+#include <map>
 #include <memory>
 #include <optional>
 #include <nlohmann/json.hpp>
@@ -18,6 +19,7 @@
 #include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
 #include "bakers/manifest.h"
+#include "bakers/mesh_writer.h"
 #include "bakers/vdb_writer.h"
 #include "precompute/solar.h"
 #include "core/cpu_backend.h"
@@ -27,6 +29,8 @@
 #include "precompute/mesh.h"
 #include "precompute/scene.h"
 #include "precompute/exposure.h"
+#include "precompute/occlusion.h"
+#include "precompute/ray_scene.h"
 #include "precompute/wind_timeline.h"
 #include "progress.h"
 
@@ -110,7 +114,7 @@ Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double d
 }
 
 std::string layerUnit(const std::string& name) {
-  if (name == "valid_mask" || name == "wind_shadow_mask") return "1";
+  if (name == "valid_mask" || name == "wind_shadow_mask" || name == "ambient_occlusion" || name == "sun_visibility") return "1";
   if (name == "sun_exposure") return "h";
   if (name == "temperature") return "degC";
   if (name == "wind_speed") return "m/s";
@@ -131,6 +135,11 @@ std::string layerContent(const std::string& name) {
   if (name == "wind_shadow_depth") return "wind shadow depth W_z - A (height of the wind-effect surface above the ground)";
   if (name == "wind_shadow_mask") return "1 where the wind-effect surface is more than wind_shadow_tolerance_m above the ground (wind shadow)";
   if (name == "depth") return "total snow depth C+S+U+P";
+  if (name == "ambient_occlusion")
+    return "ambient occlusion value a (Foldes & Benes Eq. 1): cosine-weighted fraction of the hemisphere open to the sky, 1 = unoccluded";
+  if (name == "sun_visibility") return "sun visibility v: luminance-weighted fraction of the day's sun trajectory that sees the point";
+  if (name == "occlusion_accumulation") return "snow placed by ambient occlusion, s_max max(0, tau_ambient - a) cos(theta) (Eq. 1)";
+  if (name == "occlusion_dissipation") return "snow the sun dissipates, s_max max(0, v - tau_sun) cos(theta)";
   if (name == "bedrock") return "terrain altitude B";
   if (name == "surface") return "snow-surface altitude B+C+S+U+P";
   if (name == "valid_mask") return "1 where the terrain has data, 0 at NODATA cells (written as 0 in every layer)";
@@ -244,6 +253,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   if (!scene.latitudeDeg)
     log << "site: latitude " << fixed(latitude, 3) << " deg " << (ti.latitudeKnown ? "(from the DEM)" : "(default; set site.latitude_deg)") << "\n";
 
+  const bool occlusionMode = scene.mode == "occlusion";
+  if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
+
   // 3. Precompute
   t0 = Clock::now();
   SnowState state;
@@ -252,7 +264,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   state.validCell = terrain.valid;
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
   std::optional<Exposure> exposure;
-  if (scene.sunExposure) {
+  if (occlusionMode) {
+    log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
+  } else if (scene.sunExposure) {
     ExposureSettings es;
     es.quality = sunQuality(scene.sunQuality);
     es.latitudeDeg = latitude;
@@ -275,8 +289,11 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   };
   temperatureForDay(0, state);
   t0 = Clock::now();
-  const WindTimeline wind(state.bedrockM, state.validCell, state.spec, scene.weather, scene.params, cache, WindSolverOptions{}, &log);
-  if (wind.hasWind()) {
+  const WeatherTimeline calm;
+  const WindTimeline wind(state.bedrockM, state.validCell, state.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
+                          WindSolverOptions{}, &log);
+  if (occlusionMode) {
+  } else if (wind.hasWind()) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " ("
         << wind.computedStates() << " computed, " << wind.cachedStates() << " from the cache"
         << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(since(t0), 2) << " s)\n";
@@ -296,7 +313,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   const bool windChanges = wind.varies();
 
   // 4. Season
-  std::unique_ptr<SnowBackend> backend = chooseBackend(scene.backend, log);
+  std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : chooseBackend(scene.backend, log);
+  const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
   std::error_code ec;
   fs::create_directories(options.outDir, ec);
   if (ec) throw InputError(options.outDir + ": cannot create the output folder: " + ec.message());
@@ -305,6 +323,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   BakeResult result;
   std::vector<std::string> layers = scene.outputs.layers;
   if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
+  std::map<std::string, Grid<float>> occlusionLayers;  // mode = "occlusion": a, v, accumulation, dissipation
+  std::optional<TriangleMesh> snowMesh;                 // occlusion mode on a mesh terrain: the input mesh, snow on its vertices
   std::vector<std::vector<uint8_t>> previews;  // for the contact sheet, in the order written
   int previewWidth = 0, previewHeight = 0;
   // Lists a written file in the manifest and the result.
@@ -375,7 +395,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         continue;
       }
       Grid<float> grid;
-      if (isWindLayer(layer)) {
+      if (occlusionLayers.count(layer)) {
+        grid = occlusionLayers.at(layer);
+      } else if (isWindLayer(layer)) {
         grid = windLayerGrid(s, wind, outputDay, layer, scene.params.windShadowToleranceM);
       } else if (layer == "sun_exposure" || layer == "temperature") {
         // I of the output's day, and T = T0 + k_t A + k_i I.
@@ -430,6 +452,28 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                   fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude",
                "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", day, 0.f, 0.f);
     }
+    for (const std::string& format : scene.outputs.meshes) {
+      std::ostringstream rel;
+      rel << (frame ? "frames/snow_surface." : "snow_surface");
+      if (frame) rel << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+      const std::string path = (fs::path(options.outDir) / (rel.str() + "." + format)).string();
+      const MeshData mesh = heightfieldMesh(layerGrid(s, "surface"), s.validCell, s.spec);
+      writeMesh(path, format, mesh);
+      listFile(path,
+               "snow surface B+C+S+U+P as a mesh: a vertex per valid cell at its centre, two triangles per 2 x 2 cells (" +
+                   std::to_string(mesh.positions.size()) + " vertices, " + std::to_string(mesh.triangles.size()) +
+                   " triangles); x east, y north from the south-west corner",
+               "m", meshFormatDescription(format), day, 0.f, 0.f);
+      if (snowMesh && !frame) {
+        const std::string meshPath = (fs::path(options.outDir) / ("snow_mesh." + format)).string();
+        writeMesh(meshPath, format, MeshData{snowMesh->positions, {}, snowMesh->triangles});
+        listFile(meshPath,
+                 "the input mesh " + snowMesh->source + " with its vertices raised by their snow depth (occlusion mode, per vertex; " +
+                     std::to_string(snowMesh->positions.size()) + " vertices, " + std::to_string(snowMesh->triangles.size()) +
+                     " triangles), in the input's own coordinates",
+                 "m", meshFormatDescription(format), day, 0.f, 0.f);
+      }
+    }
     if (!channels.empty()) {
       std::ostringstream rel;
       rel << "layers";
@@ -445,63 +489,124 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     }
   };
 
-  SeasonConfig config;
-  config.days = scene.days;
-  config.seed = scene.seed;
-  config.params = scene.params;
-  config.weather = scene.weather;
-  config.userSnowfalls = scene.userSnowfalls;
-  config.avalancheMaps = scene.outputs.avalancheMaps;
-  config.avalancheFrameIntervalS = scene.outputs.avalancheFrameIntervalS;
-  for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
-    const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: avalanche on day " + fixed(a.day, 1);
-    double xM = a.xM, yM = a.yM;
-    if (a.mapCoordinates) {
-      if (ti.coordinateSystem.rfind("geographic", 0) == 0)
-        throw InputError(where + ": map_position needs a DEM in projected metres; this one is " + ti.coordinateSystem + " (use position_m)");
-      xM = a.xM - ti.spec.originX;
-      yM = ti.spec.originY - a.yM;
-    }
-    const double fx = xM / ti.spec.cellSizeXM, fy = yM / ti.spec.cellSizeYM;
-    if (!(fx >= 0.0 && fy >= 0.0 && fx < ti.spec.width && fy < ti.spec.height))
-      throw InputError(where + ": the rupture point (" + fixed(xM, 1) + " m east, " + fixed(yM, 1) +
-                       " m south of the north-west corner) is outside the terrain (" + fixed(ti.spec.width * ti.spec.cellSizeXM, 1) +
-                       " x " + fixed(ti.spec.height * ti.spec.cellSizeYM, 1) + " m)");
-    const int x = static_cast<int>(fx), y = static_cast<int>(fy);
-    if (!state.validCell(x, y)) throw InputError(where + ": the rupture point falls on a NODATA cell");
-    config.userAvalanches.push_back({a.day, x, y});
-  }
-  config.frameDays = scene.outputs.frameDays;
-  config.windTransport = wind.hasWind();
-  if (exposure || windChanges)
-    config.updateStaticFields = [&](int day, SnowState& s) {
-      if (exposure) temperatureForDay(day, s);
-      if (windChanges) windForDay(day, s);
+  SeasonReport report;
+  ManifestOcclusion manifestOcclusion;
+  if (occlusionMode) {
+    // Foldes & Benes 2007 (precompute/occlusion.h): ambient occlusion and the day's sun trajectory.
+    const OcclusionParameters& op = scene.occlusion;
+    OcclusionSettings os;
+    os.sMaxM = op.sMaxM;
+    os.tauAmbient = op.tauAmbient;
+    os.tauSun = op.tauSun;
+    os.sunPositions = op.sunPositions;
+    os.aoRays = op.aoRays > 0 ? op.aoRays : occlusionRaysForQuality(scene.sunQuality);
+    os.aoRadiusM = op.aoRadiusM;
+    os.latitudeDeg = latitude;
+    os.turbidity = op.turbidity;
+    const double sunDay = op.day.value_or(scene.days / 2.0);
+    os.dayOfYear = std::fmod(scene.startDayOfYear() - 1 + sunDay, 365.0) + 1.0;
+    const auto tOcc = Clock::now();
+    const RayScene rays(state.bedrockM, state.spec, occluders);
+    const double buildSeconds = since(tOcc);
+    const OcclusionSnow o = computeOcclusionSnowOnTerrain(rays, state.bedrockM, state.validCell, state.spec, os);
+    auto asGrid = [&](const std::vector<float>& v) {
+      Grid<float> g(state.spec.width, state.spec.height, 0.f);
+      std::copy(v.begin(), v.end(), g.data());
+      return g;
     };
-  ProgressBar bar(log, "season", stderrIsTerminal() && &log == &std::cerr, options.progress);
-  const SeasonReport report = runSeason(
-      *backend, state, config, [&](double f) { bar.update(f); }, [&](double day, const SnowState& s) { writeLayers(s, day); });
-  bar.finish();
-  log << "season: " << fixed(scene.days, 0) << " days, " << report.events << " events on " << backend->name() << " ("
-      << fixed(report.seconds, 2) << " s)\n";
-  for (const auto& p : report.phenomena)
-    log << "  " << std::left << std::setw(24) << p.name << std::right << std::setw(6) << p.steps << " steps"
-        << (p.skippedSteps ? " (" + std::to_string(p.skippedSteps) + " skipped)" : std::string()) << "  " << fixed(p.seconds, 3)
-        << " s\n";
-  for (const AvalancheRecord& a : report.avalanches) {
-    log << "  avalanche day " << fixed(a.day, 2) << " at cell (" << a.ruptureX << ", " << a.ruptureY << ")" << (a.user ? " (user)" : "");
-    if (!a.released) {
-      log << ": not released, " << a.why << "\n";
-      continue;
+    occlusionLayers["ambient_occlusion"] = asGrid(o.ambient);
+    occlusionLayers["sun_visibility"] = asGrid(o.sunVisibility);
+    occlusionLayers["occlusion_accumulation"] = asGrid(o.accumulationM);
+    occlusionLayers["occlusion_dissipation"] = asGrid(o.dissipationM);
+    // The static cover is settled snow: the stable layer.
+    state.stableM = asGrid(o.snowM);
+    log << "occlusion: Embree scene " << fixed(buildSeconds, 2) << " s; ambient occlusion " << os.aoRays << " rays/cell, "
+        << fixed(o.aoSeconds, 2) << " s (" << fixed(o.aoRayCount / std::max(o.aoSeconds, 1e-9) / 1e6, 1) << " M rays/s); sun "
+        << o.sun.size() << " positions on day " << fixed(os.dayOfYear, 0) << " of the year, " << fixed(o.sunSeconds, 2) << " s\n";
+    if (o.sun.empty()) log << "  the sun stays below the horizon on that day (polar night): no dissipation\n";
+    manifestOcclusion = {os.sMaxM, os.tauAmbient, os.tauSun, os.aoRadiusM, sunDay, os.dayOfYear, os.turbidity, os.aoRays, {}, ""};
+    for (const SunSample& x : o.sun) manifestOcclusion.sunHoursAndWeights.push_back({x.solarHour, x.weight});
+    if (ti.format == "mesh" && !scene.outputs.meshes.empty()) {
+      // Snow per vertex of the input mesh itself (the paper's irregular mesh), raised along z.
+      const auto tm = Clock::now();
+      TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
+      std::vector<TriangleMesh> meshes = occluders;
+      meshes.insert(meshes.begin(), mesh);
+      const Grid<float> none;
+      const RayScene meshRays(none, GridSpec{}, meshes);
+      const OcclusionSnow mo = computeOcclusionSnowOnMesh(meshRays, mesh, os);
+      double volume = 0.0;
+      for (size_t k = 0; k < mesh.positions.size(); ++k) mesh.positions[k][2] += mo.snowM[k], volume += mo.snowM[k];
+      log << "occlusion: mesh " << mesh.source << ", " << mesh.positions.size() << " vertices, " << mesh.triangles.size()
+          << " triangles: " << fixed(since(tm), 2) << " s (mean snow " << fixed(volume / std::max<size_t>(1, mesh.positions.size()), 3)
+          << " m per vertex)\n";
+      manifestOcclusion.meshSource = mesh.source;
+      snowMesh = std::move(mesh);
     }
-    log << ": " << a.releaseCells << " cells released (" << fixed(a.releasedM3, 0) << " m^3), runout " << fixed(a.runoutM, 0)
-        << " m, fall " << fixed(a.fallHeightM, 0) << " m, " << a.steps << " steps of " << fixed(scene.params.avalancheStepS, 2)
-        << " s, " << fixed(a.secondsPerStep() * 1e3, 3) << " ms a step; " << a.why << "\n";
+    for (size_t i = 0; i < state.stableM.size(); ++i) report.final.stableM3 += state.stableM.values()[i] * state.spec.cellAreaM2();
+    report.seconds = since(tOcc);
+    log << "occlusion: " << std::scientific << std::setprecision(4) << report.final.totalM3() << std::defaultfloat << " m^3 of snow ("
+        << fixed(report.seconds, 2) << " s)\n";
+  } else {
+    SeasonConfig config;
+    config.days = scene.days;
+    config.seed = scene.seed;
+    config.params = scene.params;
+    config.weather = scene.weather;
+    config.userSnowfalls = scene.userSnowfalls;
+    config.avalancheMaps = scene.outputs.avalancheMaps;
+    config.avalancheFrameIntervalS = scene.outputs.avalancheFrameIntervalS;
+    for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
+      const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: avalanche on day " + fixed(a.day, 1);
+      double xM = a.xM, yM = a.yM;
+      if (a.mapCoordinates) {
+        if (ti.coordinateSystem.rfind("geographic", 0) == 0)
+          throw InputError(where + ": map_position needs a DEM in projected metres; this one is " + ti.coordinateSystem + " (use position_m)");
+        xM = a.xM - ti.spec.originX;
+        yM = ti.spec.originY - a.yM;
+      }
+      const double fx = xM / ti.spec.cellSizeXM, fy = yM / ti.spec.cellSizeYM;
+      if (!(fx >= 0.0 && fy >= 0.0 && fx < ti.spec.width && fy < ti.spec.height))
+        throw InputError(where + ": the rupture point (" + fixed(xM, 1) + " m east, " + fixed(yM, 1) +
+                         " m south of the north-west corner) is outside the terrain (" + fixed(ti.spec.width * ti.spec.cellSizeXM, 1) +
+                         " x " + fixed(ti.spec.height * ti.spec.cellSizeYM, 1) + " m)");
+      const int x = static_cast<int>(fx), y = static_cast<int>(fy);
+      if (!state.validCell(x, y)) throw InputError(where + ": the rupture point falls on a NODATA cell");
+      config.userAvalanches.push_back({a.day, x, y});
+    }
+    config.frameDays = scene.outputs.frameDays;
+    config.windTransport = wind.hasWind();
+    if (exposure || windChanges)
+      config.updateStaticFields = [&](int day, SnowState& s) {
+        if (exposure) temperatureForDay(day, s);
+        if (windChanges) windForDay(day, s);
+      };
+    ProgressBar bar(log, "season", stderrIsTerminal() && &log == &std::cerr, options.progress);
+    SeasonReport seasonReport = runSeason(
+        *backend, state, config, [&](double f) { bar.update(f); }, [&](double day, const SnowState& s) { writeLayers(s, day); });
+    bar.finish();
+    report = std::move(seasonReport);
+    log << "season: " << fixed(scene.days, 0) << " days, " << report.events << " events on " << backend->name() << " ("
+        << fixed(report.seconds, 2) << " s)\n";
+    for (const auto& p : report.phenomena)
+      log << "  " << std::left << std::setw(24) << p.name << std::right << std::setw(6) << p.steps << " steps"
+          << (p.skippedSteps ? " (" + std::to_string(p.skippedSteps) + " skipped)" : std::string()) << "  " << fixed(p.seconds, 3)
+          << " s\n";
+    for (const AvalancheRecord& a : report.avalanches) {
+      log << "  avalanche day " << fixed(a.day, 2) << " at cell (" << a.ruptureX << ", " << a.ruptureY << ")" << (a.user ? " (user)" : "");
+      if (!a.released) {
+        log << ": not released, " << a.why << "\n";
+        continue;
+      }
+      log << ": " << a.releaseCells << " cells released (" << fixed(a.releasedM3, 0) << " m^3), runout " << fixed(a.runoutM, 0)
+          << " m, fall " << fixed(a.fallHeightM, 0) << " m, " << a.steps << " steps of " << fixed(scene.params.avalancheStepS, 2)
+          << " s, " << fixed(a.secondsPerStep() * 1e3, 3) << " ms a step; " << a.why << "\n";
+    }
+    if (report.avalancheTries > 0) log << "  spontaneous avalanche tries: " << report.avalancheTries << "\n";
+    log << "  snow: " << std::scientific << std::setprecision(4) << report.final.totalM3() << " m^3 (added "
+        << report.snowfallAddedM3 << ", melted " << report.meltRemovedM3 << "), mass balance error " << report.massBalanceRelativeError()
+        << std::defaultfloat << "\n";
   }
-  if (report.avalancheTries > 0) log << "  spontaneous avalanche tries: " << report.avalancheTries << "\n";
-  log << "  snow: " << std::scientific << std::setprecision(4) << report.final.totalM3() << " m^3 (added "
-      << report.snowfallAddedM3 << ", melted " << report.meltRemovedM3 << "), mass balance error " << report.massBalanceRelativeError()
-      << std::defaultfloat << "\n";
 
   // 5. Outputs
   t0 = Clock::now();
@@ -555,7 +660,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                                                : hashFile(scene.terrain.file);
   manifest.coordinateSystem = ti.coordinateSystem;
   manifest.seed = scene.seed;
-  manifest.backend = backend->name();
+  manifest.backend = backendName;
+  manifest.mode = scene.mode;
+  manifest.occlusion = manifestOcclusion;
   manifest.grid = ti.spec;
   manifest.latitudeDeg = latitude;
   manifest.seasonDays = scene.days;
@@ -580,7 +687,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(since(t0), 2) << " s)\n";
   log << "total: " << fixed(since(tStart), 2) << " s\n";
   result.season = report;
-  result.backendName = backend->name();
+  result.backendName = backendName;
   return result;
 }
 
