@@ -5,14 +5,18 @@
 #include <assimp/scene.h>
 
 #include <cmath>
+#include <cstring>
+#include <map>
+#include <unordered_map>
 #include <stdexcept>
 
 #include "core/atomic_file.h"
+#include "rtin.h"
 
 namespace snow {
 
 const std::vector<std::string>& meshFormats() {
-  static const std::vector<std::string> f{"ply", "obj", "glb"};
+  static const std::vector<std::string> f{"ply", "obj", "glb", "fbx"};
   return f;
 }
 
@@ -20,7 +24,8 @@ std::string meshFormatDescription(const std::string& format) {
   if (format == "ply") return "PLY binary (little endian), positions and normals, metres, z up";
   if (format == "obj") return "Wavefront OBJ (no materials), positions and normals, metres, y up (x, z, -y)";
   if (format == "glb") return "binary glTF 2.0, positions and normals, metres, y up (x, z, -y)";
-  throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb");
+  if (format == "fbx") return "ASCII FBX 7.5, positions and normals, metres (UnitScaleFactor 100), y up (x, z, -y)";
+  throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
 }
 
 namespace {
@@ -46,8 +51,8 @@ std::vector<std::array<float, 3>> areaWeightedNormals(const MeshData& m) {
 }  // namespace
 
 void writeMesh(const std::string& path, const std::string& format, const MeshData& m) {
-  const char* id = format == "ply" ? "plyb" : format == "obj" ? "objnomtl" : format == "glb" ? "glb2" : nullptr;
-  if (!id) throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb");
+  const char* id = format == "ply" ? "plyb" : format == "obj" ? "objnomtl" : format == "glb" ? "glb2" : format == "fbx" ? "fbxa" : nullptr;
+  if (!id) throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
   const bool yUp = format != "ply";
   const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m);
@@ -75,6 +80,11 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
     mesh->mVertices[k] = axes(m.positions[k]);
     mesh->mNormals[k] = axes(normals[k]);
   }
+  if (m.uvs.size() == m.positions.size()) {
+    mesh->mNumUVComponents[0] = 2;
+    mesh->mTextureCoords[0] = new aiVector3D[m.positions.size()];
+    for (size_t k = 0; k < m.uvs.size(); ++k) mesh->mTextureCoords[0][k] = aiVector3D(m.uvs[k][0], m.uvs[k][1], 0.f);
+  }
   mesh->mNumFaces = static_cast<unsigned>(m.triangles.size());
   mesh->mFaces = new aiFace[m.triangles.size()];
   for (size_t k = 0; k < m.triangles.size(); ++k) {
@@ -85,29 +95,172 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
   Assimp::Exporter exporter;
   const aiExportDataBlob* blob = exporter.ExportToBlob(&scene, id, 0u);
   if (!blob) throw std::runtime_error(path + ": assimp could not export " + format + ": " + exporter.GetErrorString());
-  writeTextAtomically(path, std::string(static_cast<const char*>(blob->data), blob->size));
+  std::string bytes(static_cast<const char*>(blob->data), blob->size);
+  if (format == "fbx") {
+    // The exporter stamps the time of day: a fixed stamp, so the same bake gives the same bytes.
+    const size_t a = bytes.find("CreationTimeStamp:"), b = a == std::string::npos ? a : bytes.find('}', a);
+    if (b != std::string::npos)
+      bytes.replace(a, b + 1 - a,
+                    "CreationTimeStamp:  {\n\t\tVersion: 1000\n\t\tYear: 2000\n\t\tMonth: 1\n\t\tDay: 1\n\t\tHour: 0\n\t\tMinute: 0\n"
+                    "\t\tSecond: 0\n\t\tMillisecond: 0\n\t}");
+    // FBX counts in centimetres: 100 of them to our unit, the metre.
+    for (const char* key : {"\"UnitScaleFactor\", \"double\", \"Number\", \"\", 1\n", "\"OriginalUnitScaleFactor\", \"double\", \"Number\", \"\", 1\n"}) {
+      const size_t at = bytes.find(key);
+      if (at != std::string::npos) bytes.replace(at + std::strlen(key) - 2, 1, "100");
+    }
+  }
+  writeTextAtomically(path, bytes);
 }
 
-MeshData heightfieldMesh(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec) {
+namespace {
+
+// Vertices of the grid points a triangulation uses, numbered in row order.
+struct GridVertices {
+  std::vector<uint32_t> index;  // per grid point, UINT32_MAX when unused
+  std::vector<std::array<int, 2>> points;
+};
+
+GridVertices usedPoints(const RtinMesh& t) {
+  GridVertices g;
+  g.index.assign(static_cast<size_t>(t.width) * t.height, UINT32_MAX);
+  for (const auto& tri : t.triangles)
+    for (const auto& p : tri) g.index[static_cast<size_t>(p[1]) * t.width + p[0]] = 0;
+  for (int y = 0; y < t.height; ++y)
+    for (int x = 0; x < t.width; ++x) {
+      uint32_t& i = g.index[static_cast<size_t>(y) * t.width + x];
+      if (i == UINT32_MAX) continue;
+      i = static_cast<uint32_t>(g.points.size());
+      g.points.push_back({x, y});
+    }
+  return g;
+}
+
+std::array<float, 3> pointAt(const GridSpec& spec, int x, int y, float z) {
+  return {static_cast<float>((x + 0.5) * spec.cellSizeXM), static_cast<float>((spec.height - y - 0.5) * spec.cellSizeYM), z};
+}
+std::array<float, 2> uvAt(const GridSpec& spec, int x, int y) {
+  return {static_cast<float>((x + 0.5) / spec.width), static_cast<float>(1.0 - (y + 0.5) / spec.height)};
+}
+
+}  // namespace
+
+MeshData surfaceMesh(const RtinMesh& t, const Grid<float>& altitude, const GridSpec& spec) {
+  const GridVertices g = usedPoints(t);
   MeshData m;
-  const int w = spec.width, h = spec.height;
-  std::vector<uint32_t> index(static_cast<size_t>(w) * h, UINT32_MAX);
-  for (int j = 0; j < h; ++j)
-    for (int i = 0; i < w; ++i) {
-      if (!valid(i, j)) continue;
-      index[static_cast<size_t>(j) * w + i] = static_cast<uint32_t>(m.positions.size());
-      m.positions.push_back({float((i + 0.5) * spec.cellSizeXM), float((h - j - 0.5) * spec.cellSizeYM), altitude(i, j)});
-    }
-  auto at = [&](int i, int j) { return index[static_cast<size_t>(j) * w + i]; };
-  for (int j = 0; j + 1 < h; ++j)
-    for (int i = 0; i + 1 < w; ++i) {
-      // Rows run south, so (i, j+1) is south of (i, j): counter-clockwise seen from above.
-      const uint32_t nw = at(i, j), ne = at(i + 1, j), sw = at(i, j + 1), se = at(i + 1, j + 1);
-      if (nw != UINT32_MAX && sw != UINT32_MAX && se != UINT32_MAX) m.triangles.push_back({nw, sw, se});
-      if (nw != UINT32_MAX && se != UINT32_MAX && ne != UINT32_MAX) m.triangles.push_back({nw, se, ne});
-    }
+  for (const auto& p : g.points) {
+    m.positions.push_back(pointAt(spec, p[0], p[1], altitude(p[0], p[1])));
+    m.uvs.push_back(uvAt(spec, p[0], p[1]));
+  }
+  for (const auto& tri : t.triangles) {
+    std::array<uint32_t, 3> v;
+    for (int k = 0; k < 3; ++k) v[k] = g.index[static_cast<size_t>(tri[k][1]) * t.width + tri[k][0]];
+    m.triangles.push_back(v);
+  }
   m.normals = areaWeightedNormals(m);
   return m;
+}
+
+MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<float>& depth, const Grid<uint8_t>& valid,
+                      const GridSpec& spec) {
+  const int w = t.width, h = t.height;
+  // The body's depth: 0 next to NODATA, so the body's rim inside the terrain closes on itself.
+  auto bodyDepth = [&](int x, int y) -> float {
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = x + dx, ny = y + dy;
+        if (nx >= 0 && ny >= 0 && nx < w && ny < h && !valid(nx, ny)) return 0.f;
+      }
+    return std::max(0.f, depth(x, y));
+  };
+  // Triangles holding snow at a vertex.
+  std::vector<const std::array<std::array<int, 2>, 3>*> kept;
+  for (const auto& tri : t.triangles)
+    if (bodyDepth(tri[0][0], tri[0][1]) > 0.f || bodyDepth(tri[1][0], tri[1][1]) > 0.f || bodyDepth(tri[2][0], tri[2][1]) > 0.f)
+      kept.push_back(&tri);
+  MeshData m;
+  if (kept.empty()) return m;
+  // Top vertex per grid point used, and a bottom one where the snow is deeper than 0.
+  std::unordered_map<uint64_t, std::array<uint32_t, 2>> vertexOf;  // key y * w + x -> {top, bottom}
+  std::vector<uint64_t> keys;
+  for (const auto* tri : kept)
+    for (const auto& p : *tri) keys.push_back(static_cast<uint64_t>(p[1]) * w + p[0]);
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  for (uint64_t key : keys) {
+    const int x = static_cast<int>(key % w), y = static_cast<int>(key / w);
+    const float d = bodyDepth(x, y), b = bedrock(x, y);
+    const uint32_t top = static_cast<uint32_t>(m.positions.size());
+    m.positions.push_back(pointAt(spec, x, y, b + d));
+    m.uvs.push_back(uvAt(spec, x, y));
+    uint32_t bottom = top;
+    if (d > 0.f) {
+      bottom = static_cast<uint32_t>(m.positions.size());
+      m.positions.push_back(pointAt(spec, x, y, b));
+      m.uvs.push_back(uvAt(spec, x, y));
+    }
+    vertexOf[key] = {top, bottom};
+  }
+  auto vid = [&](const std::array<int, 2>& p, int which) { return vertexOf.at(static_cast<uint64_t>(p[1]) * w + p[0])[which]; };
+  // Directed top edges: an edge of the kept set's rim appears once.
+  std::map<std::pair<uint64_t, uint64_t>, int> edgeCount;
+  auto key = [&](const std::array<int, 2>& p) { return static_cast<uint64_t>(p[1]) * w + p[0]; };
+  for (const auto* tri : kept) {
+    const auto& q = *tri;
+    m.triangles.push_back({vid(q[0], 0), vid(q[1], 0), vid(q[2], 0)});  // top, facing up
+    m.triangles.push_back({vid(q[0], 1), vid(q[2], 1), vid(q[1], 1)});  // bottom, facing down
+    for (int k = 0; k < 3; ++k) {
+      const uint64_t a = key(q[k]), b = key(q[(k + 1) % 3]);
+      ++edgeCount[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  // Walls along rim edges where the snow has depth: (a_top, a_bottom, b_bottom), (a_top, b_bottom, b_top).
+  for (const auto* tri : kept) {
+    const auto& q = *tri;
+    for (int k = 0; k < 3; ++k) {
+      const auto &pa = q[k], &pb = q[(k + 1) % 3];
+      const uint64_t a = key(pa), b = key(pb);
+      if (edgeCount[{std::min(a, b), std::max(a, b)}] != 1) continue;
+      const uint32_t at = vid(pa, 0), ab = vid(pa, 1), bt = vid(pb, 0), bb = vid(pb, 1);
+      if (at != ab) m.triangles.push_back({at, ab, bb});
+      if (bt != bb) m.triangles.push_back({at, bb, bt});
+    }
+  }
+  m.normals = areaWeightedNormals(m);
+  return m;
+}
+
+std::vector<MeshTile> splitIntoTiles(const MeshData& mesh, const GridSpec& spec, int tileCells) {
+  if (tileCells < 1) throw std::invalid_argument("splitIntoTiles: a tile needs at least one cell");
+  std::map<std::pair<int, int>, std::vector<uint32_t>> trianglesOf;  // (row, column) -> triangles
+  for (uint32_t k = 0; k < mesh.triangles.size(); ++k) {
+    double cx = 0, cy = 0;
+    for (uint32_t v : mesh.triangles[k]) cx += mesh.positions[v][0] / 3.0, cy += mesh.positions[v][1] / 3.0;
+    const int column = static_cast<int>(std::floor(cx / spec.cellSizeXM / tileCells));
+    const int row = static_cast<int>(std::floor((spec.height * spec.cellSizeYM - cy) / spec.cellSizeYM / tileCells));
+    trianglesOf[{row, column}].push_back(k);
+  }
+  std::vector<MeshTile> tiles;
+  for (const auto& [rc, tris] : trianglesOf) {
+    MeshTile t;
+    t.row = rc.first, t.column = rc.second;
+    std::unordered_map<uint32_t, uint32_t> local;
+    for (uint32_t k : tris) {
+      std::array<uint32_t, 3> v;
+      for (int c = 0; c < 3; ++c) {
+        const uint32_t g = mesh.triangles[k][c];
+        auto [it, fresh] = local.emplace(g, static_cast<uint32_t>(t.mesh.positions.size()));
+        if (fresh) {
+          t.mesh.positions.push_back(mesh.positions[g]);
+          if (mesh.normals.size() == mesh.positions.size()) t.mesh.normals.push_back(mesh.normals[g]);
+          if (mesh.uvs.size() == mesh.positions.size()) t.mesh.uvs.push_back(mesh.uvs[g]);
+        }
+        v[c] = it->second;
+      }
+      t.mesh.triangles.push_back(v);
+    }
+    tiles.push_back(std::move(t));
+  }
+  return tiles;
 }
 
 }  // namespace snow

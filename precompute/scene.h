@@ -22,7 +22,10 @@ struct OutputRequest {
   bool multichannelExr = false;        // also all layers as the channels of one EXR (layers.exr)
   int displacementWidth = 0, displacementHeight = 0;  // displacement maps at this size (0: none)
   bool vdb = false;                    // the snow body as an OpenVDB file (snow.vdb)
-  std::vector<std::string> meshes;     // the snow surface as meshes: ply / obj / glb (snow_surface.EXT)
+  std::vector<std::string> meshes;     // meshes in these formats: ply / obj / glb / fbx
+  std::vector<std::string> meshParts{"surface"};  // surface (snow_surface.EXT) and/or body (snow_body.EXT)
+  double meshMaxErrorM = 0.1;          // the adaptive triangulation's vertical error bound
+  double meshTileSizeM = 0.0;          // split the surface mesh into square tiles of this size (0: one file)
   double vdbVoxelSizeM = 0.0;          // 0: the grid's smaller cell size
   bool avalancheMaps = false;      // each avalanche's release zone, scour and deposit
   double avalancheFrameIntervalS = 0.0;  // frames of each avalanche's motion (0: none)

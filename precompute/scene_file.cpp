@@ -126,7 +126,10 @@ const std::vector<Rule>& sceneRules() {
       {"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}},
       {"outputs.multichannel_exr", Kind::Bool},
       {"outputs.vdb", Kind::Bool},
-      {"outputs.meshes", Kind::StringArray, -kInf, kInf, {"ply", "obj", "glb"}},
+      {"outputs.meshes", Kind::StringArray, -kInf, kInf, {"ply", "obj", "glb", "fbx"}},
+      {"outputs.mesh_parts", Kind::StringArray, -kInf, kInf, {"surface", "body"}},
+      {"outputs.mesh_max_error_m", Kind::Number, 0, 10000},
+      {"outputs.mesh_tile_size_m", Kind::Number, 0, 1e7},
       {"outputs.vdb_voxel_size_m", Kind::Number, 0.01, 1000},
       {"outputs.displacement_size", Kind::NumberArray, 1, 65536},
       {"outputs.avalanche_maps", Kind::Bool},
@@ -516,6 +519,13 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   if (auto v = root["outputs"]["vdb"].value<bool>()) scene.outputs.vdb = *v;
   if (const toml::node* meshes = root["outputs"]["meshes"].node())
     for (auto&& e : *meshes->as_array()) scene.outputs.meshes.push_back(e.as_string()->get());
+  if (const toml::node* parts = root["outputs"]["mesh_parts"].node()) {
+    scene.outputs.meshParts.clear();
+    for (auto&& e : *parts->as_array()) scene.outputs.meshParts.push_back(e.as_string()->get());
+    if (scene.outputs.meshParts.empty()) fail(source, *parts, "outputs.mesh_parts", "needs \"surface\", \"body\" or both");
+  }
+  scene.outputs.meshMaxErrorM = number(root["outputs"]["mesh_max_error_m"], scene.outputs.meshMaxErrorM);
+  scene.outputs.meshTileSizeM = number(root["outputs"]["mesh_tile_size_m"], scene.outputs.meshTileSizeM);
   if (auto v = root["outputs"]["vdb_voxel_size_m"].value<double>()) scene.outputs.vdbVoxelSizeM = *v;
   if (const toml::node* size = root["outputs"]["displacement_size"].node()) {
     const toml::array& a = *size->as_array();

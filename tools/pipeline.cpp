@@ -20,6 +20,7 @@
 #include "bakers/grid_writer.h"
 #include "bakers/manifest.h"
 #include "bakers/mesh_writer.h"
+#include "bakers/rtin.h"
 #include "bakers/vdb_writer.h"
 #include "precompute/solar.h"
 #include "core/cpu_backend.h"
@@ -452,27 +453,66 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                   fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude",
                "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", day, 0.f, 0.f);
     }
-    for (const std::string& format : scene.outputs.meshes) {
-      std::ostringstream rel;
-      rel << (frame ? "frames/snow_surface." : "snow_surface");
-      if (frame) rel << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
-      const std::string path = (fs::path(options.outDir) / (rel.str() + "." + format)).string();
-      const MeshData mesh = heightfieldMesh(layerGrid(s, "surface"), s.validCell, s.spec);
-      writeMesh(path, format, mesh);
-      listFile(path,
-               "snow surface B+C+S+U+P as a mesh: a vertex per valid cell at its centre, two triangles per 2 x 2 cells (" +
-                   std::to_string(mesh.positions.size()) + " vertices, " + std::to_string(mesh.triangles.size()) +
-                   " triangles); x east, y north from the south-west corner",
-               "m", meshFormatDescription(format), day, 0.f, 0.f);
-      if (snowMesh && !frame) {
-        const std::string meshPath = (fs::path(options.outDir) / ("snow_mesh." + format)).string();
-        writeMesh(meshPath, format, MeshData{snowMesh->positions, {}, snowMesh->triangles});
-        listFile(meshPath,
-                 "the input mesh " + snowMesh->source + " with its vertices raised by their snow depth (occlusion mode, per vertex; " +
-                     std::to_string(snowMesh->positions.size()) + " vertices, " + std::to_string(snowMesh->triangles.size()) +
-                     " triangles), in the input's own coordinates",
-                 "m", meshFormatDescription(format), day, 0.f, 0.f);
+    if (!scene.outputs.meshes.empty()) {
+      // One adaptive triangulation for every part asked (rtin.h), within the vertical error bound
+      // of the surface (and of the bedrock, the body's bottom).
+      const auto& parts = scene.outputs.meshParts;
+      const bool body = std::find(parts.begin(), parts.end(), "body") != parts.end();
+      const Grid<float> surface = layerGrid(s, "surface");
+      std::vector<const Grid<float>*> fields{&surface};
+      if (body) fields.push_back(&s.bedrockM);
+      const RtinMesh triangulation = buildRtin(fields, s.validCell, scene.outputs.meshMaxErrorM);
+      const std::string suffix = frame ? [&] {
+        std::ostringstream o;
+        o << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+        return o.str();
+      }() : std::string();
+      const std::string folder = frame ? "frames/" : "";
+      const std::string frameNote = " (adaptive triangulation, vertical error at most " + fixed(scene.outputs.meshMaxErrorM, 3) +
+                                    " m at every grid point; x east, y north from the south-west corner; UVs line up with the maps)";
+      auto writeAll = [&](const std::string& stem, const MeshData& mesh, const std::string& what) {
+        for (const std::string& format : scene.outputs.meshes) {
+          const std::string path = (fs::path(options.outDir) / (folder + stem + suffix + "." + format)).string();
+          writeMesh(path, format, mesh);
+          listFile(path, what + ", " + std::to_string(mesh.positions.size()) + " vertices, " + std::to_string(mesh.triangles.size()) +
+                             " triangles" + frameNote,
+                   "m", meshFormatDescription(format), day, 0.f, 0.f);
+        }
+      };
+      for (const std::string& part : parts) {
+        if (part == "surface") {
+          const MeshData mesh = surfaceMesh(triangulation, surface, s.spec);
+          const int tileCells = scene.outputs.meshTileSizeM > 0.0
+                                    ? std::max(1, static_cast<int>(std::lround(scene.outputs.meshTileSizeM / s.spec.cellSizeXM)))
+                                    : 0;
+          if (tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height)) {
+            writeAll("snow_surface", mesh, "snow surface B+C+S+U+P");
+          } else {
+            for (const MeshTile& t : splitIntoTiles(mesh, s.spec, tileCells))
+              writeAll("snow_surface_x" + std::to_string(t.column) + "_y" + std::to_string(t.row), t.mesh,
+                       "snow surface B+C+S+U+P, tile column " + std::to_string(t.column) + " (from the west), row " +
+                           std::to_string(t.row) + " (from the north) of " + std::to_string(tileCells) + " x " +
+                           std::to_string(tileCells) + " cells");
+          }
+        } else {
+          const MeshData mesh = snowBodyMesh(triangulation, s.bedrockM, layerGrid(s, "depth"), s.validCell, s.spec);
+          if (mesh.triangles.empty()) {
+            log << "  snow_body" << suffix << ": no snow, no mesh written\n";
+            continue;
+          }
+          writeAll("snow_body", mesh, "the snow body alone, closed (top on the snow surface, bottom on the bedrock, walls at the grid's edge)");
+        }
       }
+      if (snowMesh && !frame)
+        for (const std::string& format : scene.outputs.meshes) {
+          const std::string meshPath = (fs::path(options.outDir) / ("snow_mesh." + format)).string();
+          writeMesh(meshPath, format, MeshData{snowMesh->positions, {}, {}, snowMesh->triangles});
+          listFile(meshPath,
+                   "the input mesh " + snowMesh->source + " with its vertices raised by their snow depth (occlusion mode, per vertex; " +
+                       std::to_string(snowMesh->positions.size()) + " vertices, " + std::to_string(snowMesh->triangles.size()) +
+                       " triangles), in the input's own coordinates",
+                   "m", meshFormatDescription(format), day, 0.f, 0.f);
+        }
     }
     if (!channels.empty()) {
       std::ostringstream rel;
