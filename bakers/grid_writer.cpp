@@ -12,7 +12,7 @@
 namespace snow {
 
 WrittenImage writeFloatImage(const std::string& base, const std::string& format, const Grid<float>& grid,
-                             const std::string& channelName) {
+                             const std::string& layerName) {
   if (format != "exr" && format != "tiff") throw std::invalid_argument("unknown image format '" + format + "'");
   WrittenImage result;
   result.path = base + (format == "exr" ? ".exr" : ".tif");
@@ -25,7 +25,12 @@ WrittenImage writeFloatImage(const std::string& base, const std::string& format,
     auto out = OIIO::ImageOutput::create(temp);
     if (!out) throw std::runtime_error("cannot create an image writer for " + result.path + ": " + OIIO::geterror());
     OIIO::ImageSpec spec(grid.width(), grid.height(), 1, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = {channelName};
+    // One greyscale channel "Y": what Blender, Nuke, Houdini and Terragen read from a
+    // single-channel image (Blender ignores a channel named otherwise and loads zeros); the
+    // layer's name goes into the metadata.
+    spec.channelnames = {"Y"};
+    spec.attribute("snowbake:layer", layerName);
+    spec.attribute("ImageDescription", "snowbake layer: " + layerName);
     spec.attribute("oiio:ColorSpace", "Linear");
     spec.attribute("compression", format == "exr" ? "zip" : "zip");
     // Fixed metadata only: no time stamps, so the same bake gives the same bytes.
@@ -120,7 +125,11 @@ void writeMultiChannelExr(const std::string& path, const std::vector<std::string
     auto out = OIIO::ImageOutput::create(path);
     if (!out) throw std::runtime_error("cannot create an EXR writer for " + path + ": " + OIIO::geterror());
     OIIO::ImageSpec spec(w, h, n, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = names;
+    // "<layer>.Y": each layer an EXR layer with one greyscale channel, which Blender reads as
+    // render passes named after the layers (the compositor's Image node), Nuke as layers and
+    // Houdini as planes. A bare "<layer>" channel name is ignored by Blender.
+    spec.channelnames.clear();
+    for (const auto& n : names) spec.channelnames.push_back(n + ".Y");
     spec.alpha_channel = -1;
     spec.attribute("oiio:ColorSpace", "Linear");
     spec.attribute("compression", "zip");

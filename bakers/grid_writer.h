@@ -15,9 +15,10 @@ struct WrittenImage {
   float minValue = 0.f, maxValue = 0.f;
 };
 
-// `format` is "exr" or "tiff"; the file gets that extension. Written atomically.
+// `format` is "exr" or "tiff"; the file gets that extension. Written atomically. The one channel
+// is "Y" (greyscale); `layerName` goes into the metadata (snowbake:layer, ImageDescription).
 WrittenImage writeFloatImage(const std::string& pathWithoutExtension, const std::string& format, const Grid<float>& grid,
-                             const std::string& channelName);
+                             const std::string& layerName);
 
 // A grid normalised to its own range [min, max] and quantised: "png16" (1-channel 16-bit PNG,
 // `<base>.16.png`), "png8" (8-bit PNG mask for engines' weight layers, `<base>.8.png`) or "r16"
@@ -32,7 +33,8 @@ std::string normalisedFormat(const std::string& encoding, int width, int height)
 // displacement maps at a requested resolution). Edge cells clamp. Exact for linear fields.
 Grid<float> resampleBilinear(const Grid<float>& grid, int width, int height);
 
-// Several grids of one size as the named channels of one 32-bit float EXR (zip). Written atomically.
+// Several grids of one size in one 32-bit float EXR (zip), channel "<name>.Y" per grid (an EXR
+// layer per grid). Written atomically.
 void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids);
 
 // An 8-bit sRGB PNG preview, three bytes per pixel, row 0 at the north edge. Written atomically.

@@ -5,6 +5,8 @@
 #include <assimp/scene.h>
 
 #include <cmath>
+#include <charconv>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <unordered_map>
@@ -50,12 +52,117 @@ std::vector<std::array<float, 3>> areaWeightedNormals(const MeshData& m) {
 
 }  // namespace
 
+namespace {
+
+// (x, y, z) z up -> (x, z, -y) y up.
+std::array<float, 3> yUp(const std::array<float, 3>& p) { return {p[0], p[2], -p[1]}; }
+
+// Binary glTF 2.0 written directly (assimp's exporter took seconds a million triangles): one
+// mesh, one primitive, POSITION / NORMAL / TEXCOORD_0 (glTF's v runs down the image) and uint32
+// indices, a plain snow material.
+std::string glbBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+  const size_t n = m.positions.size(), t = m.triangles.size();
+  const bool uv = m.uvs.size() == n;
+  std::string bin;
+  auto put = [&](const void* p, size_t bytes) { bin.append(static_cast<const char*>(p), bytes); };
+  std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  for (const auto& p : m.positions) {
+    const auto q = yUp(p);
+    put(q.data(), 12);
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], q[c]), hi[c] = std::max(hi[c], q[c]);
+  }
+  const size_t normalOffset = bin.size();
+  for (const auto& v : normals) put(yUp(v).data(), 12);
+  const size_t uvOffset = bin.size();
+  if (uv)
+    for (const auto& u : m.uvs) {
+      const float q[2] = {u[0], 1.f - u[1]};
+      put(q, 8);
+    }
+  const size_t indexOffset = bin.size();
+  for (const auto& tri : m.triangles) put(tri.data(), 12);
+  const size_t binLength = bin.size();
+  while (bin.size() % 4) bin.push_back('\0');
+  auto num = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return std::string(buf);
+  };
+  std::string json = "{\"asset\":{\"version\":\"2.0\",\"generator\":\"snowbake\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+                     "\"nodes\":[{\"mesh\":0,\"name\":\"snow\"}],\"meshes\":[{\"name\":\"snow\",\"primitives\":[{\"attributes\":{"
+                     "\"POSITION\":0,\"NORMAL\":1" + std::string(uv ? ",\"TEXCOORD_0\":2" : "") + "},\"indices\":" + (uv ? "3" : "2") +
+                     ",\"mode\":4,\"material\":0}]}],\"materials\":[{\"name\":\"snow\",\"pbrMetallicRoughness\":{\"baseColorFactor\":"
+                     "[0.95,0.96,0.98,1],\"metallicFactor\":0,\"roughnessFactor\":0.8}}],\"buffers\":[{\"byteLength\":" +
+                     std::to_string(binLength) + "}],\"bufferViews\":[";
+  auto view = [&](size_t offset, size_t length, int target) {
+    return "{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) + ",\"byteLength\":" + std::to_string(length) + ",\"target\":" +
+           std::to_string(target) + "}";
+  };
+  json += view(0, n * 12, 34962) + "," + view(normalOffset, n * 12, 34962) + (uv ? "," + view(uvOffset, n * 8, 34962) : "") + "," +
+          view(indexOffset, t * 12, 34963) + "],\"accessors\":[";
+  json += "{\"bufferView\":0,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\",\"min\":[" + num(lo[0]) + "," +
+          num(lo[1]) + "," + num(lo[2]) + "],\"max\":[" + num(hi[0]) + "," + num(hi[1]) + "," + num(hi[2]) + "]},";
+  json += "{\"bufferView\":1,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\"},";
+  if (uv) json += "{\"bufferView\":2,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC2\"},";
+  json += "{\"bufferView\":" + std::string(uv ? "3" : "2") + ",\"componentType\":5125,\"count\":" + std::to_string(3 * t) +
+          ",\"type\":\"SCALAR\"}]}";
+  while (json.size() % 4) json.push_back(' ');
+  std::string out;
+  auto u32 = [&](uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
+  u32(0x46546C67u);  // "glTF"
+  u32(2);
+  u32(static_cast<uint32_t>(12 + 8 + json.size() + 8 + bin.size()));
+  u32(static_cast<uint32_t>(json.size()));
+  u32(0x4E4F534Au);  // "JSON"
+  out += json;
+  u32(static_cast<uint32_t>(bin.size()));
+  u32(0x004E4942u);  // "BIN"
+  out += bin;
+  return out;
+}
+
+// Wavefront OBJ written directly (shortest round-trip decimal of each float), y up.
+std::string objBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+  std::string out = "# snowbake snow mesh: metres, y up (x east, y altitude, z south)\no snow\n";
+  out.reserve(m.positions.size() * 100 + m.triangles.size() * 40);
+  char buf[48];
+  auto line = [&](const char* tag, const float* v, int count) {
+    out += tag;
+    for (int c = 0; c < count; ++c) {
+      out += ' ';
+      const auto r = std::to_chars(buf, buf + sizeof buf, v[c]);
+      out.append(buf, r.ptr);
+    }
+    out += '\n';
+  };
+  for (const auto& p : m.positions) line("v", yUp(p).data(), 3);
+  const bool uv = m.uvs.size() == m.positions.size();
+  if (uv)
+    for (const auto& u : m.uvs) line("vt", u.data(), 2);
+  for (const auto& v : normals) line("vn", yUp(v).data(), 3);
+  for (const auto& tri : m.triangles) {
+    out += 'f';
+    for (uint32_t v : tri) {
+      const std::string k = std::to_string(v + 1);
+      out += ' ';
+      out += k;
+      out += uv ? "/" + k + "/" + k : "//" + k;
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace
+
 void writeMesh(const std::string& path, const std::string& format, const MeshData& m) {
   const char* id = format == "ply" ? "plyb" : format == "obj" ? "objnomtl" : format == "glb" ? "glb2" : format == "fbx" ? "fbxa" : nullptr;
   if (!id) throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
-  const bool yUp = format != "ply";
   const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m);
+  if (format == "glb") return writeTextAtomically(path, glbBytes(m, normals));
+  if (format == "obj") return writeTextAtomically(path, objBytes(m, normals));
+  const bool yUp = format != "ply";
   auto axes = [&](const std::array<float, 3>& p) { return yUp ? aiVector3D(p[0], p[2], -p[1]) : aiVector3D(p[0], p[1], p[2]); };
 
   aiScene scene;  // owns everything below; freed by its destructor
@@ -201,25 +308,31 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
     vertexOf[key] = {top, bottom};
   }
   auto vid = [&](const std::array<int, 2>& p, int which) { return vertexOf.at(static_cast<uint64_t>(p[1]) * w + p[0])[which]; };
-  // Directed top edges: an edge of the kept set's rim appears once.
-  std::map<std::pair<uint64_t, uint64_t>, int> edgeCount;
+  // Undirected edges of the kept triangles, sorted: a rim edge appears once.
   auto key = [&](const std::array<int, 2>& p) { return static_cast<uint64_t>(p[1]) * w + p[0]; };
+  std::vector<std::pair<uint64_t, uint64_t>> edges;
+  edges.reserve(kept.size() * 3);
   for (const auto* tri : kept) {
     const auto& q = *tri;
     m.triangles.push_back({vid(q[0], 0), vid(q[1], 0), vid(q[2], 0)});  // top, facing up
     m.triangles.push_back({vid(q[0], 1), vid(q[2], 1), vid(q[1], 1)});  // bottom, facing down
     for (int k = 0; k < 3; ++k) {
       const uint64_t a = key(q[k]), b = key(q[(k + 1) % 3]);
-      ++edgeCount[{std::min(a, b), std::max(a, b)}];
+      edges.push_back({std::min(a, b), std::max(a, b)});
     }
   }
+  std::sort(edges.begin(), edges.end());
+  auto once = [&](uint64_t a, uint64_t b) {
+    const std::pair<uint64_t, uint64_t> e{std::min(a, b), std::max(a, b)};
+    const auto range = std::equal_range(edges.begin(), edges.end(), e);
+    return range.second - range.first == 1;
+  };
   // Walls along rim edges where the snow has depth: (a_top, a_bottom, b_bottom), (a_top, b_bottom, b_top).
   for (const auto* tri : kept) {
     const auto& q = *tri;
     for (int k = 0; k < 3; ++k) {
       const auto &pa = q[k], &pb = q[(k + 1) % 3];
-      const uint64_t a = key(pa), b = key(pb);
-      if (edgeCount[{std::min(a, b), std::max(a, b)}] != 1) continue;
+      if (!once(key(pa), key(pb))) continue;
       const uint32_t at = vid(pa, 0), ab = vid(pa, 1), bt = vid(pb, 0), bb = vid(pb, 1);
       if (at != ab) m.triangles.push_back({at, ab, bb});
       if (bt != bb) m.triangles.push_back({at, bb, bt});

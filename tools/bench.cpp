@@ -19,6 +19,8 @@
 #include "precompute/exposure.h"
 #include "precompute/horizon.h"
 #include "precompute/occlusion.h"
+#include "bakers/mesh_writer.h"
+#include "bakers/rtin.h"
 #include "precompute/terrain_loader.h"
 #include "precompute/wind.h"
 
@@ -58,20 +60,23 @@ std::string windBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string sunBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string meshBench(const BenchOptions& o, std::ostream& log, int threads);
 
 }  // namespace
 
 std::string runBench(const BenchOptions& o, std::ostream& log) {
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  if (o.stage != "all" && o.stage != "season" && o.stage != "wind" && o.stage != "sun" && o.stage != "avalanche" && o.stage != "occlusion")
-    throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche, occlusion or all");
+  if (o.stage != "all" && o.stage != "season" && o.stage != "wind" && o.stage != "sun" && o.stage != "avalanche" && o.stage != "occlusion" &&
+      o.stage != "mesh")
+    throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche, occlusion, mesh or all");
   std::string out;
   if (o.stage == "all" || o.stage == "sun") out += sunBench(o, log, threads) + "\n";
   if (o.stage == "all" || o.stage == "wind") out += windBench(o, log, threads) + "\n";
   if (o.stage == "all" || o.stage == "season") out += seasonBench(o, log, threads) + "\n";
   if (o.stage == "all" || o.stage == "avalanche") out += avalancheBench(o, log, threads) + "\n";
-  if (o.stage == "all" || o.stage == "occlusion") out += occlusionBench(o, log, threads);
+  if (o.stage == "all" || o.stage == "occlusion") out += occlusionBench(o, log, threads) + "\n";
+  if (o.stage == "all" || o.stage == "mesh") out += meshBench(o, log, threads);
   return out;
 }
 
@@ -422,6 +427,53 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
     }
   }
   writeCsv(o, "occlusion.csv", csv.str(), table);
+  return table.str();
+}
+
+}  // namespace
+
+namespace {
+
+// The adaptive triangulation on a real DEM: triangles against the vertical error bound, the
+// error measured on the output, and the time (triangulation and glTF writing).
+std::string meshBench(const BenchOptions& o, std::ostream& log, int threads) {
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  std::ostringstream table, csv;
+  const std::string dem = o.sharedDataDir + "/dem/tyrol_avaWog_5m.asc";
+  if (!std::filesystem::exists(dem)) return "Mesh simplification: skipped (" + dem + " not found)\n";
+  TerrainSource src;
+  src.file = dem;
+  const Terrain t = loadTerrain(src);
+  const GridSpec& spec = t.info.spec;
+  const size_t full = 2 * static_cast<size_t>(spec.width - 1) * (spec.height - 1);
+  table << "Mesh simplification, tyrol_avaWog_5m.asc (" << spec.width << " x " << spec.height << " cells of "
+        << format("%.1f", spec.cellSizeXM) << " m; a full-resolution triangulation has " << full << " triangles), "
+        << machineDescription() << ", " << threads << " threads\n\n"
+        << "| vertical error bound (m) | triangles | share of full | measured max error (m) | triangulation (s) | glb (s) | glb size (MB) |\n"
+        << "|---|---|---|---|---|---|---|\n";
+  csv << "bound_m,triangles,vertices,max_error_m,triangulation_s,glb_s,glb_bytes\n";
+  const std::string dir = o.csvDir.empty() ? std::filesystem::temp_directory_path().string() : o.csvDir;
+  std::filesystem::create_directories(dir);
+  for (double bound : {0.0, 0.05, 0.1, 0.25, 0.5, 1.0, 2.0, 5.0}) {
+    const auto t0 = Clock::now();
+    const RtinMesh m = buildRtin({&t.heightsM}, t.valid, bound);
+    const double tri = since(t0);
+    const double err = rtinMaxVerticalError(m, t.heightsM);
+    const auto t1 = Clock::now();
+    const MeshData mesh = surfaceMesh(m, t.heightsM, spec);
+    const std::string path = (std::filesystem::path(dir) / "mesh_bench.glb").string();
+    writeMesh(path, "glb", mesh);
+    const double glb = since(t1);
+    const double mb = std::filesystem::file_size(path) / 1e6;
+    table << "| " << format("%.2f", bound) << " | " << m.triangles.size() << " | " << format("%.3f", double(m.triangles.size()) / full) << " | "
+          << format("%.3f", err) << " | " << format("%.2f", tri) << " | " << format("%.2f", glb) << " | " << format("%.1f", mb) << " |\n";
+    csv << bound << "," << m.triangles.size() << "," << mesh.positions.size() << "," << err << "," << tri << "," << glb << ","
+        << std::filesystem::file_size(path) << "\n";
+    log << "  mesh bound " << bound << " m: " << m.triangles.size() << " triangles\n";
+  }
+  std::filesystem::remove(std::filesystem::path(dir) / "mesh_bench.glb");
+  writeCsv(o, "mesh.csv", csv.str(), table);
   return table.str();
 }
 

@@ -329,8 +329,14 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   std::vector<std::vector<uint8_t>> previews;  // for the contact sheet, in the order written
   int previewWidth = 0, previewHeight = 0;
   // Lists a written file in the manifest and the result.
+  // Time spent per kind of output (by format): the time since the previous file was listed, which
+  // is the time to compute and write this one.
+  std::map<std::string, double> outputSeconds;
+  auto lastListed = Clock::now();
   auto listFile = [&](const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
                       double day, float minValue, float maxValue) {
+    outputSeconds[format.substr(0, format.find(','))] += since(lastListed);
+    lastListed = Clock::now();
     ManifestFile f;
     f.path = fs::relative(path, options.outDir).string();
     f.content = content;
@@ -350,6 +356,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   };
   const std::string rgbPngFormat = "PNG, 3 channels uint8, sRGB";
   auto writeLayers = [&](const SnowState& s, double day) {
+    lastListed = Clock::now();
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
     std::vector<std::string> channelNames;
@@ -461,7 +468,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       const Grid<float> surface = layerGrid(s, "surface");
       std::vector<const Grid<float>*> fields{&surface};
       if (body) fields.push_back(&s.bedrockM);
+      const auto tTri = Clock::now();
       const RtinMesh triangulation = buildRtin(fields, s.validCell, scene.outputs.meshMaxErrorM);
+      outputSeconds["mesh triangulation (adaptive)"] += since(tTri);
+      lastListed = Clock::now();
       const std::string suffix = frame ? [&] {
         std::ostringstream o;
         o << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
@@ -481,7 +491,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       };
       for (const std::string& part : parts) {
         if (part == "surface") {
+          auto tm = Clock::now();
           const MeshData mesh = surfaceMesh(triangulation, surface, s.spec);
+          outputSeconds["mesh building"] += since(tm);
+          lastListed = Clock::now();
           const int tileCells = scene.outputs.meshTileSizeM > 0.0
                                     ? std::max(1, static_cast<int>(std::lround(scene.outputs.meshTileSizeM / s.spec.cellSizeXM)))
                                     : 0;
@@ -495,7 +508,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                            std::to_string(tileCells) + " cells");
           }
         } else {
+          auto tm = Clock::now();
           const MeshData mesh = snowBodyMesh(triangulation, s.bedrockM, layerGrid(s, "depth"), s.validCell, s.spec);
+          outputSeconds["mesh building"] += since(tm);
+          lastListed = Clock::now();
           if (mesh.triangles.empty()) {
             log << "  snow_body" << suffix << ": no snow, no mesh written\n";
             continue;
@@ -725,6 +741,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   writeTextAtomically(manifestPath, manifestToJson(manifest));
   result.files.push_back(manifestPath);
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(since(t0), 2) << " s)\n";
+  for (const auto& [kind, seconds] : outputSeconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";
   log << "total: " << fixed(since(tStart), 2) << " s\n";
   result.season = report;
   result.backendName = backendName;

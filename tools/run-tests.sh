@@ -4,6 +4,7 @@
 # that folder is absent.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+bash tools/setup-debian.sh --with-blender
 bash tools/build.sh
 cd build
 ctest --output-on-failure -j"$(nproc)" --timeout 900

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what snowbake needs on Debian 12, if it is missing. Idempotent: does nothing (and
 # needs no network) when every package is already there. Runs apt-get as root, or through sudo.
+# --with-blender also installs Blender 3.4, which the test suite uses as a real client of the
+# outputs (tests/blender_test.cpp); the bake itself never needs it.
 set -euo pipefail
 
 packages=(
@@ -9,6 +11,7 @@ packages=(
   libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
 )
+if [ "${1:-}" = "--with-blender" ]; then packages+=(blender); fi
 
 missing=()
 for p in "${packages[@]}"; do
