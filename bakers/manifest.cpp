@@ -38,6 +38,9 @@ std::string manifestToJson(const Manifest& m) {
                           {"released_m3", a.releasedM3}, {"deposit_m3", a.depositM3}, {"runout_m", a.runoutM},
                           {"fall_height_m", a.fallHeightM}, {"steps", a.steps}, {"simulated_s", a.simulatedS}});
   j["run"]["avalanches"] = avalanches;
+  ordered_json parameters = ordered_json::object();
+  for (const auto& [key, value] : m.parameters) parameters[key] = value;
+  j["run"]["parameters"] = parameters;
   if (m.mode == "occlusion") {
     const ManifestOcclusion& o = m.occlusion;
     ordered_json sun = ordered_json::array();

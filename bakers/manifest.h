@@ -43,6 +43,7 @@ struct ManifestOcclusion {
 
 struct Manifest {
   std::string mode = "season";
+  std::vector<std::pair<std::string, double>> parameters;  // every model parameter as used (key, value)
   ManifestOcclusion occlusion;
   std::string programVersion;
   std::string sceneSource;

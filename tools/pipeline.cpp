@@ -718,6 +718,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   manifest.seed = scene.seed;
   manifest.backend = backendName;
   manifest.mode = scene.mode;
+  for (const ParameterInfo& info : parameterTable()) manifest.parameters.push_back({info.key, scene.params.*(info.member)});
   manifest.occlusion = manifestOcclusion;
   manifest.grid = ti.spec;
   manifest.latitudeDeg = latitude;
