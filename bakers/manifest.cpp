@@ -38,6 +38,11 @@ std::string manifestToJson(const Manifest& m) {
                           {"released_m3", a.releasedM3}, {"deposit_m3", a.depositM3}, {"runout_m", a.runoutM},
                           {"fall_height_m", a.fallHeightM}, {"steps", a.steps}, {"simulated_s", a.simulatedS}});
   j["run"]["avalanches"] = avalanches;
+  ordered_json skiers = ordered_json::array();
+  for (const auto& k : m.skiers)
+    skiers.push_back({{"day", k.day}, {"start_cell", {k.x, k.y}}, {"user", k.user}, {"cells", k.cells}, {"length_m", k.lengthM},
+                      {"drop_m", k.dropM}, {"triggered_avalanche", k.triggered}, {"outcome", k.why}});
+  j["run"]["skiers"] = skiers;
   ordered_json parameters = ordered_json::object();
   for (const auto& [key, value] : m.parameters) parameters[key] = value;
   j["run"]["parameters"] = parameters;
@@ -67,8 +72,8 @@ std::string manifestToJson(const Manifest& m) {
     if (f.day >= 0) e["day"] = f.day; else e["day"] = "final";
     e["min"] = f.minValue;
     e["max"] = f.maxValue;
-    e["width"] = m.grid.width;
-    e["height"] = m.grid.height;
+    e["width"] = f.width > 0 ? f.width : m.grid.width;
+    e["height"] = f.height > 0 ? f.height : m.grid.height;
     files.push_back(e);
   }
   j["files"] = files;

@@ -17,6 +17,17 @@ struct ManifestFile {
   std::string format;    // e.g. "OpenEXR, 1 channel float32, linear"
   double day = -1.0;     // season day of the frame; -1 for the end of the season
   float minValue = 0.f, maxValue = 0.f;
+  int width = 0, height = 0;  // 0: the grid's
+};
+
+struct ManifestSkier {
+  double day = 0;
+  int x = 0, y = 0;
+  bool user = false;
+  int cells = 0;
+  double lengthM = 0, dropM = 0;
+  bool triggered = false;
+  std::string why;
 };
 
 struct ManifestPhenomenon {
@@ -62,6 +73,7 @@ struct Manifest {
   double snowfallAddedM3 = 0, meltRemovedM3 = 0, finalSnowM3 = 0, initialSnowM3 = 0;
   std::vector<ManifestPhenomenon> phenomena;
   std::vector<ManifestAvalanche> avalanches;
+  std::vector<ManifestSkier> skiers;
   std::vector<ManifestFile> files;
 };
 

@@ -55,6 +55,10 @@ class SnowBackend {
   // (clipped to the grid by the caller), row after row: a cheap look at a few cells.
   virtual void readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) = 0;
 
+  // Skiers (core/ski.h): in each listed cell (y * width + x, in order), `amountM` of unstable
+  // snow becomes stable, and what U lacks of it, stable becomes compacted (conserves mass).
+  virtual void skierCompaction(const std::vector<int>& cells, float amountM) = 0;
+
   // Avalanches (kernels/avalanche.h; the host loop is core/avalanche.h). Release: `moving` (one
   // byte per cell) marks the released cells; records U + P and joins their powder to U.
   virtual void avalancheRelease(const std::vector<uint8_t>& moving) = 0;

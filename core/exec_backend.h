@@ -95,6 +95,25 @@ class ExecBackend final : public SnowBackend {
     }
   }
 
+  void skierCompaction(const std::vector<int>& cells, float amountM) override {
+    for (int cell : cells) {
+      const size_t i = static_cast<size_t>(cell);
+      float u = 0.f, st = 0.f, c = 0.f;
+      exec_.downloadRange(unstable_, i, 1, &u);
+      exec_.downloadRange(stable_, i, 1, &st);
+      exec_.downloadRange(compacted_, i, 1, &c);
+      const float fromU = std::min(u, amountM);
+      const float fromS = std::min(st + fromU, amountM - fromU);  // what U lacked, from S (after U's share arrived)
+      u -= fromU;
+      st = st + fromU - fromS;
+      c += fromS;
+      exec_.uploadRange(unstable_, i, 1, &u);
+      exec_.uploadRange(stable_, i, 1, &st);
+      exec_.uploadRange(compacted_, i, 1, &c);
+    }
+    exec_.finish();
+  }
+
   void avalancheRelease(const std::vector<uint8_t>& moving) override {
     if (!avalancheFieldsReady_) {  // allocated on the first avalanche only
       exec_.upload(flows_, std::vector<float>(4 * spec_.cellCount(), 0.f));

@@ -51,7 +51,18 @@ struct ModelParameters {
   // --- §6.2 ski tracks
   double skierTargetSlopeDeg = 30.0;         // s_t
   double trackAmplitudeM = 5.0;              // a
-  double trackFrequencyPerM = 0.01;          // f
+  double trackFrequencyPerM = 0.01;          // f: the lowest turn frequency where the terrain is steeper than s_t (see ski.h)
+  // --- §6.2 skiers, beyond Table 2
+  double skiersPerHour = 1.0;                // automatic skiers while skiing happens (the paper: about one an hour)
+  double skiHoursPerDay = 7.0;               // hours of skiing a day
+  double skiMinSnowM = 0.3;                  // skiers go only where the snow is at least this deep
+  double skiLookaheadM = 30.0;               // the window a skier picks its next target cell in
+  double skiSlopeToleranceDeg = 10.0;        // sigma of f(|s_n - s_t|) = exp(-((s_n - s_t)/sigma)^2)
+  double skiSteering = 0.5;                  // share of the way the heading turns toward the target each step
+  double skiCompactionM = 0.05;              // snow a skier turns U -> S (or S -> C) in each cell entered
+  double skiTriggerFactor = 0.1;             // how much a skier raises a cell's avalanche probability
+  double skiTrackDepthM = 0.1;               // depth of a fresh ski track
+  double skiTrackWidthM = 1.2;               // width of a ski track
   // --- §6.1 avalanches, beyond Table 2
   double avalancheDryTemperatureC = -10.0;    // alpha = 1 (granular) at or below
   double avalancheWetTemperatureC = 0.0;      // alpha = 0 (viscous) at or above

@@ -160,12 +160,13 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   std::optional<AvalancheRun> avalanche;
   std::deque<UserAvalanche> pendingAvalanches;
   int avalancheId = -1;
+  const bool skiing = (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !cfg.userSkiers.empty();
   {
     double validCells = 0;
     for (uint8_t v : state.validCell.values()) validCells += v;
     const double areaKm2 = validCells * state.spec.cellAreaM2() * 1e-6;
     const double startsPerDay = p.avalancheRatePerKm2PerDay * areaKm2;
-    if (startsPerDay > 0.0 || !cfg.userAvalanches.empty()) {
+    if (startsPerDay > 0.0 || !cfg.userAvalanches.empty() || (skiing && p.skiTriggerFactor > 0.0)) {
       avalanche.emplace(backend, p, state);
       avalanche->keepMaps(cfg.avalancheMaps, cfg.avalancheFrameIntervalS);
       PhenomenonSpec s;
@@ -180,7 +181,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
           if (!pendingAvalanches.empty()) {
             const UserAvalanche u = pendingAvalanches.front();
             pendingAvalanches.pop_front();
-            avalanche->release(u.x, u.y, e.day, t0, true);
+            avalanche->release(u.x, u.y, e.day, t0, !u.bySkier);
             if (!avalanche->active()) report.avalanches.push_back(avalanche->record());
           } else {
             const RandomKey key{cfg.seed};
@@ -201,7 +202,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
           const UserAvalanche u = pendingAvalanches.front();
           pendingAvalanches.pop_front();
           timed(slot, [&] {
-            avalanche->release(u.x, u.y, u.day, cfg.weather.at(u.day).seaLevelTemperatureC, true);
+            avalanche->release(u.x, u.y, u.day, cfg.weather.at(u.day).seaLevelTemperatureC, !u.bySkier);
             report.avalanches.push_back(avalanche->runToRest());
           });
         }
@@ -217,6 +218,54 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     });
   }
 
+  // Skiers (§6.2): automatic ones at skiers_per_hour x ski_hours_per_day a day, each from a cell
+  // drawn by the route map, and the scene's user skiers. A descent runs whole at its event (the
+  // bake has no real-time display to zoom for); an avalanche it triggers starts at once.
+  std::optional<SkiRun> ski;
+  if (skiing) {
+    ski.emplace(backend, p, state, cfg.skiTracks);
+    report.routeMap = ski->routeMap();
+    uint64_t skierId = 0;
+    auto runSkier = [&](int x, int y, double day, bool user) {
+      SkierRecord r = ski->descend(x, y, day, cfg.seed, skierId++, user);
+      if (r.triggered && avalancheId >= 0) {
+        pendingAvalanches.push_back({day, r.triggerX, r.triggerY, true});
+        scheduler.start(avalancheId);
+      }
+      if (!user) r.path.clear();  // keep the records small; user skiers keep their paths
+      report.skiers.push_back(std::move(r));
+    };
+    const double startsPerDay = p.skiersPerHour * p.skiHoursPerDay;
+    if (startsPerDay > 0.0) {
+      PhenomenonSpec s;
+      s.name = "skier";
+      s.alwaysActive = true;
+      s.stepsPerDay = startsPerDay;
+      const int slot = static_cast<int>(reports.size());
+      s.onStep = [&, slot](const EventContext& e) {
+        timed(slot, [&] {
+          // Cells drawn by the route map until one has snow enough to ski (at most 16 draws).
+          const RandomKey key{cfg.seed};
+          for (uint32_t k = 0; k < 16; ++k) {
+            const Philox4x32 r = key.draw(e.eventIndex, k, RngStream::Skier);
+            int x = 0, y = 0;
+            if (!ski->pickStart(uniformOpenDouble(r.v[0], r.v[1]), x, y)) break;
+            if (!ski->canStart(x, y)) continue;
+            runSkier(x, y, e.day, false);
+            break;
+          }
+        });
+      };
+      addPhenomenon(std::move(s));
+    }
+    for (const UserSkier& u : cfg.userSkiers) {
+      if (u.day < 0.0 || u.day > cfg.days) continue;
+      scheduler.addAction(u.day, [&, u](double now) {
+        for (int k = 0; k < u.count; ++k) runSkier(u.x, u.y, now, true);
+      });
+    }
+  }
+
   if (cfg.updateStaticFields) {
     for (int day = 1; day < cfg.days; ++day)
       scheduler.addAction(day, [&, day](double) {
@@ -230,6 +279,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     scheduler.addAction(day, [&](double now) {
       SnowState frame = state;
       backend.download(frame);
+      if (cfg.skiTracks) cfg.skiTracks->fade(frame);
       onFrame(now, frame);
     });
   }
@@ -245,6 +295,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   if (progress) progress(1.0);
 
   backend.download(state);
+  if (cfg.skiTracks) cfg.skiTracks->fade(state);
   report.final = backend.totals();
   const auto stats = scheduler.stats();
   for (size_t i = 0; i < stats.size(); ++i) {

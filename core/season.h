@@ -8,15 +8,24 @@
 
 #include "avalanche.h"
 #include "backend.h"
+#include "ski.h"
 #include "parameters.h"
 #include "weather.h"
 
 namespace snow {
 
+// Skiers asked for in the scene: start cell, day, how many (one after the other).
+struct UserSkier {
+  double day = 0;
+  int x = 0, y = 0;
+  int count = 1;
+};
+
 // An avalanche asked for in the scene: rupture cell and day.
 struct UserAvalanche {
   double day = 0;
   int x = 0, y = 0;
+  bool bySkier = false;  // set off by a skier (recorded as not a user release)
 };
 
 struct SeasonConfig {
@@ -26,6 +35,8 @@ struct SeasonConfig {
   WeatherTimeline weather;
   std::vector<SnowfallPeriod> userSnowfalls;  // storms requested as user events
   std::vector<UserAvalanche> userAvalanches;  // avalanches requested as user events
+  std::vector<UserSkier> userSkiers;          // skiers requested as user events
+  SkiTracks* skiTracks = nullptr;             // the ski-track texture to draw into (null: no texture)
   bool avalancheMaps = false;                 // keep each avalanche's maps in its record
   double avalancheFrameIntervalS = 0.0;       // and frames of its motion (0: none)
   std::vector<double> frameDays;              // days at which to hand the state to onFrame
@@ -53,6 +64,8 @@ struct SeasonReport {
   double seconds = 0.0;
   std::vector<AvalancheRecord> avalanches;  // every avalanche released, and every user release that could not be
   uint64_t avalancheTries = 0;              // spontaneous release tries (most find nothing to release)
+  std::vector<SkierRecord> skiers;          // every skier's descent (path kept for user skiers only)
+  Grid<float> routeMap;                     // the skiers' route map (empty without skiers)
   // |final - (initial + added - melted)| relative to the snow that passed through.
   double massBalanceRelativeError() const;
 };

@@ -52,6 +52,10 @@ struct HostStorage {
   void downloadRange(Buffer<T>& b, size_t offset, size_t count, T* out) {
     std::copy(b.values().begin() + offset, b.values().begin() + offset + count, out);
   }
+  template <class T>
+  void uploadRange(Buffer<T>& b, size_t offset, size_t count, const T* in) {
+    std::copy(in, in + count, b.values().begin() + offset);
+  }
   void finish() {}
 };
 

@@ -108,6 +108,10 @@ class CudaExec {
   void downloadRange(Buffer<T>& b, size_t offset, size_t count, T* out) {
     if (count > 0) check(cudaMemcpy(out, b.data() + offset, count * sizeof(T), cudaMemcpyDeviceToHost), "download range");
   }
+  template <class T>
+  void uploadRange(Buffer<T>& b, size_t offset, size_t count, const T* in) {
+    if (count > 0) check(cudaMemcpy(b.data() + offset, in, count * sizeof(T), cudaMemcpyHostToDevice), "upload range");
+  }
 
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {

@@ -22,6 +22,7 @@ struct OutputRequest {
   bool multichannelExr = false;        // also all layers as the channels of one EXR (layers.exr)
   int displacementWidth = 0, displacementHeight = 0;  // displacement maps at this size (0: none)
   bool vdb = false;                    // the snow body as an OpenVDB file (snow.vdb)
+  int skiTrackFactor = 8;              // the ski-track texture's cells per simulation cell, each way
   std::vector<std::string> meshes;     // meshes in these formats: ply / obj / glb / fbx
   std::vector<std::string> meshParts{"surface"};  // surface (snow_surface.EXT) and/or body (snow_body.EXT)
   double meshMaxErrorM = 0.1;          // the adaptive triangulation's vertical error bound
@@ -65,8 +66,10 @@ struct Scene {
     double xM = 0, yM = 0;
     bool mapCoordinates = false;
     int line = 0;  // where it was given, for messages
+    int count = 1;  // skiers: how many, one after the other
   };
   std::vector<AvalancheEvent> userAvalanches;
+  std::vector<AvalancheEvent> userSkiers;  // [[events]] type = "skier": start point, day, count
   ModelParameters params;
   OutputRequest outputs;
   bool sunExposure = true;             // precompute.sun: false skips the sun (temperature from altitude alone)

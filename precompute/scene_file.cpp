@@ -50,7 +50,7 @@ const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable
                                                 "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
                                                 "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit",
                                                 "avalanche_preview", "preview", "ambient_occlusion", "sun_visibility",
-                                                "occlusion_accumulation", "occlusion_dissipation"};
+                                                "occlusion_accumulation", "occlusion_dissipation", "ski_tracks", "ski_route_map"};
 // Layers only occlusion mode has.
 const std::vector<std::string> kOcclusionLayers = {"ambient_occlusion", "sun_visibility", "occlusion_accumulation",
                                                    "occlusion_dissipation"};
@@ -110,7 +110,8 @@ const std::vector<Rule>& sceneRules() {
       {"weather.snowfall.start_day", Kind::Number, 0, 3650},
       {"weather.snowfall.end_day", Kind::Number, 0, 3650},
       {"events", Kind::TableArray},
-      {"events.type", Kind::String, -kInf, kInf, {"snowfall", "avalanche"}},
+      {"events.type", Kind::String, -kInf, kInf, {"snowfall", "avalanche", "skier"}},
+      {"events.count", Kind::Integer, 1, 10000},
       {"events.position_m", Kind::NumberArray, -1e7, 1e7},
       {"events.map_position", Kind::NumberArray, -1e9, 1e9},
       {"events.day", Kind::Number, 0, 3650},
@@ -126,6 +127,7 @@ const std::vector<Rule>& sceneRules() {
       {"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}},
       {"outputs.multichannel_exr", Kind::Bool},
       {"outputs.vdb", Kind::Bool},
+      {"outputs.ski_track_factor", Kind::Integer, 1, 16},
       {"outputs.meshes", Kind::StringArray, -kInf, kInf, {"ply", "obj", "glb", "fbx"}},
       {"outputs.mesh_parts", Kind::StringArray, -kInf, kInf, {"surface", "body"}},
       {"outputs.mesh_max_error_m", Kind::Number, 0, 10000},
@@ -480,10 +482,12 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       for (const char* required : {"type", "day"})
         if (!e.contains(required)) throw InputError(where(source, e.source()) + ": events." + required + ": missing");
       const double day = e["day"].value<double>().value();
-      if (e["type"].value<std::string>().value() == "avalanche") {
+      const std::string type = e["type"].value<std::string>().value();
+      if (type == "avalanche" || type == "skier") {
         const bool metres = e.contains("position_m"), map = e.contains("map_position");
         if (metres == map)
-          throw InputError(where(source, e.source()) + ": events: an avalanche needs position_m = [x, y] or map_position = [easting, northing] (one of them)");
+          throw InputError(where(source, e.source()) + ": events: " + (type == "skier" ? "a skier" : "an avalanche") +
+                           " needs position_m = [x, y] or map_position = [easting, northing] (one of them)");
         const char* key = metres ? "position_m" : "map_position";
         const toml::array& xy = *e.get(key)->as_array();
         if (xy.size() != 2) fail(source, *e.get(key), std::string("events.") + key, "needs two numbers");
@@ -493,7 +497,13 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
         a.yM = xy[1].value<double>().value();
         a.mapCoordinates = map;
         a.line = static_cast<int>(e.source().begin.line);
-        scene.userAvalanches.push_back(a);
+        if (type == "skier") {
+          a.count = static_cast<int>(e["count"].value<int64_t>().value_or(1));
+          scene.userSkiers.push_back(a);
+        } else {
+          if (e.contains("count")) fail(source, *e.get("count"), "events.count", "only skier events have a count");
+          scene.userAvalanches.push_back(a);
+        }
         continue;
       }
       if (!e.contains("duration_days")) throw InputError(where(source, e.source()) + ": events.duration_days: missing");
@@ -517,6 +527,7 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
     for (auto&& e : *enc->as_array()) scene.outputs.encodings.push_back(e.as_string()->get());
   if (auto v = root["outputs"]["multichannel_exr"].value<bool>()) scene.outputs.multichannelExr = *v;
   if (auto v = root["outputs"]["vdb"].value<bool>()) scene.outputs.vdb = *v;
+  if (auto v = root["outputs"]["ski_track_factor"].value<int64_t>()) scene.outputs.skiTrackFactor = static_cast<int>(*v);
   if (const toml::node* meshes = root["outputs"]["meshes"].node())
     for (auto&& e : *meshes->as_array()) scene.outputs.meshes.push_back(e.as_string()->get());
   if (const toml::node* parts = root["outputs"]["mesh_parts"].node()) {
@@ -561,7 +572,7 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   if (scene.mode == "occlusion") {
     // No season: the outputs that only a season makes are errors, not silently empty files.
     for (const auto& layer : scene.outputs.layers)
-      for (const char* seasonOnly : {"wind_scour", "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit", "avalanche_preview",
+      for (const char* seasonOnly : {"wind_scour", "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit", "avalanche_preview", "ski_tracks", "ski_route_map",
                                      "sun_exposure", "temperature", "wind_speed", "wind_direction", "wind_shadow_depth", "wind_shadow_mask"})
         if (layer == seasonOnly)
           fail(source, *root["outputs"]["layers"].node(), "outputs.layers", "'" + layer + "' needs a season; mode = \"occlusion\" has none");
@@ -569,7 +580,8 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       fail(source, *root["outputs"]["frames_days"].node(), "outputs.frames_days", "mode = \"occlusion\" has no season to take frames of");
     if (scene.outputs.avalancheMaps || scene.outputs.avalancheFrameIntervalS > 0)
       throw InputError(source + ": outputs.avalanche_*: mode = \"occlusion\" has no avalanches");
-    if (!scene.userAvalanches.empty()) throw InputError(source + ": events: mode = \"occlusion\" has no season for avalanche events");
+    if (!scene.userAvalanches.empty() || !scene.userSkiers.empty())
+      throw InputError(source + ": events: mode = \"occlusion\" has no season for avalanche or skier events");
   } else {
     for (const auto& layer : scene.outputs.layers)
       if (std::find(kOcclusionLayers.begin(), kOcclusionLayers.end(), layer) != kOcclusionLayers.end())

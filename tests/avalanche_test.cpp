@@ -229,7 +229,7 @@ TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
        << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = -6.0\n"
        << "[[weather.snowfall]]\nstart_day = 1\nend_day = 20\n"
        << "[[events]]\ntype = \"avalanche\"\nday = 21\nposition_m = [1877, 2352]\n"
-       << "[parameters]\nrain_snow_limit_m = 1000\navalanche_rate_per_km2_per_day = 0\n"
+       << "[parameters]\nrain_snow_limit_m = 1000\navalanche_rate_per_km2_per_day = 0\nskiers_per_hour = 0\n"
        << "[outputs]\nlayers = [\"bedrock\", \"avalanche_deposit\", \"avalanche_scour\", \"avalanche_preview\"]\n"
        << "avalanche_maps = true\navalanche_frame_interval_s = 30\n";
   const test::Bake bake = test::bakeSceneText("tyrol_avalanche_test", text.str());

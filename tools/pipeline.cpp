@@ -136,6 +136,8 @@ std::string layerContent(const std::string& name) {
   if (name == "wind_shadow_depth") return "wind shadow depth W_z - A (height of the wind-effect surface above the ground)";
   if (name == "wind_shadow_mask") return "1 where the wind-effect surface is more than wind_shadow_tolerance_m above the ground (wind shadow)";
   if (name == "depth") return "total snow depth C+S+U+P";
+  if (name == "ski_tracks") return "ski tracks: depth of the grooves below the snow surface (subtract from the surface), faded by snow since";
+  if (name == "ski_route_map") return "skiers' route map: length of the longest strictly descending path from the cell (m)";
   if (name == "ambient_occlusion")
     return "ambient occlusion value a (Foldes & Benes Eq. 1): cosine-weighted fraction of the hemisphere open to the sky, 1 = unoccluded";
   if (name == "sun_visibility") return "sun visibility v: luminance-weighted fraction of the day's sun trajectory that sees the point";
@@ -325,6 +327,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   std::vector<std::string> layers = scene.outputs.layers;
   if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
   std::map<std::string, Grid<float>> occlusionLayers;  // mode = "occlusion": a, v, accumulation, dissipation
+  std::optional<SkiTracks> skiTracks;                   // the ski-track texture, when asked for
+  Grid<float> routeMapGrid;                             // the skiers' route map, when there are skiers
   std::optional<TriangleMesh> snowMesh;                 // occlusion mode on a mesh terrain: the input mesh, snow on its vertices
   std::vector<std::vector<uint8_t>> previews;  // for the contact sheet, in the order written
   int previewWidth = 0, previewHeight = 0;
@@ -403,7 +407,20 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         continue;
       }
       Grid<float> grid;
-      if (occlusionLayers.count(layer)) {
+      if (layer == "ski_tracks") {
+        // The finer texture: its own size, listed with it.
+        const Grid<float>& t = skiTracks->depth();
+        const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, t, layer);
+        listImage(img, layerContent(layer) + " (" + std::to_string(skiTracks->factor()) + " x " + std::to_string(skiTracks->factor()) +
+                           " texels per cell, " + std::to_string(t.width()) + " x " + std::to_string(t.height()) + ")",
+                  layerUnit(layer), day);
+        manifest.files.back().width = t.width();
+        manifest.files.back().height = t.height();
+        continue;
+      }
+      if (layer == "ski_route_map") {
+        grid = routeMapGrid.empty() ? Grid<float>(s.spec.width, s.spec.height, 0.f) : routeMapGrid;
+      } else if (occlusionLayers.count(layer)) {
         grid = occlusionLayers.at(layer);
       } else if (isWindLayer(layer)) {
         grid = windLayerGrid(s, wind, outputDay, layer, scene.params.windShadowToleranceM);
@@ -612,8 +629,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     config.userSnowfalls = scene.userSnowfalls;
     config.avalancheMaps = scene.outputs.avalancheMaps;
     config.avalancheFrameIntervalS = scene.outputs.avalancheFrameIntervalS;
-    for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
-      const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: avalanche on day " + fixed(a.day, 1);
+    // A user event's point (metres from the north-west corner, or the DEM's own projected
+    // coordinates) as a valid cell.
+    auto eventCell = [&](const Scene::AvalancheEvent& a, const std::string& what, const std::string& point) {
+      const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: " + what + " on day " + fixed(a.day, 1);
       double xM = a.xM, yM = a.yM;
       if (a.mapCoordinates) {
         if (ti.coordinateSystem.rfind("geographic", 0) == 0)
@@ -623,12 +642,26 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       }
       const double fx = xM / ti.spec.cellSizeXM, fy = yM / ti.spec.cellSizeYM;
       if (!(fx >= 0.0 && fy >= 0.0 && fx < ti.spec.width && fy < ti.spec.height))
-        throw InputError(where + ": the rupture point (" + fixed(xM, 1) + " m east, " + fixed(yM, 1) +
+        throw InputError(where + ": the " + point + " (" + fixed(xM, 1) + " m east, " + fixed(yM, 1) +
                          " m south of the north-west corner) is outside the terrain (" + fixed(ti.spec.width * ti.spec.cellSizeXM, 1) +
                          " x " + fixed(ti.spec.height * ti.spec.cellSizeYM, 1) + " m)");
       const int x = static_cast<int>(fx), y = static_cast<int>(fy);
-      if (!state.validCell(x, y)) throw InputError(where + ": the rupture point falls on a NODATA cell");
-      config.userAvalanches.push_back({a.day, x, y});
+      if (!state.validCell(x, y)) throw InputError(where + ": the " + point + " falls on a NODATA cell");
+      return std::array<int, 2>{x, y};
+    };
+    for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
+      const auto c = eventCell(a, "avalanche", "rupture point");
+      config.userAvalanches.push_back({a.day, c[0], c[1]});
+    }
+    for (const Scene::AvalancheEvent& a : scene.userSkiers) {
+      const auto c = eventCell(a, "skier", "start point");
+      config.userSkiers.push_back({a.day, c[0], c[1], a.count});
+    }
+    if (std::find(layers.begin(), layers.end(), "ski_route_map") != layers.end())
+      routeMapGrid = routeMap(state.bedrockM, state.validCell, state.spec);
+    if (std::find(layers.begin(), layers.end(), "ski_tracks") != layers.end()) {
+      skiTracks.emplace(state.spec, scene.outputs.skiTrackFactor);
+      config.skiTracks = &*skiTracks;
     }
     config.frameDays = scene.outputs.frameDays;
     config.windTransport = wind.hasWind();
@@ -659,6 +692,20 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           << " s, " << fixed(a.secondsPerStep() * 1e3, 3) << " ms a step; " << a.why << "\n";
     }
     if (report.avalancheTries > 0) log << "  spontaneous avalanche tries: " << report.avalancheTries << "\n";
+    if (!report.skiers.empty()) {
+      int users = 0, triggered = 0, skied = 0;
+      double length = 0.0;
+      for (const SkierRecord& k : report.skiers) {
+        users += k.user, triggered += k.triggered, skied += k.cells > 0;
+        length += k.lengthM;
+      }
+      log << "  skiers: " << report.skiers.size() << " (" << users << " from the scene), " << skied << " skied, "
+          << fixed(length / 1000.0, 1) << " km in all, " << triggered << " set off an avalanche\n";
+      for (const SkierRecord& k : report.skiers)
+        if (k.user)
+          log << "  skier day " << fixed(k.day, 2) << " from cell (" << k.startX << ", " << k.startY << "): " << k.cells << " cells, "
+              << fixed(k.lengthM, 0) << " m, drop " << fixed(k.dropM, 0) << " m; " << k.why << "\n";
+    }
     log << "  snow: " << std::scientific << std::setprecision(4) << report.final.totalM3() << " m^3 (added "
         << report.snowfallAddedM3 << ", melted " << report.meltRemovedM3 << "), mass balance error " << report.massBalanceRelativeError()
         << std::defaultfloat << "\n";
@@ -732,6 +779,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   for (const AvalancheRecord& a : report.avalanches)
     manifest.avalanches.push_back({a.day, a.ruptureX, a.ruptureY, a.user, a.released, a.why, a.releaseCells, a.footprintCells,
                                    a.steps, a.releasedM3, a.depositM3, a.runoutM, a.fallHeightM, a.simulatedS});
+  for (const SkierRecord& k : report.skiers)
+    manifest.skiers.push_back({k.day, k.startX, k.startY, k.user, k.cells, k.lengthM, k.dropM, k.triggered, k.why});
   manifest.events = report.events;
   manifest.snowfallAddedM3 = report.snowfallAddedM3;
   manifest.meltRemovedM3 = report.meltRemovedM3;

@@ -1,0 +1,153 @@
+// Skiers (paper §6.2, §7.3): the route map, skier agents on the grid, refined sine-wave tracks in
+// a finer track texture, and their two-way interaction with the snow.
+//
+// Route map: for every cell, the length in metres of the longest strictly descending 8-neighbour
+// path from it (to a local minimum, which includes cells at the terrain's edge with no lower
+// neighbour). The paper's cellular automaton, D(c) = max over lower neighbours n of D(n) + |cn|,
+// is RouteMapStepKernel (iterated until nothing changes); routeMap() gets the same numbers in one
+// pass over the cells sorted by altitude (tested equal, bit for bit).
+//
+// Large-scale paths: a skier is an agent (position, heading). Each step it looks at the cells
+// within ski_lookahead_m ahead of it (within 100 degrees of its heading) and aims at cell n with
+// probability proportional to Eq. 4: 1[snow_n >= ski_min_snow_m] f(|s_n - s_t|) w_d(n), where s_n
+// is the slope angle from its cell down to n (uphill and level cells get 0), f(d) =
+// exp(-(d / ski_slope_tolerance_deg)^2) and w_d(n) = D(n) + |cn| (the route length through n: a
+// dead-end basin's short routes weigh little). Its heading turns ski_steering of the way toward
+// the target each step; it moves one cell length a step and stops at a route's end (D = 0), where
+// the snow runs out, at the terrain's edge, or when no cell ahead is acceptable.
+//
+// Refined tracks: along each straight segment of the path, a lateral sine p(t) = a sin(phase),
+// the phase advancing 2 pi f per metre and carried from segment to segment (one continuous
+// curve). Where the segment is steeper than s_t, f is solved so that the slope measured along the
+// curve itself equals s_t (the paper's closed form f = sqrt(sin^2 s_n - sin^2 s_t) / (4 a sin s_t)
+// measures it on the chord between extrema, 29.0 deg along the curve for 30 at 45 deg), and is at
+// least Table 2's f (track_frequency_per_m: a skier on a slope barely steeper than s_t still turns
+// every 1 / (2 f) metres); where it is not steeper, f = 0 and the track runs straight. The lateral
+// direction is blended across each path vertex, so the curve has no gaps.
+//
+// Track texture: depth of the ski tracks in metres below the snow surface, on a grid
+// `textureFactor` times finer than the simulation's (a parabolic groove ski_track_depth_m deep and
+// ski_track_width_m wide). It fades as snow covers it: a cell's texels lose the rise of the snow
+// surface since the track was made (snowfall, wind or diffusion deposits, avalanche debris), so a
+// snowfall deeper than the track erases it and a light one softens it (the paper's alpha-blending).
+//
+// Snow: each cell a skier enters turns ski_compaction_m of U into S, or of S into C where U runs
+// short (backend skierCompaction). Crossing unstable snow on a slope above the avalanche rest
+// angle raises the cell's release probability (the spontaneous one, core/avalanche.h) by
+// ski_trigger_factor: when the draw releases, the skier stops there and an avalanche starts.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "backend.h"
+#include "grid.h"
+#include "hd.h"
+#include "parameters.h"
+#include "snow_state.h"
+
+namespace snow {
+
+// One step of the route map's cellular automaton: out = max over lower valid neighbours of
+// in(n) + |cn| (0 with none). Iterate until out == in.
+struct RouteMapStepKernel {
+  const float* altitude;
+  const uint8_t* valid;
+  const float* in;
+  float* out;
+  int width, height;
+  float dx, dy, diagonal;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = y * width + x;
+    float best = 0.f;
+    if (valid[i]) {
+      for (int oy = -1; oy <= 1; ++oy)
+        for (int ox = -1; ox <= 1; ++ox) {
+          if (ox == 0 && oy == 0) continue;
+          const int nx = x + ox, ny = y + oy;
+          if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+          const int n = ny * width + nx;
+          if (!valid[n] || !(altitude[n] < altitude[i])) continue;
+          const float d = ox == 0 ? dy : oy == 0 ? dx : diagonal;
+          const float through = in[n] + d;
+          best = through > best ? through : best;
+        }
+    }
+    out[i] = best;
+  }
+};
+
+Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec);
+// The automaton, run on the host until it stops changing; `iterations` receives the count.
+Grid<float> routeMapByAutomaton(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, int* iterations = nullptr);
+
+// Turn frequency (1/m) for a segment of slope angle `slopeRad` (see above); 0 at or below the target.
+double turnFrequency(double slopeRad, double targetRad, double amplitudeM, double minFrequencyPerM);
+
+// A path as points in metres (x east from the grid's west edge, y south from its north edge).
+using Path2 = std::vector<std::array<double, 2>>;
+// The refined track of a path; `altitude(x, y)` gives the snow surface; samples at most
+// `maxGapM` apart.
+Path2 refineTrack(const Path2& path, const std::function<double(double, double)>& altitude, const ModelParameters& p, double maxGapM);
+
+// The ski-track texture (depth below the surface, metres) and its fading.
+class SkiTracks {
+ public:
+  SkiTracks(const GridSpec& spec, int factor);
+  int factor() const { return factor_; }
+  const Grid<float>& depth() const { return depth_; }
+  // Grooves along a refined track; `surface(cell)` is the snow surface of a cell now.
+  void stamp(const Path2& track, double depthM, double widthM, const std::function<float(int cell)>& surface);
+  // Fades every cell with tracks by the rise of its snow surface since it was last looked at.
+  void fade(const SnowState& state);
+  // The same for one cell.
+  void fadeCell(int cell, float surfaceNow);
+
+ private:
+  GridSpec spec_;
+  int factor_;
+  Grid<float> depth_;
+  std::vector<float> lastSurface_;  // per cell; NaN where no track
+};
+
+struct SkierRecord {
+  double day = 0;
+  int startX = 0, startY = 0;
+  bool user = false;
+  int cells = 0;           // cells entered
+  double lengthM = 0;      // large-scale path length
+  double dropM = 0;        // surface drop from start to end
+  bool triggered = false;  // set off an avalanche
+  int triggerX = -1, triggerY = -1;
+  std::string why;         // why it stopped
+  Path2 path;              // the large-scale path (metres, x east, y south)
+};
+
+// Skiers on a backend. Reads only the cells around each skier; writes its compaction.
+class SkiRun {
+ public:
+  SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& state, SkiTracks* tracks);
+  const Grid<float>& routeMap() const { return route_; }
+  // A start cell drawn with probability proportional to the route map (cells where a route
+  // starts); false when no cell has one.
+  bool pickStart(double draw, int& x, int& y) const;
+  // Whether the cell has snow enough to start a descent (reads one cell).
+  bool canStart(int x, int y);
+  // One descent from cell (x, y); `randomKey` and `id` seed its choices. When it triggers an
+  // avalanche the record says where.
+  SkierRecord descend(int x, int y, double day, uint64_t seed, uint64_t id, bool user);
+
+ private:
+  SnowBackend& backend_;
+  ModelParameters p_;
+  GridSpec spec_;
+  const Grid<float>& bedrock_;
+  const Grid<uint8_t>& valid_;
+  Grid<float> route_;
+  std::vector<double> cumulative_;  // route-map weights, for pickStart
+  SkiTracks* tracks_;
+};
+
+}  // namespace snow

@@ -1,0 +1,242 @@
+// Skiers (core/ski.h): the route map (automaton against the one-pass sort, an analytic plane),
+// refined tracks (effective slope, continuity, straight running), dead ends, fading, the snow
+// interaction and the avalanche a skier sets off.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "core/cpu_backend.h"
+#include "core/season.h"
+#include "core/ski.h"
+#include "test_support.h"
+
+namespace snow {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+TEST(Ski, RouteMapIsTheLongestDescentOnAPlaneAndTheAutomatonAgrees) {
+  // A plane falling east: every step must move one column east, diagonally when it can.
+  SnowState s = test::terrainFrom(40, 12, 10.0, -5.f, [](double x, double) { return 1000.0 - 0.5 * x; });
+  const Grid<float> d = routeMap(s.bedrockM, s.validCell, s.spec);
+  for (int y = 0; y < 12; ++y)
+    for (int x = 0; x < 40; ++x) ASSERT_NEAR(d(x, y), (39 - x) * std::sqrt(200.0), 1e-3 * (40 - x)) << x << "," << y;
+  // A rough terrain with NODATA holes: the cellular automaton gives the same bytes.
+  SnowState r = test::makeRoughState(64, 48, 7);
+  int iterations = 0;
+  const Grid<float> a = routeMapByAutomaton(r.bedrockM, r.validCell, r.spec, &iterations);
+  const Grid<float> b = routeMap(r.bedrockM, r.validCell, r.spec);
+  EXPECT_EQ(a.values(), b.values());
+  EXPECT_GT(iterations, 2);
+  for (size_t i = 0; i < b.size(); ++i)
+    if (!r.validCell.values()[i]) {
+      ASSERT_EQ(b.values()[i], 0.f);
+    }
+}
+
+double alongCurveSlopeDeg(const Path2& t, const std::function<double(double, double)>& z) {
+  double length = 0.0;
+  for (size_t i = 1; i < t.size(); ++i) {
+    const double dz = z(t[i][0], t[i][1]) - z(t[i - 1][0], t[i - 1][1]);
+    length += std::sqrt(std::pow(t[i][0] - t[i - 1][0], 2) + std::pow(t[i][1] - t[i - 1][1], 2) + dz * dz);
+  }
+  const double drop = z(t.front()[0], t.front()[1]) - z(t.back()[0], t.back()[1]);
+  return std::asin(drop / length) * 180.0 / kPi;
+}
+
+TEST(Ski, RefinedTrackKeepsTheTargetSlopeOnSteepGroundAndRunsStraightOnGentle) {
+  const ModelParameters p;  // s_t = 30 deg, a = 5 m
+  const double texel = 10.0 / 8;
+  for (double slopeDeg : {35.0, 45.0, 60.0}) {
+    const double G = std::tan(slopeDeg * kPi / 180.0);
+    auto z = [&](double, double y) { return 2000.0 - G * y; };  // falls to the south (+y)
+    Path2 path;
+    for (int k = 0; k <= 60; ++k) path.push_back({300.0, 10.0 * k});
+    const Path2 t = refineTrack(path, z, p, 0.5 * texel);
+    const double se = alongCurveSlopeDeg(t, z);
+    EXPECT_NEAR(se, p.skierTargetSlopeDeg, 1.0) << "terrain " << slopeDeg << " deg";
+    double maxGap = 0.0, maxRise = -1e9, lateral = 0.0;
+    for (size_t i = 1; i < t.size(); ++i) {
+      maxGap = std::max(maxGap, std::hypot(t[i][0] - t[i - 1][0], t[i][1] - t[i - 1][1]));
+      maxRise = std::max(maxRise, z(t[i][0], t[i][1]) - z(t[i - 1][0], t[i - 1][1]));
+      lateral = std::max(lateral, std::abs(t[i][0] - 300.0));
+    }
+    EXPECT_LE(maxGap, texel);
+    EXPECT_LE(maxRise, 1e-9);  // never uphill on a plane
+    EXPECT_NEAR(lateral, p.trackAmplitudeM, 0.05);  // the sine's full amplitude
+    std::cout << "terrain " << slopeDeg << " deg: slope along the track " << se << " deg, turn frequency "
+              << turnFrequency(slopeDeg * kPi / 180.0, 30.0 * kPi / 180.0, 5.0, p.trackFrequencyPerM) << " 1/m\n";
+  }
+  // Gentler than s_t: straight down the fall line.
+  auto gentle = [](double, double y) { return 2000.0 - std::tan(20.0 * kPi / 180.0) * y; };
+  Path2 path;
+  for (int k = 0; k <= 30; ++k) path.push_back({300.0, 10.0 * k});
+  const Path2 t = refineTrack(path, gentle, p, 0.5 * texel);
+  for (const auto& q : t) ASSERT_NEAR(q[0], 300.0, 1e-9);
+  EXPECT_NEAR(alongCurveSlopeDeg(t, gentle), 20.0, 1e-6);
+}
+
+TEST(Ski, RefinedTrackIsOneContinuousCurveThroughTurns) {
+  const ModelParameters p;
+  auto z = [](double x, double y) { return 3000.0 - 0.9 * y - 0.3 * x; };
+  Path2 path{{100, 0}};
+  double heading = 0.3;
+  for (int k = 0; k < 80; ++k) {
+    heading += (k % 20 < 10 ? 0.12 : -0.12);  // swinging left and right by up to ~70 degrees
+    path.push_back({path.back()[0] + 10.0 * std::sin(heading), path.back()[1] + 10.0 * std::cos(heading)});
+  }
+  const double texel = 10.0 / 8;
+  const Path2 t = refineTrack(path, z, p, 0.5 * texel);
+  for (size_t i = 1; i < t.size(); ++i) ASSERT_LE(std::hypot(t[i][0] - t[i - 1][0], t[i][1] - t[i - 1][1]), texel);
+}
+
+// A slope falling east at 35 degrees with a closed bowl on the fall line of the start: its
+// routes end in the bowl, those around it reach the far edge.
+struct BowlTerrain {
+  SnowState state;
+  std::unique_ptr<SnowBackend> backend;
+  static constexpr int cx = 40, cy = 30, radius = 4;
+};
+
+BowlTerrain bowl() {
+  BowlTerrain b;
+  const double t = std::tan(35.0 * kPi / 180.0);
+  b.state = test::terrainFrom(90, 60, 10.0, -5.f, [&](double x, double) { return 2000.0 - t * x; });
+  // The bowl: its floor rises from its centre, 40 m below the slope at its east rim, so it is a
+  // closed depression whose routes all end at its centre.
+  const double rimZ = 2000.0 - t * 10.0 * (BowlTerrain::cx + BowlTerrain::radius);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 90; ++x) {
+      const double r = std::hypot(x - BowlTerrain::cx, y - BowlTerrain::cy);
+      if (r < BowlTerrain::radius) b.state.bedrockM(x, y) = static_cast<float>(rimZ - 40.0 + 4.0 * r);
+      b.state.stableM(x, y) = 1.0f;
+    }
+  b.backend = createCpuBackend();
+  b.backend->upload(b.state);
+  return b;
+}
+
+TEST(Ski, SkiersPreferTheRouteThatContinuesOverADeadEndBowl) {
+  BowlTerrain b = bowl();
+  ModelParameters p;
+  p.skiTriggerFactor = 0.0;
+  SkiRun run(*b.backend, p, b.state, nullptr);
+  const Grid<float>& d = run.routeMap();
+  // The route map's intent: the bowl's cells have short routes, the slope beside it long ones.
+  EXPECT_LT(d(BowlTerrain::cx, BowlTerrain::cy), 1.f);
+  EXPECT_GT(d(BowlTerrain::cx, BowlTerrain::cy - BowlTerrain::radius - 3), d(BowlTerrain::cx - 3, BowlTerrain::cy) + 200.f);
+  int inBowl = 0, total = 0;
+  for (uint64_t id = 0; id < 60; ++id) {
+    const SkierRecord r = run.descend(20, BowlTerrain::cy, 1.0, 42, id, true);
+    ASSERT_GT(r.cells, 0) << r.why;
+    const auto& end = r.path.back();
+    const double dist = std::hypot(end[0] / 10.0 - 0.5 - BowlTerrain::cx, end[1] / 10.0 - 0.5 - BowlTerrain::cy);
+    inBowl += dist < BowlTerrain::radius;
+    ++total;
+    // The large-scale path never climbs: each cell entered is no higher than the one before.
+    float last = 1e9f;
+    for (const auto& q : r.path) {
+      const float z = b.state.bedrockM(static_cast<int>(q[0] / 10.0), static_cast<int>(q[1] / 10.0));
+      ASSERT_LE(z, last);
+      last = z;
+    }
+  }
+  std::cout << inBowl << " of " << total << " skiers ended in the bowl\n";
+  EXPECT_LE(inBowl, total / 4);
+}
+
+TEST(Ski, TracksFadeUnderNewSnow) {
+  SnowState s = test::terrainFrom(20, 20, 10.0, -5.f, [](double, double y) { return 1000.0 - 0.8 * y; });
+  for (float& v : s.stableM.values()) v = 1.f;
+  SkiTracks tracks(s.spec, 8);
+  const Path2 line{{100.625, 20.0}, {100.625, 180.0}};  // along a texel column's centre
+  auto surface = [&](int c) { return s.bedrockM.values()[c] + s.depthM(c % 20, c / 20); };
+  tracks.stamp(line, 0.1, 1.2, surface);
+  auto maxDepth = [&] { return *std::max_element(tracks.depth().values().begin(), tracks.depth().values().end()); };
+  EXPECT_NEAR(maxDepth(), 0.1, 1e-3);
+  SkiTracks light = tracks;
+  // A light snowfall (4 cm) softens the track; a deep one (15 cm) buries it.
+  SnowState a = s;
+  for (float& v : a.powderM.values()) v = 0.04f;
+  light.fade(a);
+  EXPECT_NEAR(maxDepth(), 0.1, 1e-3);
+  EXPECT_NEAR(*std::max_element(light.depth().values().begin(), light.depth().values().end()), 0.06, 1e-3);
+  SnowState deep = s;
+  for (float& v : deep.powderM.values()) v = 0.15f;
+  tracks.fade(deep);
+  EXPECT_EQ(maxDepth(), 0.f);
+  // Melt lowers the surface without deepening the groove.
+  SkiTracks melt(s.spec, 8);
+  melt.stamp(line, 0.1, 1.2, surface);
+  SnowState thin = s;
+  for (float& v : thin.stableM.values()) v = 0.5f;
+  melt.fade(thin);
+  EXPECT_NEAR(*std::max_element(melt.depth().values().begin(), melt.depth().values().end()), 0.1, 1e-3);
+}
+
+TEST(Ski, SkiersCompactTheSnowTheyCross) {
+  SnowState s = test::terrainFrom(60, 40, 10.0, -5.f, [](double, double y) { return 2000.0 - std::tan(33.0 * kPi / 180.0) * y; });
+  for (size_t i = 0; i < s.stableM.size(); ++i) s.stableM.values()[i] = 0.6f, s.unstableM.values()[i] = 0.02f;
+  auto backend = createCpuBackend();
+  backend->upload(s);
+  ModelParameters p;
+  p.skiTriggerFactor = 0.0;
+  SkiRun run(*backend, p, s, nullptr);
+  const SkierRecord r = run.descend(30, 2, 1.0, 7, 0, true);
+  ASSERT_GT(r.cells, 10) << r.why;
+  SnowState after = s;
+  backend->download(after);
+  double before = 0, now = 0;
+  int crossed = 0;
+  for (const auto& q : r.path) {
+    const int x = static_cast<int>(q[0] / 10.0), y = static_cast<int>(q[1] / 10.0);
+    ++crossed;
+    EXPECT_EQ(after.unstableM(x, y), 0.f);                    // 2 cm of U: all turned to S
+    EXPECT_NEAR(after.stableM(x, y), 0.6f + 0.02f - 0.03f, 1e-6);  // then 3 cm of S to C
+    EXPECT_NEAR(after.compactedM(x, y), 0.03f, 1e-6);
+  }
+  for (size_t i = 0; i < s.stableM.size(); ++i) {
+    before += s.stableM.values()[i] + s.unstableM.values()[i] + s.compactedM.values()[i];
+    now += after.stableM.values()[i] + after.unstableM.values()[i] + after.compactedM.values()[i];
+  }
+  EXPECT_NEAR(now, before, 1e-4);
+  EXPECT_GT(crossed, 10);
+  // Untouched far from the path.
+  EXPECT_EQ(after.unstableM(0, 39), 0.02f);
+}
+
+TEST(Ski, ASkierOnALoadedSlopeSetsOffAnAvalanche) {
+  // 40 degree slope loaded with a metre of unstable snow: the season's skier triggers a release.
+  SnowState s = test::terrainFrom(60, 80, 10.0, -8.f, [](double, double y) { return 2500.0 - std::tan(40.0 * kPi / 180.0) * y; });
+  for (size_t i = 0; i < s.stableM.size(); ++i) s.stableM.values()[i] = 0.5f, s.unstableM.values()[i] = 1.0f;
+  auto backend = createCpuBackend();
+  SeasonConfig cfg;
+  cfg.days = 1.0;
+  cfg.seed = 3;
+  cfg.params.snowfallStartsPerDay = 0.0;
+  cfg.params.avalancheRatePerKm2PerDay = 0.0;  // no spontaneous ones: only the skier's
+  cfg.params.skiersPerHour = 0.0;
+  cfg.params.skiTriggerFactor = 10.0;  // a loaded 40 degree slope: p = 1 at the first cell
+  cfg.userSkiers.push_back({0.5, 30, 3, 1});
+  const SeasonReport rep = runSeason(*backend, s, cfg);
+  ASSERT_EQ(rep.skiers.size(), 1u);
+  EXPECT_TRUE(rep.skiers[0].triggered) << rep.skiers[0].why;
+  ASSERT_FALSE(rep.avalanches.empty());
+  EXPECT_TRUE(rep.avalanches[0].released);
+  EXPECT_FALSE(rep.avalanches[0].user);
+  EXPECT_GT(rep.avalanches[0].releasedM3, 100.0);
+  EXPECT_NEAR(rep.avalanches[0].day, 0.5, 1e-9);
+}
+
+TEST(Ski, SameDescentForTheSameSeed) {
+  BowlTerrain b1 = bowl(), b2 = bowl();
+  ModelParameters p;
+  SkiRun r1(*b1.backend, p, b1.state, nullptr), r2(*b2.backend, p, b2.state, nullptr);
+  const SkierRecord a = r1.descend(20, 30, 1.0, 9, 5, true), c = r2.descend(20, 30, 1.0, 9, 5, true);
+  ASSERT_EQ(a.path.size(), c.path.size());
+  for (size_t i = 0; i < a.path.size(); ++i) EXPECT_EQ(a.path[i], c.path[i]);
+}
+
+}  // namespace
+}  // namespace snow
