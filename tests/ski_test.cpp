@@ -10,6 +10,11 @@
 #include "core/season.h"
 #include "core/ski.h"
 #include "test_support.h"
+#include "bake_support.h"
+#include "bakers/grid_writer.h"
+
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 namespace snow {
 namespace {
@@ -236,6 +241,36 @@ TEST(Ski, SameDescentForTheSameSeed) {
   const SkierRecord a = r1.descend(20, 30, 1.0, 9, 5, true), c = r2.descend(20, 30, 1.0, 9, 5, true);
   ASSERT_EQ(a.path.size(), c.path.size());
   for (size_t i = 0; i < a.path.size(); ++i) EXPECT_EQ(a.path[i], c.path[i]);
+}
+
+}  // namespace
+}  // namespace snow
+
+namespace snow {
+namespace {
+
+TEST(Ski, BakeWritesTheTrackTextureAtItsOwnSize) {
+  const std::string text =
+      "[terrain]\nbuiltin = \"ridged\"\nsize = 64\ncell_size_m = 20\n[season]\ndays = 12\n[[events]]\ntype = \"snowfall\"\nday = 1\n"
+      "duration_days = 4\n[[events]]\ntype = \"skier\"\nday = 8\nposition_m = [600, 200]\ncount = 2\n[parameters]\n"
+      "skiers_per_hour = 2\n[outputs]\nlayers = [\"depth\", \"ski_tracks\", \"ski_route_map\"]\nencodings = [\"png16\"]\n"
+      "ski_track_factor = 4\n";
+  const test::Bake b = test::bakeSceneText("ski_texture", text);
+  const auto manifest = nlohmann::json::parse(std::ifstream(b.out() / "manifest.json"));
+  int listed = 0;
+  for (const auto& f : manifest["files"]) {
+    const std::string path = f["path"];
+    if (path.rfind("ski_tracks", 0) != 0) continue;
+    ++listed;
+    EXPECT_EQ(f["width"], 256);
+    EXPECT_EQ(f["height"], 256);
+  }
+  EXPECT_EQ(listed, 2);  // the EXR and the 16-bit PNG
+  const Grid<float> t = readFloatImage((b.out() / "ski_tracks.exr").string());
+  EXPECT_EQ(t.width(), 256);
+  EXPECT_GT(*std::max_element(t.values().begin(), t.values().end()), 0.f);
+  EXPECT_GT(manifest["run"]["skiers"].size(), 2u);
+  EXPECT_TRUE(manifest["run"]["skiers"][0].contains("outcome"));
 }
 
 }  // namespace

@@ -407,18 +407,12 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         continue;
       }
       Grid<float> grid;
+      std::string content = layerContent(layer);
       if (layer == "ski_tracks") {
-        // The finer texture: its own size, listed with it.
-        const Grid<float>& t = skiTracks->depth();
-        const WrittenImage img = writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, t, layer);
-        listImage(img, layerContent(layer) + " (" + std::to_string(skiTracks->factor()) + " x " + std::to_string(skiTracks->factor()) +
-                           " texels per cell, " + std::to_string(t.width()) + " x " + std::to_string(t.height()) + ")",
-                  layerUnit(layer), day);
-        manifest.files.back().width = t.width();
-        manifest.files.back().height = t.height();
-        continue;
-      }
-      if (layer == "ski_route_map") {
+        // The finer texture: its own size, listed with each file.
+        content += " (" + std::to_string(skiTracks->factor()) + " x " + std::to_string(skiTracks->factor()) + " texels per cell)";
+        grid = skiTracks->depth();
+      } else if (layer == "ski_route_map") {
         grid = routeMapGrid.empty() ? Grid<float>(s.spec.width, s.spec.height, 0.f) : routeMapGrid;
       } else if (occlusionLayers.count(layer)) {
         grid = occlusionLayers.at(layer);
@@ -437,14 +431,19 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       } else {
         grid = layerGrid(s, layer);
       }
-      listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer), layerContent(layer),
-                layerUnit(layer), day);
+      const bool ownSize = grid.width() != s.spec.width || grid.height() != s.spec.height;
+      auto sized = [&] {
+        if (ownSize) manifest.files.back().width = grid.width(), manifest.files.back().height = grid.height();
+      };
+      listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer), content, layerUnit(layer), day);
+      sized();
       for (const std::string& encoding : scene.outputs.encodings) {
         const WrittenImage img = writeNormalised((fs::path(options.outDir) / rel).string(), encoding, grid);
-        listFile(img.path, layerContent(layer), layerUnit(layer), normalisedFormat(encoding, grid.width(), grid.height()), day,
-                 img.minValue, img.maxValue);
+        listFile(img.path, content, layerUnit(layer), normalisedFormat(encoding, grid.width(), grid.height()), day, img.minValue,
+                 img.maxValue);
+        sized();
       }
-      if (scene.outputs.multichannelExr) {
+      if (scene.outputs.multichannelExr && !ownSize) {
         channelNames.push_back(layer);
         channels.push_back(std::move(grid));
       }
