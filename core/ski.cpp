@@ -331,27 +331,51 @@ SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id
     // the target; if even that fails, the descent ends.
     const bool acceptable = ncell == cur || (snowOf(ncell) >= p_.skiMinSnowM && surfaceOf(ncell) <= surfaceOf(cur) &&
                                              route_.values()[static_cast<size_t>(ncell)] >= 0.5f * route_.values()[static_cast<size_t>(chosen)]);
+    std::array<double, 2> moveTo = next;
     if (!acceptable) {
-      if (heading == want) {
+      if (!(heading == want)) {
+        heading = want;
+        continue;
+      }
+      // Even the straight line crosses a cell it would not enter: step to the acceptable
+      // neighbour closest in direction to the target instead, or stop.
+      int best = -1;
+      double bestDot = std::cos(60.0 * kPi / 180.0);
+      for (int oy = -1; oy <= 1; ++oy)
+        for (int ox = -1; ox <= 1; ++ox) {
+          const int bx = cx + ox, by = cy + oy;
+          if ((ox == 0 && oy == 0) || bx < 0 || by < 0 || bx >= w || by >= h || !valid_(bx, by)) continue;
+          const int b = by * w + bx;
+          if (snowOf(b) < p_.skiMinSnowM || surfaceOf(b) > surfaceOf(cur) ||
+              route_.values()[static_cast<size_t>(b)] < 0.5f * route_.values()[static_cast<size_t>(chosen)])
+            continue;
+          const double ex = (bx + 0.5) * dx - pos[0], ey = (by + 0.5) * dy - pos[1], el = std::hypot(ex, ey);
+          const double dot = (ex * want[0] + ey * want[1]) / el;
+          if (dot > bestDot) bestDot = dot, best = b;
+        }
+      if (best < 0) {
         r.why = "no acceptable cell ahead (a dead end, or no snow)";
         break;
       }
-      heading = want;
-      continue;
+      moveTo = {(best % w + 0.5) * dx, (best / w + 0.5) * dy};
+      const double ex = moveTo[0] - pos[0], ey = moveTo[1] - pos[1], el = std::hypot(ex, ey);
+      heading = {ex / el, ey / el};
     }
-    pos = next;
+    r.lengthM += std::hypot(moveTo[0] - pos[0], moveTo[1] - pos[1]);
+    pos = moveTo;
     r.path.push_back(pos);
-    r.lengthM += stepM;
-    if (ncell == cur) continue;
-    cx = nx, cy = ny;
-    entered.push_back(ncell);
+    const int mx = static_cast<int>(pos[0] / dx), my = static_cast<int>(pos[1] / dy), mcell = my * w + mx;
+    if (mcell == cur) continue;
+    cx = mx, cy = my;
+    const int ncellEntered = mcell;
+    entered.push_back(ncellEntered);
     ++r.cells;
-    if (snowOf(ncell) < p_.skiMinSnowM) {
+    if (snowOf(ncellEntered) < p_.skiMinSnowM) {
       r.why = "the snow ran out";
       break;
     }
     // Crossing unstable snow on a slope above the rest angle: the raised release probability.
-    const float U = seen.count(ncell) ? seen[ncell][1] : 0.f;
+    const float U = seen.count(ncellEntered) ? seen[ncellEntered][1] : 0.f;
     if (U >= p_.avalancheMinUnstableM && p_.skiTriggerFactor > 0.0) {
       auto at = [&](int xx, int yy) { return surfaceOf(std::clamp(yy, 0, h - 1) * w + std::clamp(xx, 0, w - 1)); };
       const double gx = (at(cx + 1, cy) - at(cx - 1, cy)) / (2 * dx), gy = (at(cx, cy + 1) - at(cx, cy - 1)) / (2 * dy);

@@ -4,6 +4,8 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -21,10 +23,12 @@ struct Bake {
 
 inline Bake bakeSceneText(const std::string& name, const std::string& sceneText) {
   Bake b;
-  // One folder per test and name: ctest runs tests in parallel processes.
+  // One folder per test, name and process: ctest runs tests in parallel processes, and two test
+  // runs on one machine must not share folders.
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   b.dir = std::filesystem::temp_directory_path() /
-          ("snowbake_" + name + "_" + (info ? std::string(info->test_suite_name()) + "." + info->name() : std::string("main")));
+          ("snowbake_" + name + "_" + (info ? std::string(info->test_suite_name()) + "." + info->name() : std::string("main")) + "_" +
+           std::to_string(::getpid()));
   std::filesystem::remove_all(b.dir);
   std::filesystem::create_directories(b.dir);
   const std::string scene = (b.dir / "scene.toml").string();
