@@ -26,7 +26,7 @@ std::string meshFormatDescription(const std::string& format) {
   if (format == "ply") return "PLY binary (little endian), positions and normals, metres, z up";
   if (format == "obj") return "Wavefront OBJ (no materials), positions and normals, metres, y up (x, z, -y)";
   if (format == "glb") return "binary glTF 2.0, positions and normals, metres, y up (x, z, -y)";
-  if (format == "fbx") return "ASCII FBX 7.5, positions and normals, metres (UnitScaleFactor 100), y up (x, z, -y)";
+  if (format == "fbx") return "ASCII FBX 7.4, positions, normals and UVs, metres (UnitScaleFactor 100), y up (x, z, -y)";
   throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
 }
 
@@ -153,17 +153,105 @@ std::string objBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
   return out;
 }
 
+// ASCII FBX 7.4 written directly (assimp's writer took 25 s a million triangles and its binary
+// one writes unreadable files): one mesh geometry with per-vertex normals and UVs, one model, one
+// material; y up, metres (UnitScaleFactor 100: FBX counts in centimetres).
+std::string fbxBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+  std::string out;
+  out.reserve(m.positions.size() * 80 + m.triangles.size() * 30 + 4096);
+  char buf[48];
+  auto num = [&](double v) {
+    const auto r = std::to_chars(buf, buf + sizeof buf, static_cast<float>(v));
+    out.append(buf, r.ptr);
+  };
+  auto integer = [&](long long v) {
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    out.append(buf, r.ptr);
+  };
+  out += "; FBX 7.4.0 project file\n; snowbake snow mesh: metres, y up (x east, y altitude, z south)\n"
+         "FBXHeaderExtension:  {\n\tFBXHeaderVersion: 1003\n\tFBXVersion: 7400\n\tCreator: \"snowbake\"\n}\n"
+         "GlobalSettings:  {\n\tVersion: 1000\n\tProperties70:  {\n"
+         "\t\tP: \"UpAxis\", \"int\", \"Integer\", \"\",1\n\t\tP: \"UpAxisSign\", \"int\", \"Integer\", \"\",1\n"
+         "\t\tP: \"FrontAxis\", \"int\", \"Integer\", \"\",2\n\t\tP: \"FrontAxisSign\", \"int\", \"Integer\", \"\",1\n"
+         "\t\tP: \"CoordAxis\", \"int\", \"Integer\", \"\",0\n\t\tP: \"CoordAxisSign\", \"int\", \"Integer\", \"\",1\n"
+         "\t\tP: \"UnitScaleFactor\", \"double\", \"Number\", \"\",100\n\t\tP: \"OriginalUnitScaleFactor\", \"double\", \"Number\", \"\",100\n"
+         "\t}\n}\n"
+         "Definitions:  {\n\tVersion: 100\n\tCount: 3\n\tObjectType: \"Model\" {\n\t\tCount: 1\n\t}\n"
+         "\tObjectType: \"Geometry\" {\n\t\tCount: 1\n\t}\n\tObjectType: \"Material\" {\n\t\tCount: 1\n\t}\n}\n"
+         "Objects:  {\n\tGeometry: 1000, \"Geometry::snow\", \"Mesh\" {\n\t\tVertices: *";
+  integer(static_cast<long long>(3 * m.positions.size()));
+  out += " {\n\t\t\ta: ";
+  bool first = true;
+  for (const auto& p : m.positions)
+    for (float c : yUp(p)) {
+      if (!first) out += ',';
+      first = false;
+      num(c);
+    }
+  out += "\n\t\t}\n\t\tPolygonVertexIndex: *";
+  integer(static_cast<long long>(3 * m.triangles.size()));
+  out += " {\n\t\t\ta: ";
+  first = true;
+  for (const auto& t : m.triangles) {
+    if (!first) out += ',';
+    first = false;
+    integer(t[0]);
+    out += ',';
+    integer(t[1]);
+    out += ',';
+    integer(-static_cast<long long>(t[2]) - 1);  // the last index of a polygon, negated minus one
+  }
+  out += "\n\t\t}\n\t\tGeometryVersion: 124\n\t\tLayerElementNormal: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"\"\n"
+         "\t\t\tMappingInformationType: \"ByVertice\"\n\t\t\tReferenceInformationType: \"Direct\"\n\t\t\tNormals: *";
+  integer(static_cast<long long>(3 * normals.size()));
+  out += " {\n\t\t\t\ta: ";
+  first = true;
+  for (const auto& n : normals)
+    for (float c : yUp(n)) {
+      if (!first) out += ',';
+      first = false;
+      num(c);
+    }
+  out += "\n\t\t\t}\n\t\t}\n";
+  const bool uv = m.uvs.size() == m.positions.size();
+  if (uv) {
+    out += "\t\tLayerElementUV: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"UVMap\"\n\t\t\tMappingInformationType: \"ByVertice\"\n"
+           "\t\t\tReferenceInformationType: \"Direct\"\n\t\t\tUV: *";
+    integer(static_cast<long long>(2 * m.uvs.size()));
+    out += " {\n\t\t\t\ta: ";
+    first = true;
+    for (const auto& u : m.uvs)
+      for (float c : u) {
+        if (!first) out += ',';
+        first = false;
+        num(c);
+      }
+    out += "\n\t\t\t}\n\t\t}\n";
+  }
+  out += "\t\tLayer: 0 {\n\t\t\tVersion: 100\n\t\t\tLayerElement:  {\n\t\t\t\tType: \"LayerElementNormal\"\n\t\t\t\tTypedIndex: 0\n\t\t\t}\n";
+  if (uv) out += "\t\t\tLayerElement:  {\n\t\t\t\tType: \"LayerElementUV\"\n\t\t\t\tTypedIndex: 0\n\t\t\t}\n";
+  out += "\t\t}\n\t}\n"
+         "\tModel: 2000, \"Model::snow\", \"Mesh\" {\n\t\tVersion: 232\n\t\tProperties70:  {\n\t\t}\n\t\tShading: T\n"
+         "\t\tCulling: \"CullingOff\"\n\t}\n"
+         "\tMaterial: 3000, \"Material::snow\", \"\" {\n\t\tVersion: 102\n\t\tShadingModel: \"lambert\"\n\t\tMultiLayer: 0\n"
+         "\t\tProperties70:  {\n\t\t\tP: \"DiffuseColor\", \"Color\", \"\", \"A\",0.95,0.96,0.98\n\t\t}\n\t}\n}\n"
+         "Connections:  {\n\tC: \"OO\",2000,0\n\tC: \"OO\",1000,2000\n\tC: \"OO\",3000,2000\n}\n";
+  return out;
+}
+
 }  // namespace
 
 void writeMesh(const std::string& path, const std::string& format, const MeshData& m) {
-  const char* id = format == "ply" ? "plyb" : format == "obj" ? "objnomtl" : format == "glb" ? "glb2" : format == "fbx" ? "fbxa" : nullptr;
-  if (!id) throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
+  if (format != "ply" && format != "obj" && format != "glb" && format != "fbx")
+    throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
   const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m);
   if (format == "glb") return writeTextAtomically(path, glbBytes(m, normals));
   if (format == "obj") return writeTextAtomically(path, objBytes(m, normals));
-  const bool yUp = format != "ply";
-  auto axes = [&](const std::array<float, 3>& p) { return yUp ? aiVector3D(p[0], p[2], -p[1]) : aiVector3D(p[0], p[1], p[2]); };
+  if (format == "fbx") return writeTextAtomically(path, fbxBytes(m, normals));
+  // PLY through assimp's exporter (binary, z up).
+  const char* id = "plyb";
+  auto axes = [&](const std::array<float, 3>& p) { return aiVector3D(p[0], p[1], p[2]); };
 
   aiScene scene;  // owns everything below; freed by its destructor
   scene.mRootNode = new aiNode();
@@ -202,21 +290,7 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
   Assimp::Exporter exporter;
   const aiExportDataBlob* blob = exporter.ExportToBlob(&scene, id, 0u);
   if (!blob) throw std::runtime_error(path + ": assimp could not export " + format + ": " + exporter.GetErrorString());
-  std::string bytes(static_cast<const char*>(blob->data), blob->size);
-  if (format == "fbx") {
-    // The exporter stamps the time of day: a fixed stamp, so the same bake gives the same bytes.
-    const size_t a = bytes.find("CreationTimeStamp:"), b = a == std::string::npos ? a : bytes.find('}', a);
-    if (b != std::string::npos)
-      bytes.replace(a, b + 1 - a,
-                    "CreationTimeStamp:  {\n\t\tVersion: 1000\n\t\tYear: 2000\n\t\tMonth: 1\n\t\tDay: 1\n\t\tHour: 0\n\t\tMinute: 0\n"
-                    "\t\tSecond: 0\n\t\tMillisecond: 0\n\t}");
-    // FBX counts in centimetres: 100 of them to our unit, the metre.
-    for (const char* key : {"\"UnitScaleFactor\", \"double\", \"Number\", \"\", 1\n", "\"OriginalUnitScaleFactor\", \"double\", \"Number\", \"\", 1\n"}) {
-      const size_t at = bytes.find(key);
-      if (at != std::string::npos) bytes.replace(at + std::strlen(key) - 2, 1, "100");
-    }
-  }
-  writeTextAtomically(path, bytes);
+  writeTextAtomically(path, std::string(static_cast<const char*>(blob->data), blob->size));
 }
 
 namespace {

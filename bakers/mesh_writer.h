@@ -6,9 +6,10 @@
 //   "obj"  Wavefront OBJ without materials, y up ((x, y, z) -> (x, z, -y)): the convention OBJ
 //          importers assume (Blender, Maya, Houdini, Unreal)
 //   "glb"  binary glTF 2.0, y up as the glTF specification requires ((x, y, z) -> (x, z, -y))
-//   "fbx"  ASCII FBX 7.5, y up ((x, y, z) -> (x, z, -y)), metres. ASCII because the binary FBX
-//          writer of Debian's assimp 5.2 writes files no reader opens (assimp issue #4686); the
-//          FBX SDK (Unreal, Unity, Maya) reads ASCII FBX, Blender's importer does not (use glb).
+//   "fbx"  ASCII FBX 7.4, y up ((x, y, z) -> (x, z, -y)), metres (UnitScaleFactor 100). ASCII
+//          because the binary FBX writer of Debian's assimp 5.2 writes files no reader opens
+//          (assimp issue #4686); the FBX SDK (Unreal, Unity, Maya) reads ASCII FBX, Blender's
+//          importer does not (use glb). glb, obj and fbx are written by our own code, PLY by assimp.
 // Positions in metres; per-vertex normals; UVs (when given) in the maps' frame: u east, v north,
 // (0, 0) at the grid's south-west corner, texel centres at ((i + 0.5) / W, 1 - (j + 0.5) / H).
 // Written atomically.
