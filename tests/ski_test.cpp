@@ -275,3 +275,30 @@ TEST(Ski, BakeWritesTheTrackTextureAtItsOwnSize) {
 
 }  // namespace
 }  // namespace snow
+
+namespace snow {
+namespace {
+
+TEST(Ski, SameBytesOnOneAndTwoThreads) {
+  const std::string base =
+      "[terrain]\nbuiltin = \"ridged\"\nsize = 64\ncell_size_m = 20\n[season]\ndays = 15\n[[events]]\ntype = \"snowfall\"\nday = 1\n"
+      "duration_days = 4\n[parameters]\nskiers_per_hour = 4\nski_trigger_factor = 1\n[outputs]\nlayers = [\"depth\", \"compacted\", "
+      "\"ski_tracks\"]\n[run]\nbackend = \"cpu\"\n";
+  const test::Bake one = test::bakeSceneText("ski_threads_1", base + "threads = 1\n");
+  const test::Bake two = test::bakeSceneText("ski_threads_2", base + "threads = 2\n");
+  auto bytes = [](const std::filesystem::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  for (const char* f : {"depth.exr", "compacted.exr", "ski_tracks.exr"})
+    EXPECT_TRUE(bytes(one.out() / f) == bytes(two.out() / f)) << f << " differs between 1 and 2 threads";
+  // The manifests differ only in the scene (its text names the thread count).
+  const auto m1 = nlohmann::json::parse(std::ifstream(one.out() / "manifest.json"));
+  const auto m2 = nlohmann::json::parse(std::ifstream(two.out() / "manifest.json"));
+  EXPECT_EQ(m1["run"], m2["run"]);
+  EXPECT_EQ(m1["files"], m2["files"]);
+  EXPECT_GT(m1["run"]["skiers"].size(), 10u);
+}
+
+}  // namespace
+}  // namespace snow
