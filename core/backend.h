@@ -55,7 +55,14 @@ class SnowBackend {
   // (clipped to the grid by the caller), row after row: a cheap look at a few cells.
   virtual void readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) = 0;
 
-  // Skiers (core/ski.h): in each listed cell (y * width + x, in order), `amountM` of unstable
+  // Skiers (core/ski.h). The route map of the bedrock by the cellular automaton
+  // (RouteMapStepKernel) on the backend's device; false on host backends, where a one-pass sort
+  // over the cells gives the same bytes faster.
+  virtual bool routeMapOnDevice(Grid<float>& out) {
+    (void)out;
+    return false;
+  }
+  // In each listed cell (y * width + x, in order), `amountM` of unstable
   // snow becomes stable, and what U lacks of it, stable becomes compacted (conserves mass).
   virtual void skierCompaction(const std::vector<int>& cells, float amountM) = 0;
 

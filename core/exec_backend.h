@@ -4,11 +4,13 @@
 // by the CUDA backend's .cu file, so it must stay free of TBB and CUDA headers.
 #pragma once
 #include <algorithm>
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "backend.h"
+#include "kernels/ski.h"
 #include "steps.h"
 
 namespace snow {
@@ -92,6 +94,37 @@ class ExecBackend final : public SnowBackend {
         for (int c = 0; c < cols; ++c) d[c] += row[c];
         if (layer == &unstable_) std::copy(row.begin(), row.end(), unstable.begin() + static_cast<size_t>(r) * cols);
       }
+    }
+  }
+
+  bool routeMapOnDevice(Grid<float>& out) override {
+    if constexpr (!Exec::kDevice) {
+      (void)out;
+      return false;
+    } else {
+      const int w = spec_.width, h = spec_.height;
+      const float dx = static_cast<float>(spec_.cellSizeXM), dy = static_cast<float>(spec_.cellSizeYM);
+      typename Exec::template Buffer<float> a, b;
+      const std::vector<float> zero(spec_.cellCount(), 0.f);
+      exec_.upload(a, zero);
+      exec_.upload(b, zero);
+      std::vector<float> previous, latest;
+      // Information moves one cell an iteration; compare the last two iterations every 16.
+      for (size_t it = 1;; ++it) {
+        auto& in = it % 2 ? a : b;
+        auto& result = it % 2 ? b : a;
+        exec_.forEachCell(w, h, RouteMapStepKernel{bedrock_.data(), valid_.data(), in.data(), result.data(), w, h, dx, dy,
+                                                   std::sqrt(dx * dx + dy * dy)});
+        if (it % 16 == 0 || it > spec_.cellCount()) {
+          exec_.download(in, previous);
+          exec_.download(result, latest);
+          if (previous == latest) break;
+        }
+      }
+      exec_.finish();
+      out = Grid<float>(w, h, 0.f);
+      out.values() = latest;
+      return true;
     }
   }
 

@@ -42,6 +42,7 @@ inline float rowMax(const float* values, const uint8_t* valid, int width, int y)
 
 // Storage for the executors that run on the host: buffers are vectors, "upload" is a copy.
 struct HostStorage {
+  static constexpr bool kDevice = false;  // buffers live in host memory
   template <class T>
   using Buffer = HostBuffer<T>;
   template <class T>

@@ -195,7 +195,10 @@ void SkiTracks::stamp(const Path2& track, double depthM, double widthM, const st
 
 SkiRun::SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& state, SkiTracks* tracks)
     : backend_(backend), p_(p), spec_(state.spec), bedrock_(state.bedrockM), valid_(state.validCell),
-      route_(snow::routeMap(state.bedrockM, state.validCell, state.spec)), tracks_(tracks) {
+      tracks_(tracks) {
+  // On a GPU backend, the paper's automaton on the device; on the host, the one-pass sort (the
+  // same bytes, tested).
+  if (!backend.routeMapOnDevice(route_)) route_ = snow::routeMap(state.bedrockM, state.validCell, state.spec);
   cumulative_.resize(route_.size());
   double sum = 0.0;
   for (size_t i = 0; i < route_.size(); ++i) cumulative_[i] = (sum += route_.values()[i]);

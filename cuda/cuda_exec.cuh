@@ -81,6 +81,7 @@ __global__ inline void rowMaxKernel(const float* values, const uint8_t* valid, i
 
 class CudaExec {
  public:
+  static constexpr bool kDevice = true;  // buffers live on the GPU
   template <class T>
   using Buffer = DeviceBuffer<T>;
 

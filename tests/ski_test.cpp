@@ -302,3 +302,30 @@ TEST(Ski, SameBytesOnOneAndTwoThreads) {
 
 }  // namespace
 }  // namespace snow
+
+#include "core/exec_backend.h"
+#include "core/serial_exec.h"
+
+namespace snow {
+namespace {
+
+// The device code path of the route map (ExecBackend::routeMapOnDevice), run on a host executor
+// dressed as a device: the automaton loop gives the one-pass bytes.
+struct HostAsDevice : SerialExec {
+  static constexpr bool kDevice = true;
+};
+
+TEST(Ski, DeviceRouteMapLoopGivesTheSameBytes) {
+  SnowState r = test::makeRoughState(70, 51, 13);
+  ExecBackend<HostAsDevice> backend;
+  backend.upload(r);
+  Grid<float> out;
+  ASSERT_TRUE(backend.routeMapOnDevice(out));
+  EXPECT_EQ(out.values(), routeMap(r.bedrockM, r.validCell, r.spec).values());
+  auto cpu = createCpuBackend();
+  Grid<float> unused;
+  EXPECT_FALSE(cpu->routeMapOnDevice(unused));  // the host backend leaves it to the sort
+}
+
+}  // namespace
+}  // namespace snow

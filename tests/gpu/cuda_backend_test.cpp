@@ -17,6 +17,7 @@
 #include "core/kernel_registry.h"
 #include "core/avalanche.h"
 #include "core/season.h"
+#include "core/ski.h"
 #include "core/serial_exec.h"
 #include "cuda/cuda_backend.h"
 #include "tests/test_support.h"
@@ -198,4 +199,25 @@ TEST(CudaBackend, AvalancheStepTimeDoesNotGrowWithTheTerrain) {
                 r.secondsPerStep() * 1e3, r.boxCellsMax);
   }
   EXPECT_GT(perStep[0], 0.0);
+}
+
+// The skiers' route map: the paper's cellular automaton on the GPU gives the host's one-pass
+// bytes; and the skier compaction edits the device's layers as the host's.
+TEST(CudaBackend, RouteMapAndSkierCompactionMatchTheCpu) {
+  SKIP_WITHOUT_CUDA();
+  SnowState s = test::makeRoughState(181, 143, 31);
+  auto gpu = cuda::createCudaBackend();
+  gpu->upload(s);
+  Grid<float> onDevice;
+  ASSERT_TRUE(gpu->routeMapOnDevice(onDevice));
+  EXPECT_EQ(onDevice.values(), routeMap(s.bedrockM, s.validCell, s.spec).values());
+  ExecBackend<SerialExec> cpu;
+  cpu.upload(s);
+  const std::vector<int> cells{5, 181 * 20 + 17, 181 * 20 + 18, 181 * 100 + 90};
+  cpu.skierCompaction(cells, 0.05f);
+  gpu->skierCompaction(cells, 0.05f);
+  SnowState a = s, b = s;
+  cpu.download(a);
+  gpu->download(b);
+  test::expectSameBytes(a, b);
 }
