@@ -360,8 +360,8 @@ TEST(Occlusion, SceneFilesKeepEachModesLayersApart) {
 }
 
 TEST(Occlusion, FrontRangeOcclusionAndSeasonMapsDiffer) {
-  const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/front_range_small_srtm3.asc";
-  if (!fs::exists(dem)) GTEST_SKIP() << "shared data not found: ../shared/data/dem/front_range_small_srtm3.asc";
+  const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/front_range_srtm3.asc";
+  if (!fs::exists(dem)) GTEST_SKIP() << "shared data not found: ../shared/data/dem/front_range_srtm3.asc";
   const std::string common = "[terrain]\nfile = \"" + dem + "\"\n[season]\nstart_date = 2025-11-01\ndays = 60\n[outputs]\nlayers = [\"depth\"]\n";
   const test::Bake occ = test::bakeSceneText("fr_occlusion", "mode = \"occlusion\"\n" + common);
   const test::Bake season = test::bakeSceneText("fr_season", common);
@@ -382,7 +382,7 @@ TEST(Occlusion, FrontRangeOcclusionAndSeasonMapsDiffer) {
   for (size_t k = 0; k < a.size(); ++k) diff += std::abs(a[k] / ma - b[k] / mb);
   diff /= a.size();
   EXPECT_GT(diff, 0.2) << "mean |occlusion/mean - season/mean|";
-  std::cout << "Front Range (small): occlusion mean depth " << ma << " m, season " << mb << " m, mean |difference| of the normalised maps "
+  std::cout << "Front Range: occlusion mean depth " << ma << " m, season " << mb << " m, mean |difference| of the normalised maps "
             << diff << "\n";
 }
 
