@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "core/atomic_file.h"
+#include "core/mesh_normals.h"
 #include "rtin.h"
 
 namespace snow {
@@ -30,27 +31,6 @@ std::string meshFormatDescription(const std::string& format) {
   throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
 }
 
-namespace {
-
-std::vector<std::array<float, 3>> areaWeightedNormals(const MeshData& m) {
-  std::vector<std::array<double, 3>> sum(m.positions.size(), {0.0, 0.0, 0.0});
-  for (const auto& t : m.triangles) {
-    const auto &a = m.positions[t[0]], &b = m.positions[t[1]], &c = m.positions[t[2]];
-    const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-    const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-    const double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-    for (int k = 0; k < 3; ++k)
-      for (int c2 = 0; c2 < 3; ++c2) sum[t[k]][c2] += cr[c2];
-  }
-  std::vector<std::array<float, 3>> out(sum.size(), {0.f, 0.f, 1.f});
-  for (size_t k = 0; k < sum.size(); ++k) {
-    const double len = std::sqrt(sum[k][0] * sum[k][0] + sum[k][1] * sum[k][1] + sum[k][2] * sum[k][2]);
-    if (len > 0.0) out[k] = {float(sum[k][0] / len), float(sum[k][1] / len), float(sum[k][2] / len)};
-  }
-  return out;
-}
-
-}  // namespace
 
 namespace {
 
@@ -245,7 +225,7 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
   if (format != "ply" && format != "obj" && format != "glb" && format != "fbx")
     throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
-  const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m);
+  const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m.positions, m.triangles);
   if (format == "glb") return writeTextAtomically(path, glbBytes(m, normals));
   if (format == "obj") return writeTextAtomically(path, objBytes(m, normals));
   if (format == "fbx") return writeTextAtomically(path, fbxBytes(m, normals));
@@ -337,7 +317,7 @@ MeshData surfaceMesh(const RtinMesh& t, const Grid<float>& altitude, const GridS
     for (int k = 0; k < 3; ++k) v[k] = g.index[static_cast<size_t>(tri[k][1]) * t.width + tri[k][0]];
     m.triangles.push_back(v);
   }
-  m.normals = areaWeightedNormals(m);
+  m.normals = areaWeightedNormals(m.positions, m.triangles);
   return m;
 }
 
@@ -412,7 +392,7 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
       if (bt != bb) m.triangles.push_back({at, bb, bt});
     }
   }
-  m.normals = areaWeightedNormals(m);
+  m.normals = areaWeightedNormals(m.positions, m.triangles);
   return m;
 }
 

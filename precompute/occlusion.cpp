@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "core/errors.h"
+#include "core/mesh_normals.h"
 #include "exposure.h"
 #include "solar.h"
 
@@ -238,26 +239,8 @@ OcclusionSnow computeOcclusionSnowOnTerrain(const RayScene& scene, const Grid<fl
   return computeOcclusionSnow(scene, points, normals, active, eps, settings);
 }
 
-std::vector<std::array<float, 3>> vertexNormals(const TriangleMesh& mesh) {
-  std::vector<std::array<double, 3>> sum(mesh.positions.size(), {0.0, 0.0, 0.0});
-  for (const auto& t : mesh.triangles) {
-    const auto &a = mesh.positions[t[0]], &b = mesh.positions[t[1]], &c = mesh.positions[t[2]];
-    const double u[3] = {double(b[0]) - a[0], double(b[1]) - a[1], double(b[2]) - a[2]};
-    const double v[3] = {double(c[0]) - a[0], double(c[1]) - a[1], double(c[2]) - a[2]};
-    const double cr[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};  // 2 x area
-    for (int k = 0; k < 3; ++k)
-      for (int c2 = 0; c2 < 3; ++c2) sum[t[k]][c2] += cr[c2];
-  }
-  std::vector<std::array<float, 3>> out(sum.size(), {0.f, 0.f, 1.f});
-  for (size_t k = 0; k < sum.size(); ++k) {
-    const double len = std::sqrt(sum[k][0] * sum[k][0] + sum[k][1] * sum[k][1] + sum[k][2] * sum[k][2]);
-    if (len > 0.0) out[k] = {static_cast<float>(sum[k][0] / len), static_cast<float>(sum[k][1] / len), static_cast<float>(sum[k][2] / len)};
-  }
-  return out;
-}
-
 OcclusionSnow computeOcclusionSnowOnMesh(const RayScene& scene, const TriangleMesh& mesh, const OcclusionSettings& settings) {
-  const std::vector<std::array<float, 3>> normals = vertexNormals(mesh);
+  const std::vector<std::array<float, 3>> normals = areaWeightedNormals(mesh.positions, mesh.triangles);
   // Vertices no triangle uses take no part.
   std::vector<uint8_t> used(mesh.positions.size(), 0);
   for (const auto& t : mesh.triangles) used[t[0]] = used[t[1]] = used[t[2]] = 1;

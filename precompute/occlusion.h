@@ -87,8 +87,8 @@ OcclusionSnow computeOcclusionSnow(const RayScene& scene, const std::vector<std:
 OcclusionSnow computeOcclusionSnowOnTerrain(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid,
                                             const GridSpec& spec, const OcclusionSettings& settings);
 
-// Per vertex of a mesh (the scene should hold the mesh): area-weighted vertex normals.
+// Per vertex of a mesh (the scene should hold the mesh): area-weighted vertex normals
+// (core/mesh_normals.h).
 OcclusionSnow computeOcclusionSnowOnMesh(const RayScene& scene, const TriangleMesh& mesh, const OcclusionSettings& settings);
-std::vector<std::array<float, 3>> vertexNormals(const TriangleMesh& mesh);
 
 }  // namespace snow

@@ -15,6 +15,7 @@
 
 #include "bake_support.h"
 #include "core/errors.h"
+#include "core/mesh_normals.h"
 #include "precompute/exposure.h"
 #include "precompute/mesh.h"
 #include "precompute/occlusion.h"
@@ -286,7 +287,7 @@ TEST(Occlusion, MeshVerticesGetSnowPerVertex) {
   EXPECT_NEAR(o.snowM[corner], s.sMaxM * (s.tauAmbient - 1.0), 1e-6);
   EXPECT_LT(o.ambient[centre], 0.8f);
   EXPECT_GT(o.snowM[centre], o.snowM[corner] + 0.2);
-  const auto normals = vertexNormals(m);
+  const auto normals = areaWeightedNormals(m.positions, m.triangles);
   EXPECT_NEAR(normals[corner][2], 1.0, 1e-6);
 }
 
