@@ -276,26 +276,21 @@ SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id
     std::vector<std::pair<int, double>> candidates;
     double total = 0.0;
     const float here = surfaceOf(cur);
-    // Eq. 4's weight of aiming from the current cell at cell (nx, ny), offset (ox, oy).
-    auto weightOf = [&](int nx, int ny, int ox, int oy) -> double {
-      const double dist = std::hypot(ox * dx, oy * dy);
-      const int n = ny * w + nx;
-      if (!valid_(nx, ny) || snowOf(n) < p_.skiMinSnowM) return 0.0;
-      const double drop = here - surfaceOf(n);
-      if (!(drop > 0.0)) return 0.0;
-      const double sn = std::atan2(drop, dist), e = (sn - target) / sigma;
-      return std::exp(-e * e) * (route_.values()[static_cast<size_t>(n)] + dist);
-    };
     for (int oy = -R; oy <= R; ++oy)
       for (int ox = -R; ox <= R; ++ox) {
         const int nx = cx + ox, ny = cy + oy;
-        if ((ox == 0 && oy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+        if ((ox == 0 && oy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h || !valid_(nx, ny)) continue;
         const double ddx = ox * dx, ddy = oy * dy, dist = std::hypot(ddx, ddy);
         if (dist > R * stepM * 1.0001) continue;
         if ((heading[0] != 0.0 || heading[1] != 0.0) && ddx * heading[0] + ddy * heading[1] < std::cos(100.0 * kPi / 180.0) * dist) continue;
-        const double weight = weightOf(nx, ny, ox, oy);
+        const int n = ny * w + nx;
+        if (snowOf(n) < p_.skiMinSnowM) continue;
+        const double drop = here - surfaceOf(n);
+        if (!(drop > 0.0)) continue;
+        const double sn = std::atan2(drop, dist), e = (sn - target) / sigma;
+        const double weight = std::exp(-e * e) * (route_.values()[static_cast<size_t>(n)] + dist);
         if (weight <= 0.0) continue;
-        candidates.push_back({ny * w + nx, weight});
+        candidates.push_back({n, weight});
         total += weight;
       }
     if (candidates.empty() || !(total > 0.0)) {
@@ -331,11 +326,13 @@ SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id
     const int ncell = ny * w + nx;
     // The smooth turn must not carry the skier where it would not go: uphill, out of the snow,
     // or into a dead end (a route much shorter than the target's). Then it turns straight at
-    // the target; if even that fails, the descent ends.
-    const bool acceptable = ncell == cur || (snowOf(ncell) >= p_.skiMinSnowM && surfaceOf(ncell) <= surfaceOf(cur) &&
-                                             route_.values()[static_cast<size_t>(ncell)] >= 0.5f * route_.values()[static_cast<size_t>(chosen)]);
+    // the target; if even that fails, it steps to the neighbour nearest the target's direction.
+    auto enterable = [&](int cell) {
+      return snowOf(cell) >= p_.skiMinSnowM && surfaceOf(cell) <= surfaceOf(cur) &&
+             route_.values()[static_cast<size_t>(cell)] >= 0.5f * route_.values()[static_cast<size_t>(chosen)];
+    };
     std::array<double, 2> moveTo = next;
-    if (!acceptable) {
+    if (ncell != cur && !enterable(ncell)) {
       if (!(heading == want)) {
         heading = want;
         continue;
@@ -349,9 +346,7 @@ SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id
           const int bx = cx + ox, by = cy + oy;
           if ((ox == 0 && oy == 0) || bx < 0 || by < 0 || bx >= w || by >= h || !valid_(bx, by)) continue;
           const int b = by * w + bx;
-          if (snowOf(b) < p_.skiMinSnowM || surfaceOf(b) > surfaceOf(cur) ||
-              route_.values()[static_cast<size_t>(b)] < 0.5f * route_.values()[static_cast<size_t>(chosen)])
-            continue;
+          if (!enterable(b)) continue;
           const double ex = (bx + 0.5) * dx - pos[0], ey = (by + 0.5) * dy - pos[1], el = std::hypot(ex, ey);
           const double dot = (ex * want[0] + ey * want[1]) / el;
           if (dot > bestDot) bestDot = dot, best = b;
@@ -367,18 +362,18 @@ SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id
     r.lengthM += std::hypot(moveTo[0] - pos[0], moveTo[1] - pos[1]);
     pos = moveTo;
     r.path.push_back(pos);
-    const int mx = static_cast<int>(pos[0] / dx), my = static_cast<int>(pos[1] / dy), mcell = my * w + mx;
-    if (mcell == cur) continue;
+    const int mx = static_cast<int>(pos[0] / dx), my = static_cast<int>(pos[1] / dy), entering = my * w + mx;
+    if (entering == cur) continue;
     cx = mx, cy = my;
-    const int ncellEntered = mcell;
-    entered.push_back(ncellEntered);
+    entered.push_back(entering);
     ++r.cells;
-    if (snowOf(ncellEntered) < p_.skiMinSnowM) {
+    if (snowOf(entering) < p_.skiMinSnowM) {
       r.why = "the snow ran out";
       break;
     }
     // Crossing unstable snow on a slope above the rest angle: the raised release probability.
-    const float U = seen.count(ncellEntered) ? seen[ncellEntered][1] : 0.f;
+    const auto seenEntering = seen.find(entering);
+    const float U = seenEntering != seen.end() ? seenEntering->second[1] : 0.f;
     if (U >= p_.avalancheMinUnstableM && p_.skiTriggerFactor > 0.0) {
       auto at = [&](int xx, int yy) { return surfaceOf(std::clamp(yy, 0, h - 1) * w + std::clamp(xx, 0, w - 1)); };
       const double gx = (at(cx + 1, cy) - at(cx - 1, cy)) / (2 * dx), gy = (at(cx, cy + 1) - at(cx, cy - 1)) / (2 * dy);
