@@ -18,11 +18,6 @@
 
 namespace snow {
 
-const std::vector<std::string>& meshFormats() {
-  static const std::vector<std::string> f{"ply", "obj", "glb", "fbx"};
-  return f;
-}
-
 std::string meshFormatDescription(const std::string& format) {
   if (format == "ply") return "PLY binary (little endian), positions and normals, metres, z up";
   if (format == "obj") return "Wavefront OBJ (no materials), positions and normals, metres, y up (x, z, -y)";

@@ -30,7 +30,6 @@ struct MeshData {
   std::vector<std::array<uint32_t, 3>> triangles;
 };
 
-const std::vector<std::string>& meshFormats();  // ply, obj, glb, fbx
 std::string meshFormatDescription(const std::string& format);
 
 // Writes `path` (its extension should match the format). Throws std::runtime_error on failure.

@@ -224,7 +224,6 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   std::optional<SkiRun> ski;
   if (skiing) {
     ski.emplace(backend, p, state, cfg.skiTracks);
-    report.routeMap = ski->routeMap();
     uint64_t skierId = 0;
     auto runSkier = [&](int x, int y, double day, bool user) {
       SkierRecord r = ski->descend(x, y, day, cfg.seed, skierId++, user);

@@ -65,7 +65,6 @@ struct SeasonReport {
   std::vector<AvalancheRecord> avalanches;  // every avalanche released, and every user release that could not be
   uint64_t avalancheTries = 0;              // spontaneous release tries (most find nothing to release)
   std::vector<SkierRecord> skiers;          // every skier's descent (path kept for user skiers only)
-  Grid<float> routeMap;                     // the skiers' route map (empty without skiers)
   // |final - (initial + added - melted)| relative to the snow that passed through.
   double massBalanceRelativeError() const;
 };

@@ -12,19 +12,11 @@ namespace snow {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
-
-struct Steps {
-  float dx, dy, diagonal;
-};
-Steps stepsOf(const GridSpec& spec) {
-  const float dx = static_cast<float>(spec.cellSizeXM), dy = static_cast<float>(spec.cellSizeYM);
-  return {dx, dy, std::sqrt(dx * dx + dy * dy)};
-}
 }  // namespace
 
 Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec) {
   const int w = spec.width, h = spec.height;
-  const Steps st = stepsOf(spec);
+  const float dx = static_cast<float>(spec.cellSizeXM), dy = static_cast<float>(spec.cellSizeYM);
   std::vector<int> order;
   order.reserve(static_cast<size_t>(w) * h);
   for (int i = 0; i < w * h; ++i)
@@ -32,25 +24,11 @@ Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, co
   // Lowest first: every lower neighbour is final before a cell is computed.
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return altitude.values()[a] < altitude.values()[b]; });
   Grid<float> d(w, h, 0.f);
-  const RouteMapStepKernel k{altitude.data(), valid.data(), d.data(), d.data(), w, h, st.dx, st.dy, st.diagonal};
+  // In place: the kernel reads only lower, finished neighbours (the same float sums as the
+  // device automaton's, so the same bytes).
+  const RouteMapStepKernel k{altitude.data(), valid.data(), d.data(), d.data(), w, h, dx, dy, std::sqrt(dx * dx + dy * dy)};
   for (int i : order) k(i % w, i / w);
   return d;
-}
-
-Grid<float> routeMapByAutomaton(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, int* iterations) {
-  const int w = spec.width, h = spec.height;
-  const Steps st = stepsOf(spec);
-  Grid<float> a(w, h, 0.f), b(w, h, 0.f);
-  int n = 0;
-  for (;; ++n) {
-    const RouteMapStepKernel k{altitude.data(), valid.data(), a.data(), b.data(), w, h, st.dx, st.dy, st.diagonal};
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) k(x, y);
-    if (a.values() == b.values()) break;
-    std::swap(a, b);
-  }
-  if (iterations) *iterations = n + 1;
-  return b;
 }
 
 double turnFrequency(double slope, double target, double a, double minFrequency) {

@@ -4,8 +4,9 @@
 // Route map: for every cell, the length in metres of the longest strictly descending 8-neighbour
 // path from it (to a local minimum, which includes cells at the terrain's edge with no lower
 // neighbour). The paper's cellular automaton, D(c) = max over lower neighbours n of D(n) + |cn|,
-// is RouteMapStepKernel (iterated until nothing changes); routeMap() gets the same numbers in one
-// pass over the cells sorted by altitude (tested equal, bit for bit).
+// is RouteMapStepKernel (kernels/ski.h), iterated on the device by GPU backends
+// (SnowBackend::routeMapOnDevice); routeMap() gets the same numbers in one pass over the cells
+// sorted by altitude (tested equal, bit for bit).
 //
 // Large-scale paths: a skier is an agent (position, heading). Each step it looks at the cells
 // within ski_lookahead_m ahead of it (within 100 degrees of its heading) and aims at cell n with
@@ -52,8 +53,6 @@
 namespace snow {
 
 Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec);
-// The automaton, run on the host until it stops changing; `iterations` receives the count.
-Grid<float> routeMapByAutomaton(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, int* iterations = nullptr);
 
 // Turn frequency (1/m) for a segment of slope angle `slopeRad` (see above); 0 at or below the target.
 double turnFrequency(double slopeRad, double targetRad, double amplitudeM, double minFrequencyPerM);
