@@ -158,31 +158,24 @@ TEST(Occlusion, ThresholdsSweepMonotonically) {
   const Field t = field(64, 64, 20.0, [](double x, double y) {
     return 1500.0 + 300.0 * std::sin(x / 150.0) * std::cos(y / 200.0) + 120.0 * std::sin((x + 2 * y) / 60.0);
   });
-  OcclusionSettings s = winter45();
   const RayScene scene(t.heights, t.spec);
-  std::vector<float> previous;
-  double previousTotal = -1.0;
-  for (double tau : {0.6, 0.8, 0.9, 1.0, 1.1, 1.3}) {
-    s.tauAmbient = tau;
-    const OcclusionSnow o = computeOcclusionSnowOnTerrain(scene, t.heights, t.valid, t.spec, s);
-    const double total = std::accumulate(o.snowM.begin(), o.snowM.end(), 0.0);
-    EXPECT_GT(total, previousTotal) << "tau_ambient " << tau;
-    for (size_t k = 0; k < previous.size(); ++k) ASSERT_GE(o.snowM[k], previous[k]) << "tau_ambient " << tau << " cell " << k;
-    previous = o.snowM;
-    previousTotal = total;
-  }
-  s.tauAmbient = 1.25;
-  previous.clear();
-  previousTotal = -1.0;
-  for (double tauSun : {0.2, 0.5, 0.75, 0.9, 1.0}) {
-    s.tauSun = tauSun;
-    const OcclusionSnow o = computeOcclusionSnowOnTerrain(scene, t.heights, t.valid, t.spec, s);
-    const double total = std::accumulate(o.snowM.begin(), o.snowM.end(), 0.0);
-    EXPECT_GT(total, previousTotal) << "tau_sun " << tauSun;
-    for (size_t k = 0; k < previous.size(); ++k) ASSERT_GE(o.snowM[k], previous[k]) << "tau_sun " << tauSun << " cell " << k;
-    previous = o.snowM;
-    previousTotal = total;
-  }
+  // Each threshold over increasing values: the snow never falls, per cell or in total.
+  auto sweep = [&](double OcclusionSettings::*threshold, const char* name, std::initializer_list<double> values) {
+    OcclusionSettings s = winter45();
+    std::vector<float> previous;
+    double previousTotal = -1.0;
+    for (double value : values) {
+      s.*threshold = value;
+      const OcclusionSnow o = computeOcclusionSnowOnTerrain(scene, t.heights, t.valid, t.spec, s);
+      const double total = std::accumulate(o.snowM.begin(), o.snowM.end(), 0.0);
+      EXPECT_GT(total, previousTotal) << name << " " << value;
+      for (size_t k = 0; k < previous.size(); ++k) ASSERT_GE(o.snowM[k], previous[k]) << name << " " << value << " cell " << k;
+      previous = o.snowM;
+      previousTotal = total;
+    }
+  };
+  sweep(&OcclusionSettings::tauAmbient, "tau_ambient", {0.6, 0.8, 0.9, 1.0, 1.1, 1.3});
+  sweep(&OcclusionSettings::tauSun, "tau_sun", {0.2, 0.5, 0.75, 0.9, 1.0});
 }
 
 TEST(Occlusion, AmbientOcclusionMatchesTheCanyonSkyViewFactor) {
