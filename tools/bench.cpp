@@ -38,6 +38,9 @@ std::string machineDescription() {
   return model + ", " + std::to_string(std::thread::hardware_concurrency()) + " hardware threads";
 }
 
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
 std::string format(const char* fmt, double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, fmt, v);
@@ -113,9 +116,9 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
     es.startDayOfYear = startDoy;
     es.seasonDays = 120;
     es.horizonSweep = true;
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     const Exposure e = computeExposure(nullptr, tb.heightsM, tb.valid, tb.info.spec, p, es);
-    const auto t1 = std::chrono::steady_clock::now();
+    const auto t1 = Clock::now();
     SnowState st;
     st.allocate(tb.info.spec);
     st.bedrockM = tb.heightsM;
@@ -123,8 +126,8 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
       st.exposureHours = e.totalAt(day);
       computeTemperatureBase(st, p);
     }
-    const double tempSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    const double total = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double tempSeconds = since(t1);
+    const double total = since(t0);
     table << "| " << name << " | horizon sweep | " << format("%.2f", e.timings.horizonSeconds) << " | " << format("%.2f", e.timings.skySeconds)
           << " | " << format("%.2f", e.timings.sunSeconds) << " | " << format("%.2f", e.timings.indirectSeconds) << " | "
           << format("%.2f", tempSeconds) << " | " << format("%.2f", total) << " |\n";
@@ -200,11 +203,11 @@ std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
   const WindState state{300.0, 12.0};
   for (const auto& c : cases) {
     for (WindOrdering ordering : {WindOrdering::UpwindSweep, WindOrdering::RedBlack}) {
-      const auto t0 = std::chrono::steady_clock::now();
+      const auto t0 = Clock::now();
       Grid<float> wx, wy, fx, fy, wz, wsz;
       computeWindVectors(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, state, p, wx, wy);
       computeFreeStream(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, state, p, fx, fy);
-      const double fieldSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double fieldSeconds = since(t0);
       WindSolverOptions so;
       so.ordering = ordering;
       const WindSolveStats st = solveWindEffectSurface(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, wx, wy, fx, fy,
@@ -242,9 +245,9 @@ std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads) {
     const SeasonConfig config = referenceWinter(o.days);
     computeTemperatureBase(state, config.params);
     auto backend = backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     const SeasonReport r = runSeason(*backend, state, config);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds = since(t0);
     double phase[5] = {0, 0, 0, 0, 0};
     for (const auto& p : r.phenomena) {
       if (p.name.rfind("snowfall", 0) == 0) phase[0] += p.seconds;
@@ -303,8 +306,6 @@ namespace {
 // sky-view factor and against a many-ray run, the cost per quality on a terrain, and the paper's
 // 500 000-triangle mesh.
 std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads) {
-  using Clock = std::chrono::steady_clock;
-  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   std::ostringstream table, csv;
   csv << "part,rays,size,ao_s,sun_s,total_s,mrays_per_s,err_mean,err_max\n";
   OcclusionSettings s;
@@ -437,8 +438,6 @@ namespace {
 // The adaptive triangulation on a real DEM: triangles against the vertical error bound, the
 // error measured on the output, and the time (triangulation and glTF writing).
 std::string meshBench(const BenchOptions& o, std::ostream& log, int threads) {
-  using Clock = std::chrono::steady_clock;
-  auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   std::ostringstream table, csv;
   const std::string dem = o.sharedDataDir + "/dem/tyrol_avaWog_5m.asc";
   if (!std::filesystem::exists(dem)) return "Mesh simplification: skipped (" + dem + " not found)\n";
