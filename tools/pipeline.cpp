@@ -363,16 +363,20 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     lastListed = Clock::now();
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
+    // Where an output of this day goes, less its extension: DIR/STEM at the season's end,
+    // DIR/frames/STEM.DDDD on a frame day (zero-padded, so DCC tools read the frames as a sequence).
+    std::string dayTag;
+    if (frame) {
+      std::ostringstream o;
+      o << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+      dayTag = o.str();
+    }
+    auto outputBase = [&](const std::string& stem) { return (fs::path(options.outDir) / (frame ? "frames" : "") / (stem + dayTag)).string(); };
     std::vector<std::string> channelNames;
     std::vector<Grid<float>> channels;
     for (const auto& layer : layers) {
       if (frame && layer == "valid_mask") continue;
-      std::string rel = layer;
-      if (frame) {
-        std::ostringstream o;
-        o << "frames/" << layer << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
-        rel = o.str();
-      }
+      const std::string base = outputBase(layer);
       const double outputDay = frame ? day : scene.days;
       if (layer == "preview") {
         // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
@@ -380,7 +384,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
         if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
         const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
-        const std::string path = (fs::path(options.outDir) / (rel + ".png")).string();
+        const std::string path = base + ".png";
         writeRgbPng(path, s.spec.width, s.spec.height, rgb);
         listFile(path,
                  "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, "
@@ -399,7 +403,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       }
       if (layer == "avalanche_preview") {
         const Grid<float> surface = layerGrid(s, "surface");
-        const std::string path = (fs::path(options.outDir) / (rel + ".png")).string();
+        const std::string path = base + ".png";
         writeRgbPng(path, s.spec.width, s.spec.height,
                     avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM));
         listFile(path, "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)", "sRGB", rgbPngFormat,
@@ -435,10 +439,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       auto sized = [&] {
         if (ownSize) manifest.files.back().width = grid.width(), manifest.files.back().height = grid.height();
       };
-      listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, grid, layer), content, layerUnit(layer), day);
+      listImage(writeFloatImage(base, scene.outputs.format, grid, layer), content, layerUnit(layer), day);
       sized();
       for (const std::string& encoding : scene.outputs.encodings) {
-        const WrittenImage img = writeNormalised((fs::path(options.outDir) / rel).string(), encoding, grid);
+        const WrittenImage img = writeNormalised(base, encoding, grid);
         listFile(img.path, content, layerUnit(layer), normalisedFormat(encoding, grid.width(), grid.height()), day, img.minValue,
                  img.maxValue);
         sized();
@@ -452,24 +456,17 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       // Displacement maps at the requested resolution: snow depth (for a displacement modifier on
       // the terrain) and the snow surface's height, bilinear from the grid.
       for (const std::string what : {"depth", "surface"}) {
-        std::ostringstream rel;
-        rel << "displacement_" << what;
-        if (frame) rel << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
         const Grid<float> g = resampleBilinear(layerGrid(s, what), scene.outputs.displacementWidth, scene.outputs.displacementHeight);
-        const fs::path base = fs::path(options.outDir) / (frame ? "frames" : "") / rel.str();
-        listImage(writeFloatImage(base.string(), scene.outputs.format, g, what),
+        listImage(writeFloatImage(outputBase(std::string("displacement_") + what), scene.outputs.format, g, what),
                   layerContent(what) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
                       " over the same extent",
                   "m", day);
       }
     }
     if (scene.outputs.vdb) {
-      std::ostringstream rel;
-      rel << (frame ? "frames/snow." : "snow");
-      if (frame) rel << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
       VdbOptions vo;
       vo.voxelSizeM = scene.outputs.vdbVoxelSizeM > 0.0 ? scene.outputs.vdbVoxelSizeM : std::min(s.spec.cellSizeXM, s.spec.cellSizeYM);
-      const std::string path = (fs::path(options.outDir) / (rel.str() + ".vdb")).string();
+      const std::string path = outputBase("snow") + ".vdb";
       const VdbSummary v = writeSnowVdb(path, s, vo);
       listFile(path, "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
                   fixed(vo.compactedKgPerM3, 0) + "/" + fixed(vo.stableKgPerM3, 0) + "/" + fixed(vo.unstableKgPerM3, 0) + "/" +
@@ -488,17 +485,11 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       const RtinMesh triangulation = buildRtin(fields, s.validCell, scene.outputs.meshMaxErrorM);
       outputSeconds["mesh triangulation (adaptive)"] += since(tTri);
       lastListed = Clock::now();
-      const std::string suffix = frame ? [&] {
-        std::ostringstream o;
-        o << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
-        return o.str();
-      }() : std::string();
-      const std::string folder = frame ? "frames/" : "";
       const std::string frameNote = " (adaptive triangulation, vertical error at most " + fixed(scene.outputs.meshMaxErrorM, 3) +
                                     " m at every grid point; x east, y north from the south-west corner; UVs line up with the maps)";
       auto writeAll = [&](const std::string& stem, const MeshData& mesh, const std::string& what) {
         for (const std::string& format : scene.outputs.meshes) {
-          const std::string path = (fs::path(options.outDir) / (folder + stem + suffix + "." + format)).string();
+          const std::string path = outputBase(stem) + "." + format;
           writeMesh(path, format, mesh);
           listFile(path, what + ", " + std::to_string(mesh.positions.size()) + " vertices, " + std::to_string(mesh.triangles.size()) +
                              " triangles" + frameNote,
@@ -529,7 +520,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           outputSeconds["mesh building"] += since(tm);
           lastListed = Clock::now();
           if (mesh.triangles.empty()) {
-            log << "  snow_body" << suffix << ": no snow, no mesh written\n";
+            log << "  snow_body" << dayTag << ": no snow, no mesh written\n";
             continue;
           }
           writeAll("snow_body", mesh, "the snow body alone, closed (top on the snow surface, bottom on the bedrock, walls at the grid's edge)");
@@ -547,10 +538,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         }
     }
     if (!channels.empty()) {
-      std::ostringstream rel;
-      rel << "layers";
-      if (frame) rel.str(""), rel << "frames/layers." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
-      const std::string path = (fs::path(options.outDir) / (rel.str() + ".exr")).string();
+      const std::string path = outputBase("layers") + ".exr";
       std::vector<const Grid<float>*> grids;
       for (const auto& g : channels) grids.push_back(&g);
       writeMultiChannelExr(path, channelNames, grids);
