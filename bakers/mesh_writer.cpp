@@ -276,14 +276,16 @@ struct GridVertices {
   std::vector<std::array<int, 2>> points;
 };
 
-GridVertices usedPoints(const RtinMesh& t) {
+using GridTriangle = std::array<std::array<int, 2>, 3>;
+
+GridVertices usedPoints(int width, int height, const std::vector<const GridTriangle*>& triangles) {
   GridVertices g;
-  g.index.assign(static_cast<size_t>(t.width) * t.height, UINT32_MAX);
-  for (const auto& tri : t.triangles)
-    for (const auto& p : tri) g.index[static_cast<size_t>(p[1]) * t.width + p[0]] = 0;
-  for (int y = 0; y < t.height; ++y)
-    for (int x = 0; x < t.width; ++x) {
-      uint32_t& i = g.index[static_cast<size_t>(y) * t.width + x];
+  g.index.assign(static_cast<size_t>(width) * height, UINT32_MAX);
+  for (const GridTriangle* tri : triangles)
+    for (const auto& p : *tri) g.index[static_cast<size_t>(p[1]) * width + p[0]] = 0;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      uint32_t& i = g.index[static_cast<size_t>(y) * width + x];
       if (i == UINT32_MAX) continue;
       i = static_cast<uint32_t>(g.points.size());
       g.points.push_back({x, y});
@@ -301,7 +303,10 @@ std::array<float, 2> uvAt(const GridSpec& spec, int x, int y) {
 }  // namespace
 
 MeshData surfaceMesh(const RtinMesh& t, const Grid<float>& altitude, const GridSpec& spec) {
-  const GridVertices g = usedPoints(t);
+  std::vector<const GridTriangle*> all;
+  all.reserve(t.triangles.size());
+  for (const auto& tri : t.triangles) all.push_back(&tri);
+  const GridVertices g = usedPoints(t.width, t.height, all);
   MeshData m;
   for (const auto& p : g.points) {
     m.positions.push_back(pointAt(spec, p[0], p[1], altitude(p[0], p[1])));
@@ -329,34 +334,31 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
     return std::max(0.f, depth(x, y));
   };
   // Triangles holding snow at a vertex.
-  std::vector<const std::array<std::array<int, 2>, 3>*> kept;
+  std::vector<const GridTriangle*> kept;
   for (const auto& tri : t.triangles)
     if (bodyDepth(tri[0][0], tri[0][1]) > 0.f || bodyDepth(tri[1][0], tri[1][1]) > 0.f || bodyDepth(tri[2][0], tri[2][1]) > 0.f)
       kept.push_back(&tri);
   MeshData m;
   if (kept.empty()) return m;
-  // Top vertex per grid point used, and a bottom one where the snow is deeper than 0.
-  std::unordered_map<uint64_t, std::array<uint32_t, 2>> vertexOf;  // key y * w + x -> {top, bottom}
-  std::vector<uint64_t> keys;
-  for (const auto* tri : kept)
-    for (const auto& p : *tri) keys.push_back(static_cast<uint64_t>(p[1]) * w + p[0]);
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  for (uint64_t key : keys) {
-    const int x = static_cast<int>(key % w), y = static_cast<int>(key / w);
+  // Top vertex per grid point used (row order), and a bottom one where the snow is deeper than 0.
+  const GridVertices g = usedPoints(w, h, kept);
+  std::vector<uint32_t> top(g.points.size()), bottom(g.points.size());
+  for (size_t k = 0; k < g.points.size(); ++k) {
+    const int x = g.points[k][0], y = g.points[k][1];
     const float d = bodyDepth(x, y), b = bedrock(x, y);
-    const uint32_t top = static_cast<uint32_t>(m.positions.size());
+    top[k] = bottom[k] = static_cast<uint32_t>(m.positions.size());
     m.positions.push_back(pointAt(spec, x, y, b + d));
     m.uvs.push_back(uvAt(spec, x, y));
-    uint32_t bottom = top;
     if (d > 0.f) {
-      bottom = static_cast<uint32_t>(m.positions.size());
+      bottom[k] = static_cast<uint32_t>(m.positions.size());
       m.positions.push_back(pointAt(spec, x, y, b));
       m.uvs.push_back(uvAt(spec, x, y));
     }
-    vertexOf[key] = {top, bottom};
   }
-  auto vid = [&](const std::array<int, 2>& p, int which) { return vertexOf.at(static_cast<uint64_t>(p[1]) * w + p[0])[which]; };
+  auto vid = [&](const std::array<int, 2>& p, int which) {
+    const uint32_t k = g.index[static_cast<size_t>(p[1]) * w + p[0]];
+    return which == 0 ? top[k] : bottom[k];
+  };
   // Undirected edges of the kept triangles, sorted: a rim edge appears once.
   auto key = [&](const std::array<int, 2>& p) { return static_cast<uint64_t>(p[1]) * w + p[0]; };
   std::vector<std::pair<uint64_t, uint64_t>> edges;
