@@ -19,9 +19,9 @@
 namespace snow {
 
 std::string meshFormatDescription(const std::string& format) {
-  if (format == "ply") return "PLY binary (little endian), positions and normals, metres, z up";
-  if (format == "obj") return "Wavefront OBJ (no materials), positions and normals, metres, y up (x, z, -y)";
-  if (format == "glb") return "binary glTF 2.0, positions and normals, metres, y up (x, z, -y)";
+  if (format == "ply") return "PLY binary (little endian), positions, normals and UVs (s, t), metres, z up";
+  if (format == "obj") return "Wavefront OBJ (no materials), positions, normals and UVs, metres, y up (x, z, -y)";
+  if (format == "glb") return "binary glTF 2.0, positions, normals and UVs, metres, y up (x, z, -y)";
   if (format == "fbx") return "ASCII FBX 7.4, positions, normals and UVs, metres (UnitScaleFactor 100), y up (x, z, -y)";
   throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
 }

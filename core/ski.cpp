@@ -138,14 +138,18 @@ void SkiTracks::stamp(const Path2& track, double depthM, double widthM, const st
   // At least 1.5 texels wide, so a track marks a texel however it lies across the texture.
   const double hw = std::max(0.5 * widthM, 0.75 * std::max(tx, ty));
   const int W = depth_.width(), H = depth_.height();
+  // The texels within reach of segment i: [x0, x1] x [y0, y1], clipped to the texture.
+  auto texelBox = [&](size_t i) {
+    const auto &P = track[i], &Q = track[i + 1];
+    return std::array<int, 4>{std::max(0, static_cast<int>(std::floor((std::min(P[0], Q[0]) - hw) / tx))),
+                              std::min(W - 1, static_cast<int>(std::floor((std::max(P[0], Q[0]) + hw) / tx))),
+                              std::max(0, static_cast<int>(std::floor((std::min(P[1], Q[1]) - hw) / ty))),
+                              std::min(H - 1, static_cast<int>(std::floor((std::max(P[1], Q[1]) + hw) / ty)))};
+  };
   // First bring every touched cell's fading up to now, then cut the grooves.
   std::vector<int> cells;
   for (size_t i = 0; i + 1 < track.size(); ++i) {
-    const auto &P = track[i], &Q = track[i + 1];
-    const int x0 = std::max(0, static_cast<int>(std::floor((std::min(P[0], Q[0]) - hw) / tx)));
-    const int x1 = std::min(W - 1, static_cast<int>(std::floor((std::max(P[0], Q[0]) + hw) / tx)));
-    const int y0 = std::max(0, static_cast<int>(std::floor((std::min(P[1], Q[1]) - hw) / ty)));
-    const int y1 = std::min(H - 1, static_cast<int>(std::floor((std::max(P[1], Q[1]) + hw) / ty)));
+    const auto [x0, x1, y0, y1] = texelBox(i);
     for (int cy = y0 / factor_; cy <= y1 / factor_; ++cy)
       for (int cx = x0 / factor_; cx <= x1 / factor_; ++cx) cells.push_back(cy * spec_.width + cx);
   }
@@ -155,10 +159,7 @@ void SkiTracks::stamp(const Path2& track, double depthM, double widthM, const st
   for (size_t i = 0; i + 1 < track.size(); ++i) {
     const auto &P = track[i], &Q = track[i + 1];
     const double ex = Q[0] - P[0], ey = Q[1] - P[1], len2 = ex * ex + ey * ey;
-    const int x0 = std::max(0, static_cast<int>(std::floor((std::min(P[0], Q[0]) - hw) / tx)));
-    const int x1 = std::min(W - 1, static_cast<int>(std::floor((std::max(P[0], Q[0]) + hw) / tx)));
-    const int y0 = std::max(0, static_cast<int>(std::floor((std::min(P[1], Q[1]) - hw) / ty)));
-    const int y1 = std::min(H - 1, static_cast<int>(std::floor((std::max(P[1], Q[1]) + hw) / ty)));
+    const auto [x0, x1, y0, y1] = texelBox(i);
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) {
         const double cx = (x + 0.5) * tx, cy = (y + 0.5) * ty;
