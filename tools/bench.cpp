@@ -298,10 +298,6 @@ std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads
   return table.str();
 }
 
-}  // namespace
-
-namespace {
-
 // Occlusion mode (Foldes & Benes 2007): the ambient occlusion value against an analytic
 // sky-view factor and against a many-ray run, the cost per quality on a terrain, and the paper's
 // 500 000-triangle mesh.
@@ -430,10 +426,6 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
   writeCsv(o, "occlusion.csv", csv.str(), table);
   return table.str();
 }
-
-}  // namespace
-
-namespace {
 
 // The adaptive triangulation on a real DEM: triangles against the vertical error bound, the
 // error measured on the output, and the time (triangulation and glTF writing).
