@@ -43,6 +43,23 @@ std::string manifestToJson(const Manifest& m) {
     skiers.push_back({{"day", k.day}, {"start_cell", {k.x, k.y}}, {"user", k.user}, {"cells", k.cells}, {"length_m", k.lengthM},
                       {"drop_m", k.dropM}, {"triggered_avalanche", k.triggered}, {"outcome", k.why}});
   j["run"]["skiers"] = skiers;
+  if (!m.artRasters.empty() || !m.edits.empty()) {
+    ordered_json rasters = ordered_json::array();
+    for (const auto& r : m.artRasters)
+      rasters.push_back({{"role", r.role}, {"source", r.source}, {"hash_fnv1a64", r.hash}, {"reader", r.reader}, {"width", r.width},
+                         {"height", r.height}, {"placement", r.placement}, {"mapping", r.description}, {"coverage", r.coverage},
+                         {"min", r.minValue}, {"max", r.maxValue}, {"mean", r.meanValue}});
+    ordered_json edits = ordered_json::array();
+    for (const auto& e : m.edits) {
+      ordered_json o = {{"day", e.day}, {"op", e.op}, {"layer", e.layer}};
+      if (!e.to.empty()) o["to"] = e.to;
+      if (e.depthM >= 0) o["depth_m"] = e.depthM;
+      o["mask"] = e.mask.empty() ? ordered_json(nullptr) : ordered_json(e.mask);
+      o["volume_m3"] = e.volumeM3;
+      edits.push_back(o);
+    }
+    j["art_direction"] = {{"rasters", rasters}, {"edits", edits}, {"edits_net_m3", m.editsNetM3}, {"no_snow_removed_m3", m.noSnowRemovedM3}};
+  }
   ordered_json parameters = ordered_json::object();
   for (const auto& [key, value] : m.parameters) parameters[key] = value;
   j["run"]["parameters"] = parameters;

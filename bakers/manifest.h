@@ -52,6 +52,23 @@ struct ManifestOcclusion {
   std::string meshSource;  // the input mesh whose vertices carry the snow (mesh terrains), or empty
 };
 
+// Art direction: a raster the scene painted with, and a timeline edit.
+struct ManifestRaster {
+  std::string role;        // e.g. "initial_snow.unstable", "multipliers.no_snow", "edits[2].mask"
+  std::string source;      // the [masks] name and file, or the file
+  std::string hash;        // FNV-1a 64 of the file's bytes
+  std::string reader, placement, description;
+  int width = 0, height = 0;  // the file's pixels
+  double coverage = 1, minValue = 0, maxValue = 0, meanValue = 0;  // on the grid, valid cells
+};
+struct ManifestEdit {
+  double day = 0;
+  std::string op, layer, to, mask;  // mask empty: everywhere
+  double depthM = -1;               // -1: none (move the whole layer)
+  double volumeM3 = 0;              // snow the edit added (negative: removed)
+  std::string label;
+};
+
 struct Manifest {
   std::string mode = "season";
   std::vector<std::pair<std::string, double>> parameters;  // every model parameter as used (key, value)
@@ -74,6 +91,9 @@ struct Manifest {
   std::vector<ManifestPhenomenon> phenomena;
   std::vector<ManifestAvalanche> avalanches;
   std::vector<ManifestSkier> skiers;
+  std::vector<ManifestRaster> artRasters;
+  std::vector<ManifestEdit> edits;
+  double editsNetM3 = 0, noSnowRemovedM3 = 0;
   std::vector<ManifestFile> files;
 };
 

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <limits>
 
 namespace snow {
 
@@ -63,19 +64,50 @@ bool AvalancheRun::trySpontaneous(double cellDraw, double acceptDraw, double day
       slope = std::max(slope, (a - before_.bedrockM(nx, ny) - depth[at(nx, ny)]) / dist);
     }
   const double tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
-  const double probability = std::min(1.0, u * std::max(0.0, slope - tanRest) / std::max(1e-6, 1.0 - tanRest));
+  const double factor = before_.avalancheReleaseFactor.size() == g.cellCount() ? before_.avalancheReleaseFactor(x, y) : 1.0;
+  const double probability = std::min(1.0, factor * u * std::max(0.0, slope - tanRest) / std::max(1e-6, 1.0 - tanRest));
   if (!(acceptDraw < probability)) return false;
   return release(x, y, day, seaLevelTemperatureC, false);
 }
 
-bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLevelTemperatureC, bool user) {
-  const auto t0 = Clock::now();
+void AvalancheRun::beginRecord(int rx, int ry, double day, bool user) {
   record_ = AvalancheRecord{};
   record_.day = day;
   record_.ruptureX = rx;
   record_.ruptureY = ry;
   record_.user = user;
   active_ = atRest_ = false;
+}
+
+bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, double seaLevelTemperatureC, bool user) {
+  const auto t0 = Clock::now();
+  backend_.download(before_);
+  const SnowState& s = before_;
+  const int w = s.spec.width;
+  std::vector<uint8_t> moving(s.spec.cellCount(), 0);
+  int rx = -1, ry = -1;
+  double highest = -std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < moving.size() && i < zone.size(); ++i) {
+    if (!zone[i] || !s.validCell.values()[i] || s.unstableM.values()[i] < p_.avalancheMinUnstableM) continue;
+    moving[i] = 1;
+    const double a = surfaceAt(s, i);
+    if (a > highest) highest = a, rx = static_cast<int>(i % w), ry = static_cast<int>(i / w);
+  }
+  if (rx < 0) {
+    size_t zoneCells = 0;
+    for (uint8_t z : zone) zoneCells += z != 0;
+    beginRecord(0, 0, day, user);
+    record_.why = "no unstable snow inside the release mask (" + std::to_string(zoneCells) + " cells)";
+    return false;
+  }
+  beginRecord(rx, ry, day, user);
+  start(moving, seaLevelTemperatureC, t0);
+  return true;
+}
+
+bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLevelTemperatureC, bool user) {
+  const auto t0 = Clock::now();
+  beginRecord(rx, ry, day, user);
   const SnowState& s = before_;
   const int w = s.spec.width, h = s.spec.height;
   if (rx < 0 || ry < 0 || rx >= w || ry >= h || !s.validCell(rx, ry)) {
@@ -110,6 +142,14 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
         queue.push_back(ny * w + nx);
       }
   }
+  start(moving, seaLevelTemperatureC, t0);
+  return true;
+}
+
+void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, Clock::time_point t0) {
+  const SnowState& s = before_;
+  const int w = s.spec.width, h = s.spec.height;
+  auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
   int x0 = w, y0 = h, x1 = 0, y1 = 0;
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
@@ -144,7 +184,6 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
   active_ = true;
   lastSpeed_ = 0.f;
   wallSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
-  return true;
 }
 
 bool AvalancheRun::step() {

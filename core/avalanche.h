@@ -21,6 +21,7 @@
 // or after avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
 // stable snow and the records are kept.
 #pragma once
+#include <chrono>
 #include <memory>
 #include <string>
 #include <utility>
@@ -75,10 +76,15 @@ class AvalancheRun {
   // Releases at cell (x, y) of the current backend state. Returns false (and says why in the
   // record) when there is no unstable snow to release there.
   bool release(int x, int y, double day, double seaLevelTemperatureC, bool user);
+  // Releases every cell of `zone` (one byte per cell, a painted release zone) that holds at
+  // least avalanche_min_unstable_m of unstable snow, as one avalanche; its rupture point (for
+  // runout and fall height) is the zone's highest released cell. False when none holds any.
+  bool releaseZone(const std::vector<uint8_t>& zone, double day, double seaLevelTemperatureC, bool user);
   // A spontaneous release try (§6.1's "low per-cell probability"): the cell drawn uniformly from
   // `cellDraw`, released when `acceptDraw` < min(1, U / 1 m x (s - tan theta_c) / (1 - tan theta_c)),
   // s the steepest drop of the snow surface to an 8-neighbour: one metre of unstable snow at 45
   // degrees always releases, nothing releases below the rest angle. Reads only the 3 x 3 cells.
+  // The scene's avalanche_release multiplier (state.avalancheReleaseFactor) scales the probability.
   bool trySpontaneous(double cellDraw, double acceptDraw, double day, double seaLevelTemperatureC);
   bool active() const { return active_; }
   bool atRest() const { return atRest_; }
@@ -99,6 +105,9 @@ class AvalancheRun {
 
  private:
   bool releaseFromSnapshot(int x, int y, double day, double seaLevelTemperatureC, bool user);
+  void beginRecord(int rx, int ry, double day, bool user);
+  // Sets the cells of `moving` in motion from the snapshot (records, box, substep arguments).
+  void start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, std::chrono::steady_clock::time_point t0);
   SnowBackend& backend_;
   const ModelParameters& p_;
   SnowState before_, after_;  // the state at release and a reusable buffer for later downloads

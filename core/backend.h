@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "kernels/avalanche.h"
+#include "kernels/edit.h"
 #include "kernels/melt.h"
 #include "kernels/powder_diffusion.h"
 #include "kernels/snowfall.h"
@@ -45,6 +46,10 @@ class SnowBackend {
   virtual void windTransport(const WindTransportArgs& args) = 0;  // conserves mass
   // Moves snow between the stable and unstable layers (conserves mass).
   virtual void stabilityChange(const StabilityArgs& args) = 0;
+
+  // A timeline edit (kernels/edit.h) weighted per cell by `weights` (one per cell, row order);
+  // returns the snow volume it added (negative: removed), in m^3.
+  virtual double applyEdit(const EditArgs& args, const std::vector<float>& weights) = 0;
 
   virtual LayerTotals totals() = 0;
   // Highest temperature (degC) of any valid cell for a sea-level temperature of 0: lets the

@@ -55,6 +55,20 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(windY_, s.windYMps.values());
     exec_.upload(windEffectZ_, s.windEffectZM.values());
     exec_.upload(windLoading_, s.windLoadingMps2.values());
+    // Art-direction factors: uploaded when the scene paints them, null in the kernels otherwise.
+    hasSnowfallFactor_ = uploadOptional(snowfallFactor_, s.snowfallFactor);
+    hasMeltFactor_ = uploadOptional(meltFactor_, s.meltFactor);
+    hasWindErosionFactor_ = uploadOptional(windErosionFactor_, s.windErosionFactor);
+  }
+
+  double applyEdit(const EditArgs& a, const std::vector<float>& weights) override {
+    exec_.upload(editWeight_, weights);
+    SnowFieldsView v = view();
+    v.editWeight = editWeight_.data();
+    const double added = runEdit(exec_, v, a);
+    exec_.upload(editWeight_, std::vector<float>());
+    exec_.finish();
+    return added;
   }
 
   void download(SnowState& s) override {
@@ -216,6 +230,9 @@ class ExecBackend final : public SnowBackend {
     v.windScour = windScour_.data();
     v.windDeposit = windDeposit_.data();
     v.melted = melted_.data();
+    v.snowfallFactor = hasSnowfallFactor_ ? snowfallFactor_.data() : nullptr;
+    v.meltFactor = hasMeltFactor_ ? meltFactor_.data() : nullptr;
+    v.windErosionFactor = hasWindErosionFactor_ ? windErosionFactor_.data() : nullptr;
     v.delta = delta_.data();
     v.surfaceSlope = surfaceSlope_.data();
     v.scratchSurface = scratchSurface_.data();
@@ -237,7 +254,15 @@ class ExecBackend final : public SnowBackend {
   typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
   typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_;
   typename Exec::template Buffer<float> flows_, avalancheBefore_, avalancheScour_, avalancheDeposit_, rowStats_;
+  typename Exec::template Buffer<float> snowfallFactor_, meltFactor_, windErosionFactor_, editWeight_;
+  bool hasSnowfallFactor_ = false, hasMeltFactor_ = false, hasWindErosionFactor_ = false;
   bool avalancheFieldsReady_ = false;
+
+  bool uploadOptional(typename Exec::template Buffer<float>& buffer, const Grid<float>& grid) {
+    const bool present = grid.size() == spec_.cellCount() && grid.size() > 0;
+    exec_.upload(buffer, present ? grid.values() : std::vector<float>());
+    return present;
+  }
 };
 
 }  // namespace snow

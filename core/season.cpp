@@ -21,8 +21,8 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 }  // namespace
 
 double SeasonReport::massBalanceRelativeError() const {
-  const double expected = initial.totalM3() + snowfallAddedM3 - meltRemovedM3;
-  const double scale = std::max({initial.totalM3() + snowfallAddedM3, final.totalM3(), 1e-30});
+  const double expected = initial.totalM3() + snowfallAddedM3 - meltRemovedM3 + editsNetM3;
+  const double scale = std::max({initial.totalM3() + snowfallAddedM3 + std::max(0.0, editsNetM3), final.totalM3(), 1e-30});
   return std::abs(final.totalM3() - expected) / scale;
 }
 
@@ -38,6 +38,24 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   const ModelParameters& p = cfg.params;
   SeasonReport report;
   if (cfg.updateStaticFields) cfg.updateStaticFields(0, state);
+  // No-snow cells leave the snow domain for the season: their snow goes, and the backend (and the
+  // avalanche and skier runners, built from `state` below) see them as outside the terrain.
+  Grid<uint8_t> terrainValid;
+  const bool noSnow = state.noSnow.size() == state.spec.cellCount() && state.noSnow.size() > 0;
+  if (noSnow) {
+    terrainValid = state.validCell;
+    const double area = state.spec.cellAreaM2();
+    for (size_t i = 0; i < state.noSnow.size(); ++i) {
+      if (!state.noSnow.values()[i]) continue;
+      if (state.validCell.values()[i])
+        for (int l = 0; l < kSnowLayerCount; ++l) {
+          float& d = state.layer(static_cast<SnowLayer>(l)).values()[i];
+          report.noSnowRemovedM3 += static_cast<double>(d) * area;
+          d = 0.f;
+        }
+      state.validCell.values()[i] = 0;
+    }
+  }
   backend.upload(state);
   report.initial = backend.totals();
   float maxTemperatureBase = backend.maxTemperatureBaseC();
@@ -152,6 +170,17 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     if (dt > 0.0) timed(slot, [&] { backend.powderDiffusion(makePowderDiffusionArgs(p, dt)); });
   });
 
+  // Timeline edits (art direction), before the avalanches and skiers of the same day.
+  for (const SeasonEdit& edit : cfg.edits) {
+    if (edit.day < 0.0 || edit.day > cfg.days) continue;
+    scheduler.addAction(edit.day, [&, &edit = edit](double now) {
+      const std::vector<float> everywhere = edit.weights ? std::vector<float>() : std::vector<float>(state.spec.cellCount(), 1.f);
+      const double added = backend.applyEdit(edit.args, edit.weights ? *edit.weights : everywhere);
+      report.editsNetM3 += added;
+      report.edits.push_back({now, edit.label, added});
+    });
+  }
+
   // Avalanches (§6.1): spontaneous release tries at about one a week per km^2 (each at a random
   // cell, released with a probability from its unstable depth and slope above the rest angle),
   // and the scene's user releases. A zoomed phenomenon: while one runs, its steps of 0.1 s are
@@ -159,6 +188,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   // exists only when the season can have avalanches.
   std::optional<AvalancheRun> avalanche;
   std::deque<UserAvalanche> pendingAvalanches;
+  std::function<void(const UserAvalanche&, double day, double t0)> releaseUser;
   int avalancheId = -1;
   const bool skiing = (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !cfg.userSkiers.empty();
   {
@@ -169,6 +199,10 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     if (startsPerDay > 0.0 || !cfg.userAvalanches.empty() || (skiing && p.skiTriggerFactor > 0.0)) {
       avalanche.emplace(backend, p, state);
       avalanche->keepMaps(cfg.avalancheMaps, cfg.avalancheFrameIntervalS);
+      releaseUser = [&](const UserAvalanche& u, double day, double t0) {
+        if (u.zone) avalanche->releaseZone(*u.zone, day, t0, !u.bySkier);
+        else avalanche->release(u.x, u.y, day, t0, !u.bySkier);
+      };
       PhenomenonSpec s;
       s.name = "avalanche";
       s.zoomed = true;
@@ -181,7 +215,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
           if (!pendingAvalanches.empty()) {
             const UserAvalanche u = pendingAvalanches.front();
             pendingAvalanches.pop_front();
-            avalanche->release(u.x, u.y, e.day, t0, !u.bySkier);
+            releaseUser(u, e.day, t0);
             if (!avalanche->active()) report.avalanches.push_back(avalanche->record());
           } else {
             const RandomKey key{cfg.seed};
@@ -202,7 +236,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
           const UserAvalanche u = pendingAvalanches.front();
           pendingAvalanches.pop_front();
           timed(slot, [&] {
-            avalanche->release(u.x, u.y, u.day, cfg.weather.at(u.day).seaLevelTemperatureC, !u.bySkier);
+            releaseUser(u, u.day, cfg.weather.at(u.day).seaLevelTemperatureC);
             report.avalanches.push_back(avalanche->runToRest());
           });
         }
@@ -228,7 +262,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     auto runSkier = [&](int x, int y, double day, bool user) {
       SkierRecord r = ski->descend(x, y, day, cfg.seed, skierId++, user);
       if (r.triggered && avalancheId >= 0) {
-        pendingAvalanches.push_back({day, r.triggerX, r.triggerY, true});
+        pendingAvalanches.push_back({day, r.triggerX, r.triggerY, true, nullptr});
         scheduler.start(avalancheId);
       }
       if (!user) r.path.clear();  // keep the records small; user skiers keep their paths
@@ -257,10 +291,36 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
       };
       addPhenomenon(std::move(s));
     }
+    uint64_t maskedSkierDraws = 0;
     for (const UserSkier& u : cfg.userSkiers) {
       if (u.day < 0.0 || u.day > cfg.days) continue;
-      scheduler.addAction(u.day, [&, u](double now) {
-        for (int k = 0; k < u.count; ++k) runSkier(u.x, u.y, now, true);
+      if (!u.startWeights) {
+        scheduler.addAction(u.day, [&, u](double now) {
+          for (int k = 0; k < u.count; ++k) runSkier(u.x, u.y, now, true);
+        });
+        continue;
+      }
+      // From a start mask: each skier's start cell drawn by the mask's weights (valid cells only),
+      // redrawn (up to 16 times) until it has snow enough to ski.
+      auto cumulative = std::make_shared<std::vector<double>>(u.startWeights->size());
+      double sum = 0.0;
+      for (size_t i = 0; i < cumulative->size(); ++i)
+        (*cumulative)[i] = (sum += state.validCell.values()[i] ? std::max(0.f, (*u.startWeights)[i]) : 0.f);
+      const uint64_t stream = maskedSkierDraws++;
+      scheduler.addAction(u.day, [&, u, cumulative, stream](double now) {
+        if (cumulative->empty() || !(cumulative->back() > 0.0)) return;
+        const RandomKey key{cfg.seed};
+        for (int k = 0; k < u.count; ++k)
+          for (uint32_t attempt = 0; attempt < 16; ++attempt) {
+            const Philox4x32 r = key.draw(stream, static_cast<uint32_t>(k) * 16u + attempt, RngStream::SkierStartMask);
+            const double target = uniformOpenDouble(r.v[0], r.v[1]) * cumulative->back();
+            const size_t i = std::min(cumulative->size() - 1, static_cast<size_t>(std::upper_bound(cumulative->begin(), cumulative->end(), target) -
+                                                                                  cumulative->begin()));
+            const int x = static_cast<int>(i % state.spec.width), y = static_cast<int>(i / state.spec.width);
+            if (!ski->canStart(x, y)) continue;
+            runSkier(x, y, now, true);
+            break;
+          }
       });
     }
   }
@@ -277,6 +337,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     if (day < 0.0 || day > cfg.days || !onFrame) continue;
     scheduler.addAction(day, [&](double now) {
       SnowState frame = state;
+      if (noSnow) frame.validCell = terrainValid;
       backend.download(frame);
       if (cfg.skiTracks) cfg.skiTracks->fade(frame);
       onFrame(now, frame);
@@ -294,6 +355,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   if (progress) progress(1.0);
 
   backend.download(state);
+  if (noSnow) state.validCell = std::move(terrainValid);
   if (cfg.skiTracks) cfg.skiTracks->fade(state);
   report.final = backend.totals();
   const auto stats = scheduler.stats();

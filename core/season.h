@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,18 +15,37 @@
 
 namespace snow {
 
-// Skiers asked for in the scene: start cell, day, how many (one after the other).
+// Skiers asked for in the scene: start cell, day, how many (one after the other). With
+// `startWeights` (one per cell, from a start mask), each skier's start cell is drawn from the
+// weights instead (among cells with snow enough to ski).
 struct UserSkier {
   double day = 0;
   int x = 0, y = 0;
   int count = 1;
+  std::shared_ptr<const std::vector<float>> startWeights;
 };
 
-// An avalanche asked for in the scene: rupture cell and day.
+// An avalanche asked for in the scene: rupture cell and day, or with `zone` (one byte per cell,
+// from a mask) a release of every unstable cell inside the zone.
 struct UserAvalanche {
   double day = 0;
   int x = 0, y = 0;
   bool bySkier = false;  // set off by a skier (recorded as not a user release)
+  std::shared_ptr<const std::vector<uint8_t>> zone;
+};
+
+// A timeline edit (kernels/edit.h) on a given day; `weights` one per cell (null: 1 everywhere).
+struct SeasonEdit {
+  double day = 0;
+  EditArgs args;
+  std::shared_ptr<const std::vector<float>> weights;
+  std::string label;  // for the log and the manifest
+};
+
+struct EditRecord {
+  double day = 0;
+  std::string label;
+  double volumeM3 = 0;  // snow added (negative: removed)
 };
 
 struct SeasonConfig {
@@ -36,6 +56,7 @@ struct SeasonConfig {
   std::vector<SnowfallPeriod> userSnowfalls;  // storms requested as user events
   std::vector<UserAvalanche> userAvalanches;  // avalanches requested as user events
   std::vector<UserSkier> userSkiers;          // skiers requested as user events
+  std::vector<SeasonEdit> edits;              // timeline edits (art direction)
   SkiTracks* skiTracks = nullptr;             // the ski-track texture to draw into (null: no texture)
   bool avalancheMaps = false;                 // keep each avalanche's maps in its record
   double avalancheFrameIntervalS = 0.0;       // and frames of its motion (0: none)
@@ -60,6 +81,9 @@ struct SeasonReport {
   LayerTotals initial, final;
   double snowfallAddedM3 = 0.0;   // ledger, summed in double
   double meltRemovedM3 = 0.0;     // positive
+  double editsNetM3 = 0.0;        // added by timeline edits (negative: removed)
+  double noSnowRemovedM3 = 0.0;   // initial snow removed from no-snow cells at the start
+  std::vector<EditRecord> edits;
   uint64_t events = 0;
   double seconds = 0.0;
   std::vector<AvalancheRecord> avalanches;  // every avalanche released, and every user release that could not be
@@ -73,7 +97,9 @@ using FrameCallback = std::function<void(double day, const SnowState& state)>;
 using ProgressCallback = std::function<void(double fraction)>;
 
 // Runs the season on `backend`, starting from `state` (uploaded here), and leaves the final
-// layers in `state`. Frames are downloaded into a copy of `state` at each frame day.
+// layers in `state`. Cells where state.noSnow is set are outside the snow domain for the whole
+// season (their snow is removed at the start; no transport enters or leaves them); state and
+// frames keep the terrain's own validCell. Frames are downloaded into a copy of `state` at each frame day.
 SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfig& config,
                        const ProgressCallback& progress = {}, const FrameCallback& onFrame = {});
 

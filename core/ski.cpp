@@ -180,7 +180,10 @@ SkiRun::SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& 
   if (!backend.routeMapOnDevice(route_)) route_ = snow::routeMap(state.bedrockM, state.validCell, state.spec);
   cumulative_.resize(route_.size());
   double sum = 0.0;
-  for (size_t i = 0; i < route_.size(); ++i) cumulative_[i] = (sum += route_.values()[i]);
+  // The scene's skier_spawn multiplier (art direction) scales where automatic skiers start.
+  const bool spawn = state.skierSpawnFactor.size() == route_.size();
+  for (size_t i = 0; i < route_.size(); ++i)
+    cumulative_[i] = (sum += route_.values()[i] * (spawn ? std::max(0.f, state.skierSpawnFactor.values()[i]) : 1.f));
 }
 
 bool SkiRun::pickStart(double draw, int& x, int& y) const {

@@ -102,7 +102,7 @@ class SkiRun {
   SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& state, SkiTracks* tracks);
   const Grid<float>& routeMap() const { return route_; }
   // A start cell drawn with probability proportional to the route map (cells where a route
-  // starts); false when no cell has one.
+  // starts) times the scene's skier_spawn multiplier; false when no cell has one.
   bool pickStart(double draw, int& x, int& y) const;
   // Whether the cell has snow enough to start a descent (reads one cell).
   bool canStart(int x, int y);

@@ -45,6 +45,15 @@ struct SnowState {
   Grid<float> meltedM;           // removed by melt
   Grid<float> avalancheScourM;   // taken away by avalanches (net per avalanche)
   Grid<float> avalancheDepositM; // left by avalanches (net per avalanche)
+  // Art direction (the scene's [multipliers], mapped from painted rasters): per-cell factors on
+  // a phenomenon; an empty grid means 1 everywhere. noSnow: 1 where snow is never allowed
+  // (roads, buildings, rivers): the season treats those cells as outside the snow domain.
+  Grid<float> snowfallFactor;
+  Grid<float> meltFactor;
+  Grid<float> windErosionFactor;
+  Grid<float> avalancheReleaseFactor;  // host only: spontaneous release probability
+  Grid<float> skierSpawnFactor;        // host only: where automatic skiers start
+  Grid<uint8_t> noSnow;
 
   // Allocates every field for `s`, snow layers zero, all cells valid, static fields zero.
   void allocate(const GridSpec& s) {
@@ -104,6 +113,11 @@ struct SnowFieldsView {
   float* windScour = nullptr;
   float* windDeposit = nullptr;
   float* melted = nullptr;
+  // Art-direction factors (null: 1 everywhere) and a per-cell weight for timeline edits.
+  const float* snowfallFactor = nullptr;
+  const float* meltFactor = nullptr;
+  const float* windErosionFactor = nullptr;
+  const float* editWeight = nullptr;
   float* delta = nullptr;  // per-cell scratch: snow volume changed by the last step (for the mass ledger)
   // Per-cell scratch: |grad A| of the snow surface, taken before a per-cell pass that changes A,
   // so the pass never reads a neighbour that another thread is writing.

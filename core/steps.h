@@ -9,6 +9,7 @@
 //   void finish();  // waits for queued work (GPU) and reports its errors
 #pragma once
 #include "kernels/avalanche.h"
+#include "kernels/edit.h"
 #include "kernels/melt.h"
 #include "kernels/powder_diffusion.h"
 #include "kernels/snowfall.h"
@@ -29,6 +30,12 @@ double runSnowfall(Exec& exec, const SnowFieldsView& v, const SnowfallArgs& a) {
 template <class Exec>
 double runMelt(Exec& exec, const SnowFieldsView& v, const MeltArgs& a) {
   exec.forEachCell(v.width, v.height, MeltKernel{v, a});
+  return exec.sum(v.delta, v.valid, v.width, v.height) * static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
+}
+
+template <class Exec>
+double runEdit(Exec& exec, const SnowFieldsView& v, const EditArgs& a) {
+  exec.forEachCell(v.width, v.height, EditKernel{v, a});
   return exec.sum(v.delta, v.valid, v.width, v.height) * static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
 }
 

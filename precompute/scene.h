@@ -2,7 +2,9 @@
 // validated and in world units. Parsing lives in scene_file.cpp; the format is documented in
 // README.md ("Scene files").
 #pragma once
+#include <array>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -10,6 +12,7 @@
 #include "core/default_terrain.h"
 #include "core/parameters.h"
 #include "core/weather.h"
+#include "raster_input.h"
 #include "terrain_source.h"
 
 namespace snow {
@@ -44,6 +47,31 @@ struct OcclusionParameters {
   double turbidity = 3.0;
 };
 
+// Art direction (README "Art direction"): painted rasters that set the starting snow, steer the
+// season, and edit it on given days.
+struct InitialSnowLayer {
+  enum class Kind { None, Constant, Raster, Mask };
+  Kind kind = Kind::None;
+  double depthM = 0.0;  // Constant; Mask: the depth where the mask is 1
+  RasterRef raster;     // Raster: depths in metres; Mask: the mask
+};
+
+struct EditSpec {
+  double day = 0;
+  std::string op;      // add | remove | set | move
+  std::string layer;   // compacted | stable | unstable | powder
+  std::string to;      // move: the layer that receives
+  std::optional<double> depthM;
+  std::optional<RasterRef> mask;  // none: everywhere
+  std::string declaredAt;
+};
+
+struct Multipliers {
+  std::optional<RasterRef> snowfall, melt, windErosion, avalancheRelease, skierSpawn;
+  std::optional<RasterRef> noSnow;  // a mask: cells >= 0.5 stay bare
+  bool any() const { return snowfall || melt || windErosion || avalancheRelease || skierSpawn || noSnow; }
+};
+
 struct Scene {
   std::string sourceName;   // the scene file path, or "preset:default"
   std::string baseDir;      // folder relative terrain paths are resolved against
@@ -67,10 +95,15 @@ struct Scene {
     bool mapCoordinates = false;
     int line = 0;  // where it was given, for messages
     int count = 1;  // skiers: how many, one after the other
+    std::optional<RasterRef> mask;  // avalanche: release every unstable cell in it; skier: start cells drawn from it
   };
   std::vector<AvalancheEvent> userAvalanches;
   std::vector<AvalancheEvent> userSkiers;  // [[events]] type = "skier": start point, day, count
   ModelParameters params;
+  std::map<std::string, RasterRef> masks;        // [masks.NAME]
+  std::array<InitialSnowLayer, 4> initialSnow;   // [initial_snow], by SnowLayer
+  Multipliers multipliers;                       // [multipliers]
+  std::vector<EditSpec> edits;                   // [[edits]], in day order
   OutputRequest outputs;
   bool sunExposure = true;             // precompute.sun: false skips the sun (temperature from altitude alone)
   std::string sunQuality = "draft";    // precompute.sun_quality: draft | production | reference

@@ -20,7 +20,8 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-enum class Kind { Table, TableArray, String, Number, Integer, Bool, Date, NumberArray, StringArray };
+// Any: a value of several shapes (a raster reference: a string or a table), checked where it is read.
+enum class Kind { Table, TableArray, String, Number, Integer, Bool, Date, NumberArray, StringArray, Any };
 
 const char* kindName(Kind k) {
   switch (k) {
@@ -33,6 +34,7 @@ const char* kindName(Kind k) {
     case Kind::Date: return "a date (YYYY-MM-DD)";
     case Kind::NumberArray: return "an array of numbers";
     case Kind::StringArray: return "an array of strings";
+    case Kind::Any: return "a value";
   }
   return "?";
 }
@@ -116,6 +118,32 @@ const std::vector<Rule>& sceneRules() {
       {"events.map_position", Kind::NumberArray, -1e9, 1e9},
       {"events.day", Kind::Number, 0, 3650},
       {"events.duration_days", Kind::Number, 0.001, 365},
+      {"events.mask", Kind::Any},
+      {"masks", Kind::Table},
+      {"masks.*", Kind::Table},
+      {"masks.*.file", Kind::String},
+      {"masks.*.values", Kind::NumberArray, -1e30, 1e30},
+      {"masks.*.range", Kind::NumberArray, -1e30, 1e30},
+      {"masks.*.invert", Kind::Bool},
+      {"initial_snow", Kind::Table},
+      {"initial_snow.compacted", Kind::Any},
+      {"initial_snow.stable", Kind::Any},
+      {"initial_snow.unstable", Kind::Any},
+      {"initial_snow.powder", Kind::Any},
+      {"multipliers", Kind::Table},
+      {"multipliers.snowfall", Kind::Any},
+      {"multipliers.melt", Kind::Any},
+      {"multipliers.wind_erosion", Kind::Any},
+      {"multipliers.avalanche_release", Kind::Any},
+      {"multipliers.skier_spawn", Kind::Any},
+      {"multipliers.no_snow", Kind::Any},
+      {"edits", Kind::TableArray},
+      {"edits.day", Kind::Number, 0, 3650},
+      {"edits.op", Kind::String, -kInf, kInf, {"add", "remove", "set", "move"}},
+      {"edits.layer", Kind::String, -kInf, kInf, {"compacted", "stable", "unstable", "powder"}},
+      {"edits.to", Kind::String, -kInf, kInf, {"compacted", "stable", "unstable", "powder"}},
+      {"edits.depth_m", Kind::Number, 0, 10000},
+      {"edits.mask", Kind::Any},
       {"parameters", Kind::Table},
       {"precompute", Kind::Table},
       {"precompute.sun", Kind::Bool},
@@ -205,7 +233,12 @@ class Validator {
   }
 
  private:
-  const Rule* findRule(const std::string& path) const {
+  const Rule* findRule(std::string path) const {
+    // [masks.NAME]: any name, the same keys.
+    if (path.rfind("masks.", 0) == 0) {
+      const size_t end = path.find('.', 6);
+      path = "masks.*" + (end == std::string::npos ? std::string() : path.substr(end));
+    }
     for (const auto& r : sceneRules())
       if (r.path == path) return &r;
     return nullptr;
@@ -231,6 +264,8 @@ class Validator {
     switch (rule.kind) {
       case Kind::Table:
         if (!node.is_table()) wrongType();
+        break;
+      case Kind::Any:
         break;
       case Kind::TableArray:
         if (!node.is_array_of_tables()) wrongType();
@@ -336,6 +371,70 @@ void applyOverride(toml::table& root, const std::string& assignment) {
 }
 
 double number(const toml::node_view<const toml::node>& n, double fallback) { return n.value<double>().value_or(fallback); }
+
+// Art direction: raster references. A table {file, values, range, invert}, or a string: the name
+// of a [masks] entry, else (with an extension or a folder in it) a file path.
+std::array<double, 2> numberPair(const std::string& source, const toml::node& node, const std::string& key) {
+  const toml::array* a = node.as_array();
+  if (!a || a->size() != 2 || !(*a)[0].is_number() || !(*a)[1].is_number()) fail(source, node, key, "needs two numbers [first, second]");
+  return {(*a)[0].value<double>().value(), (*a)[1].value<double>().value()};
+}
+
+std::string resolvePath(const std::string& file, const std::string& baseDir) {
+  fs::path p = file;
+  if (p.is_relative() && !baseDir.empty()) p = fs::path(baseDir) / p;
+  return p.lexically_normal().string();
+}
+
+RasterRef rasterFromTable(const toml::table& t, const std::string& source, const std::string& baseDir, const std::string& key) {
+  RasterRef r;
+  for (auto&& [k, node] : t) {
+    const std::string name(k.str());
+    if (name != "file" && name != "values" && name != "range" && name != "invert")
+      fail(source, node, key + "." + name, "unknown key (a raster takes file, values, range, invert)");
+  }
+  const toml::node* file = t.get("file");
+  if (!file || !file->is_string()) throw InputError(where(source, t.source()) + ": " + key + ".file: missing (the raster's path)");
+  r.file = resolvePath(file->as_string()->get(), baseDir);
+  r.declaredAt = where(source, file->source()) + ": " + key;
+  std::error_code ec;
+  if (!fs::exists(r.file, ec)) fail(source, *file, key + ".file", "raster file '" + r.file + "' does not exist");
+  if (const toml::node* v = t.get("values")) {
+    r.values = numberPair(source, *v, key + ".values");
+    if (!((*r.values)[1] != (*r.values)[0]) || !std::isfinite((*r.values)[0]) || !std::isfinite((*r.values)[1]))
+      fail(source, *v, key + ".values", "needs two different finite numbers [value meaning 0, value meaning 1]");
+  }
+  if (const toml::node* v = t.get("range")) {
+    r.range = numberPair(source, *v, key + ".range");
+    if (!std::isfinite((*r.range)[0]) || !std::isfinite((*r.range)[1])) fail(source, *v, key + ".range", "needs finite numbers");
+  }
+  if (const toml::node* v = t.get("invert")) {
+    if (!v->is_boolean()) fail(source, *v, key + ".invert", "must be true or false");
+    r.invert = v->as_boolean()->get();
+  }
+  return r;
+}
+
+RasterRef rasterRef(const toml::node& node, const std::string& source, const Scene& scene, const std::string& key) {
+  if (const toml::table* t = node.as_table()) return rasterFromTable(*t, source, scene.baseDir, key);
+  if (!node.is_string()) fail(source, node, key, "must be a mask name from [masks], a raster file path, or a table {file = ...}");
+  const std::string text = node.as_string()->get();
+  if (auto it = scene.masks.find(text); it != scene.masks.end()) {
+    RasterRef r = it->second;
+    r.declaredAt = where(source, node.source()) + ": " + key + " (mask '" + text + "')";
+    return r;
+  }
+  if (text.find_first_of("./\\") == std::string::npos)
+    fail(source, node, key, "no mask named '" + text + "' in [masks] (a file name needs its extension)");
+  RasterRef r;
+  r.file = resolvePath(text, scene.baseDir);
+  r.declaredAt = where(source, node.source()) + ": " + key;
+  std::error_code ec;
+  if (!fs::exists(r.file, ec)) fail(source, node, key, "raster file '" + r.file + "' does not exist");
+  return r;
+}
+
+bool checkRangePositive(const RasterRef& r) { return !r.range || ((*r.range)[0] >= 0.0 && (*r.range)[1] >= 0.0); }
 
 Scene buildScene(const toml::table& root, const std::string& source, const std::string& baseDir) {
   Scene scene;
@@ -476,6 +575,80 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       scene.weather.snowfallPeriods.push_back(p);
     }
   }
+  if (const toml::table* masks = root["masks"].as_table()) {
+    for (auto&& [key, node] : *masks) {
+      const std::string name(key.str());
+      const std::string path = "masks." + name;
+      if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") != std::string::npos)
+        fail(source, node, path, "a mask name takes letters, digits, '_' and '-' only");
+      RasterRef r = rasterFromTable(*node.as_table(), source, baseDir, path);
+      r.name = name;
+      scene.masks[name] = r;
+    }
+  }
+  if (const toml::table* initial = root["initial_snow"].as_table()) {
+    const char* names[] = {"compacted", "stable", "unstable", "powder"};
+    for (int l = 0; l < 4; ++l) {
+      const toml::node* node = initial->get(names[l]);
+      if (!node) continue;
+      const std::string key = std::string("initial_snow.") + names[l];
+      InitialSnowLayer& layer = scene.initialSnow[l];
+      if (node->is_number()) {
+        layer.kind = InitialSnowLayer::Kind::Constant;
+        layer.depthM = node->value<double>().value();
+        if (!(layer.depthM >= 0.0 && layer.depthM <= 10000.0)) fail(source, *node, key, "a depth in metres, 0 to 10000");
+      } else if (const toml::table* t = node->as_table(); t && t->contains("mask")) {
+        for (auto&& [k, v] : *t)
+          if (k.str() != "mask" && k.str() != "depth_m") fail(source, v, key + "." + std::string(k.str()), "unknown key (a masked depth takes mask and depth_m)");
+        if (!t->contains("depth_m") || !t->get("depth_m")->is_number())
+          throw InputError(where(source, t->source()) + ": " + key + ".depth_m: missing (the depth where the mask is 1, metres)");
+        layer.kind = InitialSnowLayer::Kind::Mask;
+        layer.depthM = t->get("depth_m")->value<double>().value();
+        if (!(layer.depthM >= 0.0 && layer.depthM <= 10000.0)) fail(source, *t->get("depth_m"), key + ".depth_m", "a depth in metres, 0 to 10000");
+        layer.raster = rasterRef(*t->get("mask"), source, scene, key + ".mask");
+      } else {
+        layer.kind = InitialSnowLayer::Kind::Raster;
+        layer.raster = rasterRef(*node, source, scene, key);
+        if (!checkRangePositive(layer.raster)) fail(source, *node, key, "a depth raster's range must not be negative");
+      }
+    }
+  }
+  if (const toml::table* m = root["multipliers"].as_table()) {
+    Multipliers& mu = scene.multipliers;
+    const std::pair<const char*, std::optional<RasterRef>*> entries[] = {
+        {"snowfall", &mu.snowfall}, {"melt", &mu.melt}, {"wind_erosion", &mu.windErosion},
+        {"avalanche_release", &mu.avalancheRelease}, {"skier_spawn", &mu.skierSpawn}, {"no_snow", &mu.noSnow}};
+    for (const auto& [name, slot] : entries)
+      if (const toml::node* node = m->get(name)) {
+        *slot = rasterRef(*node, source, scene, std::string("multipliers.") + name);
+        if (!checkRangePositive(**slot)) fail(source, *node, std::string("multipliers.") + name, "a multiplier's range must not be negative");
+      }
+  }
+  if (const toml::array* edits = root["edits"].as_array()) {
+    for (auto&& element : *edits) {
+      const toml::table& e = *element.as_table();
+      for (const char* required : {"day", "op", "layer"})
+        if (!e.contains(required)) throw InputError(where(source, e.source()) + ": edits." + required + ": missing");
+      EditSpec ed;
+      ed.day = e["day"].value<double>().value();
+      ed.op = e["op"].value<std::string>().value();
+      ed.layer = e["layer"].value<std::string>().value();
+      ed.declaredAt = where(source, e.source());
+      if (ed.day > number(root["season"]["days"], scene.days))
+        fail(source, *e.get("day"), "edits.day", "day " + std::to_string(ed.day) + " is after the season's end");
+      if (auto d = e["depth_m"].value<double>()) ed.depthM = *d;
+      if (ed.op != "move" && !ed.depthM)
+        throw InputError(ed.declaredAt + ": edits.depth_m: missing (op = \"" + ed.op + "\" needs a depth in metres)");
+      if (auto to = e["to"].value<std::string>()) ed.to = *to;
+      if (ed.op == "move" && ed.to.empty())
+        throw InputError(ed.declaredAt + ": edits.to: missing (op = \"move\" needs the layer that receives)");
+      if (ed.op != "move" && !ed.to.empty()) fail(source, *e.get("to"), "edits.to", "only op = \"move\" has a destination layer");
+      if (ed.op == "move" && ed.to == ed.layer) fail(source, *e.get("to"), "edits.to", "moves snow to the layer it takes it from");
+      if (const toml::node* mask = e.get("mask")) ed.mask = rasterRef(*mask, source, scene, "edits.mask");
+      scene.edits.push_back(ed);
+    }
+    std::stable_sort(scene.edits.begin(), scene.edits.end(), [](const EditSpec& a, const EditSpec& b) { return a.day < b.day; });
+  }
   if (const toml::array* events = root["events"].as_array()) {
     for (auto&& element : *events) {
       const toml::table& e = *element.as_table();
@@ -484,19 +657,23 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       const double day = e["day"].value<double>().value();
       const std::string type = e["type"].value<std::string>().value();
       if (type == "avalanche" || type == "skier") {
-        const bool metres = e.contains("position_m"), map = e.contains("map_position");
-        if (metres == map)
+        const bool metres = e.contains("position_m"), map = e.contains("map_position"), masked = e.contains("mask");
+        if (static_cast<int>(metres) + static_cast<int>(map) + static_cast<int>(masked) != 1)
           throw InputError(where(source, e.source()) + ": events: " + (type == "skier" ? "a skier" : "an avalanche") +
-                           " needs position_m = [x, y] or map_position = [easting, northing] (one of them)");
-        const char* key = metres ? "position_m" : "map_position";
-        const toml::array& xy = *e.get(key)->as_array();
-        if (xy.size() != 2) fail(source, *e.get(key), std::string("events.") + key, "needs two numbers");
+                           " needs position_m = [x, y], map_position = [easting, northing] or mask = ... (one of them)");
         Scene::AvalancheEvent a;
         a.day = day;
-        a.xM = xy[0].value<double>().value();
-        a.yM = xy[1].value<double>().value();
-        a.mapCoordinates = map;
         a.line = static_cast<int>(e.source().begin.line);
+        if (masked) {
+          a.mask = rasterRef(*e.get("mask"), source, scene, "events.mask");
+        } else {
+          const char* key = metres ? "position_m" : "map_position";
+          const toml::array& xy = *e.get(key)->as_array();
+          if (xy.size() != 2) fail(source, *e.get(key), std::string("events.") + key, "needs two numbers");
+          a.xM = xy[0].value<double>().value();
+          a.yM = xy[1].value<double>().value();
+          a.mapCoordinates = map;
+        }
         if (type == "skier") {
           a.count = static_cast<int>(e["count"].value<int64_t>().value_or(1));
           scene.userSkiers.push_back(a);
@@ -506,6 +683,7 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
         }
         continue;
       }
+      if (e.contains("mask")) fail(source, *e.get("mask"), "events.mask", "only avalanche and skier events take a mask");
       if (!e.contains("duration_days")) throw InputError(where(source, e.source()) + ": events.duration_days: missing");
       scene.userSnowfalls.push_back({day, day + e["duration_days"].value<double>().value()});
     }
@@ -582,6 +760,12 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       throw InputError(source + ": outputs.avalanche_*: mode = \"occlusion\" has no avalanches");
     if (!scene.userAvalanches.empty() || !scene.userSkiers.empty())
       throw InputError(source + ": events: mode = \"occlusion\" has no season for avalanche or skier events");
+    if (!scene.edits.empty()) throw InputError(source + ": edits: mode = \"occlusion\" has no season to edit");
+    for (const auto& l : scene.initialSnow)
+      if (l.kind != InitialSnowLayer::Kind::None) throw InputError(source + ": initial_snow: mode = \"occlusion\" has no season to start");
+    const Multipliers& mu = scene.multipliers;
+    if (mu.melt || mu.windErosion || mu.avalancheRelease || mu.skierSpawn)
+      throw InputError(source + ": multipliers: mode = \"occlusion\" takes only snowfall and no_snow (melt, wind, avalanches and skiers need a season)");
   } else {
     for (const auto& layer : scene.outputs.layers)
       if (std::find(kOcclusionLayers.begin(), kOcclusionLayers.end(), layer) != kOcclusionLayers.end())

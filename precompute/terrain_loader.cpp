@@ -194,6 +194,14 @@ Terrain loadDem(const std::string& path, const std::string& coordinates) {
   info.spec.height = h;
   info.spec.originX = west;
   info.spec.originY = north;
+  info.georeferenced = hasTransform;
+  info.geoCellX = sizeX;
+  info.geoCellY = sizeY;
+  if (hasSrs) {
+    char* wkt = nullptr;
+    if (srs->exportToWkt(&wkt) == OGRERR_NONE && wkt) info.crsWkt = wkt;
+    CPLFree(wkt);
+  }
 
   GDALRasterBand* band = ds->GetRasterBand(1);
   t.heightsM.resize(w, h);

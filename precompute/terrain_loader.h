@@ -29,6 +29,12 @@ struct TerrainInfo {
   int nativeWidth = 0, nativeHeight = 0;
   std::string heightMapping;      // heightmaps, raw: how pixel values became metres
   std::string resampling;         // empty, or what was done (filter, from, to)
+  // Georeference (DEMs with a geotransform): cell (i, j)'s centre lies at
+  // (spec.originX + (i + 0.5) geoCellX, spec.originY - (j + 0.5) geoCellY) in the file's own
+  // coordinates (crsWkt, empty when the file names none). Painted masks map by it.
+  bool georeferenced = false;
+  double geoCellX = 0, geoCellY = 0;
+  std::string crsWkt;
   bool latitudeKnown = false;
   double centreLatitudeDeg = 0.0;
 };

@@ -127,6 +127,8 @@ Terrain resampleTerrain(const Terrain& src, const TerrainSource& request) {
   out.info.spec.height = static_cast<int>(newH);
   out.info.spec.cellSizeXM = cellX;
   out.info.spec.cellSizeYM = cellY;
+  out.info.geoCellX = src.info.geoCellX * cellX / s.cellSizeXM;
+  out.info.geoCellY = src.info.geoCellY * cellY / s.cellSizeYM;
   std::ostringstream o;
   o << (box ? "area-weighted box filter" : "bilinear") << " from " << w << " x " << h << " cells of " << s.cellSizeXM << " x "
     << s.cellSizeYM << " m to " << newW << " x " << newH << " cells of " << cellX << " x " << cellY

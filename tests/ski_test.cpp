@@ -234,7 +234,7 @@ TEST(Ski, ASkierOnALoadedSlopeSetsOffAnAvalanche) {
   cfg.params.avalancheRatePerKm2PerDay = 0.0;  // no spontaneous ones: only the skier's
   cfg.params.skiersPerHour = 0.0;
   cfg.params.skiTriggerFactor = 10.0;  // a loaded 40 degree slope: p = 1 at the first cell
-  cfg.userSkiers.push_back({0.5, 30, 3, 1});
+  cfg.userSkiers.push_back({0.5, 30, 3, 1, nullptr});
   const SeasonReport rep = runSeason(*backend, s, cfg);
   ASSERT_EQ(rep.skiers.size(), 1u);
   EXPECT_TRUE(rep.skiers[0].triggered) << rep.skiers[0].why;

@@ -33,6 +33,7 @@
 #include "precompute/occlusion.h"
 #include "precompute/ray_scene.h"
 #include "precompute/wind_timeline.h"
+#include "art_direction.h"
 #include "progress.h"
 
 #ifndef SNOWBAKE_VERSION
@@ -265,6 +266,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   state.allocate(ti.spec);
   state.bedrockM = terrain.heightsM;
   state.validCell = terrain.valid;
+  // Painted rasters first: a bad mask fails before any precompute runs.
+  const ArtDirectionPlan art = prepareArtDirection(scene, ti, state, log);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
   std::optional<Exposure> exposure;
   if (occlusionMode) {
@@ -578,8 +581,14 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     occlusionLayers["sun_visibility"] = asGrid(o.sunVisibility);
     occlusionLayers["occlusion_accumulation"] = asGrid(o.accumulationM);
     occlusionLayers["occlusion_dissipation"] = asGrid(o.dissipationM);
-    // The static cover is settled snow: the stable layer.
+    // The static cover is settled snow: the stable layer; the scene's snowfall multiplier (a
+    // sky mask) scales it and its no-snow mask clears it.
     state.stableM = asGrid(o.snowM);
+    for (size_t i = 0; i < state.stableM.size(); ++i) {
+      float& d = state.stableM.values()[i];
+      if (state.snowfallFactor.size() == state.stableM.size()) d *= state.snowfallFactor.values()[i];
+      if (state.noSnow.size() == state.stableM.size() && state.noSnow.values()[i]) d = 0.f;
+    }
     log << "occlusion: Embree scene " << fixed(buildSeconds, 2) << " s; ambient occlusion " << os.aoRays << " rays/cell, "
         << fixed(o.aoSeconds, 2) << " s (" << fixed(o.aoRayCount / std::max(o.aoSeconds, 1e-9) / 1e6, 1) << " M rays/s); sun "
         << o.sun.size() << " positions on day " << fixed(os.dayOfYear, 0) << " of the year, " << fixed(o.sunSeconds, 2) << " s\n";
@@ -636,13 +645,18 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       if (!state.validCell(x, y)) throw InputError(where + ": the " + point + " falls on a NODATA cell");
       return std::array<int, 2>{x, y};
     };
+    config.edits = art.edits;
+    config.userAvalanches = art.avalanches;  // masked releases
+    config.userSkiers = art.skiers;          // skiers from start masks
     for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
+      if (a.mask) continue;
       const auto c = eventCell(a, "avalanche", "rupture point");
-      config.userAvalanches.push_back({a.day, c[0], c[1]});
+      config.userAvalanches.push_back({a.day, c[0], c[1], false, nullptr});
     }
     for (const Scene::AvalancheEvent& a : scene.userSkiers) {
+      if (a.mask) continue;
       const auto c = eventCell(a, "skier", "start point");
-      config.userSkiers.push_back({a.day, c[0], c[1], a.count});
+      config.userSkiers.push_back({a.day, c[0], c[1], a.count, nullptr});
     }
     if (std::find(layers.begin(), layers.end(), "ski_route_map") != layers.end())
       routeMapGrid = routeMap(state.bedrockM, state.validCell, state.spec);
@@ -678,6 +692,11 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           << " m, fall " << fixed(a.fallHeightM, 0) << " m, " << a.steps << " steps of " << fixed(scene.params.avalancheStepS, 2)
           << " s, " << fixed(a.secondsPerStep() * 1e3, 3) << " ms a step; " << a.why << "\n";
     }
+    for (const EditRecord& e : report.edits)
+      log << "  " << e.label << ": " << std::scientific << std::setprecision(4) << e.volumeM3 << std::defaultfloat << " m^3\n";
+    if (report.noSnowRemovedM3 > 0.0)
+      log << "  no-snow mask: " << std::scientific << std::setprecision(4) << report.noSnowRemovedM3 << std::defaultfloat
+          << " m^3 of initial snow removed\n";
     if (report.avalancheTries > 0) log << "  spontaneous avalanche tries: " << report.avalancheTries << "\n";
     if (!report.skiers.empty()) {
       int users = 0, triggered = 0, skied = 0;
@@ -768,6 +787,13 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                                    a.steps, a.releasedM3, a.depositM3, a.runoutM, a.fallHeightM, a.simulatedS});
   for (const SkierRecord& k : report.skiers)
     manifest.skiers.push_back({k.day, k.startX, k.startY, k.user, k.cells, k.lengthM, k.dropM, k.triggered, k.why});
+  manifest.artRasters = art.rasters;
+  manifest.edits = art.editRecords;
+  for (ManifestEdit& e : manifest.edits)
+    for (const EditRecord& r : report.edits)
+      if (r.label == e.label) e.volumeM3 = r.volumeM3;
+  manifest.editsNetM3 = report.editsNetM3;
+  manifest.noSnowRemovedM3 = report.noSnowRemovedM3;
   manifest.events = report.events;
   manifest.snowfallAddedM3 = report.snowfallAddedM3;
   manifest.meltRemovedM3 = report.meltRemovedM3;

@@ -1,4 +1,5 @@
-// Melt step (paper §5.2): D(t + dt) = D(t) - dt * k_melt * max(0, T - T_0melt), taken layer by
+// Melt step (paper §5.2): D(t + dt) = D(t) - f dt * k_melt * max(0, T - T_0melt) (f the scene's
+// melt multiplier, 1 without), taken layer by
 // layer from the top (powder, unstable, stable, compacted). Per cell, no neighbour writes.
 #pragma once
 #include "../hd.h"
@@ -29,7 +30,8 @@ struct MeltKernel {
     v.delta[i] = 0.f;
     if (!v.valid[i]) return;
     const float temperature = a.seaLevelTemperatureC + v.temperatureBase[i];
-    float want = a.dtDays * a.meltRateMPerDayPerC * maxf(0.f, temperature - a.meltThresholdC);
+    const float factor = v.meltFactor ? v.meltFactor[i] : 1.f;  // art direction
+    float want = factor * a.dtDays * a.meltRateMPerDayPerC * maxf(0.f, temperature - a.meltThresholdC);
     if (!(want > 0.f)) return;
     float p = v.powder[i], u = v.unstable[i], s = v.stable[i], c = v.compacted[i];
     float removed = 0.f;

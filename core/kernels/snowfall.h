@@ -1,6 +1,6 @@
 // Snowfall step (paper §5.1). Per cell, no neighbour writes; the slope comes from the
 // SurfaceSlopeKernel snapshot taken just before, because this pass changes A.
-//   depth added   = dt * k_snow * max(0, A - A_0precip)                        (Foehn relation)
+//   depth added   = f * dt * k_snow * max(0, A - A_0precip)  (Foehn relation; f the scene's snowfall multiplier, 1 without)
 //   powder share  x_p = clamp(k_powdery * (|grad A| - s_c), 0, 1)
 //                 s_c = s_c0 + k_sc * max(0, T_0powdery - T)
 //   of the rest, unstable share x_U = clamp(k_unstable * (|grad A| - s_U), 0, 1), stable the remainder.
@@ -36,7 +36,8 @@ struct SnowfallKernel {
       return;
     }
     const float altitude = v.surface(i);
-    const float added = a.dtDays * a.intensity * a.snowfallRatePerDay * maxf(0.f, altitude - a.rainSnowLimitM);
+    const float factor = v.snowfallFactor ? v.snowfallFactor[i] : 1.f;  // art direction (precipitation map)
+    const float added = factor * a.dtDays * a.intensity * a.snowfallRatePerDay * maxf(0.f, altitude - a.rainSnowLimitM);
     if (!(added > 0.f)) {
       v.delta[i] = 0.f;
       return;

@@ -3,7 +3,7 @@
 //   curv_W = |W_x| d2A/dx2 + |W_y| d2A/dy2     (A the snow surface, second differences)
 // set to zero where it is positive (convex: nothing to scour) or where the wind-effect surface
 // stands above the snow (a wind shadow: W_z - A > shadow tolerance). Eroded powder per event:
-//   e = min(P, dt * k_erosion * (-curv_W))
+//   e = min(P, f dt * k_erosion * (-curv_W))   (f the scene's wind-erosion multiplier, 1 without)
 // We read Table 2's k_erosion (printed "0.1 m s^-1 day^-1") as metres of snow per day per s^-1 of
 // curv_W, i.e. m s day^-1: the only reading under which e is a depth.
 // Where the paper is vague: the eroded snow is deposited as powder into the two 4-neighbours
@@ -48,7 +48,8 @@ struct WindTransportKernel {
     const float curv = fabsf(wx) * dxx + fabsf(wy) * dyy;
     if (!(curv < 0.f)) return;
     // All but a millionth at most, so the shares' float sums stay below the powder (no clamp).
-    const float eroded = minf(powder * (1.f - 1e-6f), a.dtDays * a.erosionRate * (-curv));
+    const float factor = v.windErosionFactor ? v.windErosionFactor[i] : 1.f;  // art direction
+    const float eroded = minf(powder * (1.f - 1e-6f), factor * a.dtDays * a.erosionRate * (-curv));
     if (!(eroded > 0.f)) return;
     // Receivers downwind.
     const int nx = x + (wx > 0.f ? 1 : -1), ny = y + (wy > 0.f ? 1 : -1);

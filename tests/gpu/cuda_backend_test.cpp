@@ -19,6 +19,7 @@
 #include "core/season.h"
 #include "core/ski.h"
 #include "core/serial_exec.h"
+#include "core/step_args.h"
 #include "cuda/cuda_backend.h"
 #include "tests/test_support.h"
 
@@ -216,6 +217,42 @@ TEST(CudaBackend, RouteMapAndSkierCompactionMatchTheCpu) {
   const std::vector<int> cells{5, 181 * 20 + 17, 181 * 20 + 18, 181 * 100 + 90};
   cpu.skierCompaction(cells, 0.05f);
   gpu->skierCompaction(cells, 0.05f);
+  SnowState a = s, b = s;
+  cpu.download(a);
+  gpu->download(b);
+  test::expectSameBytes(a, b);
+}
+
+// Art direction on the device: snowfall, melt and wind transport with painted multipliers, then
+// the four timeline edits with a grey mask, give the CPU's bytes.
+TEST(CudaBackend, ArtDirectionMultipliersAndEditsMatchTheCpuBitForBit) {
+  SKIP_WITHOUT_CUDA();
+  SnowState s = test::makeRoughState(167, 131, 43);
+  s.snowfallFactor.resize(s.spec.width, s.spec.height, 0.f);
+  s.meltFactor.resize(s.spec.width, s.spec.height, 0.f);
+  s.windErosionFactor.resize(s.spec.width, s.spec.height, 0.f);
+  std::vector<float> weights(s.spec.cellCount());
+  for (int y = 0; y < s.spec.height; ++y)
+    for (int x = 0; x < s.spec.width; ++x) {
+      s.snowfallFactor(x, y) = static_cast<float>(x % 7) / 3.f;
+      s.meltFactor(x, y) = static_cast<float>(y % 5) / 2.f;
+      s.windErosionFactor(x, y) = (x + y) % 3 == 0 ? 0.f : 1.5f;
+      weights[static_cast<size_t>(y) * s.spec.width + x] = static_cast<float>((x * 3 + y) % 11) / 10.f;
+    }
+  ExecBackend<SerialExec> cpu;
+  auto gpu = cuda::createCudaBackend();
+  const ModelParameters p = params();
+  double cpuSum = 0, gpuSum = 0;
+  for (SnowBackend* b : {static_cast<SnowBackend*>(&cpu), gpu.get()}) {
+    b->upload(s);
+    double& sum = b == &cpu ? cpuSum : gpuSum;
+    sum += b->snowfall(makeSnowfallArgs(p, 0.5, WeatherState{}));
+    sum += b->melt(makeMeltArgs(p, 0.5, warm()));
+    b->windTransport(makeWindTransportArgs(p, 0.5));
+    for (EditOp op : {EditOp::Add, EditOp::Remove, EditOp::Set, EditOp::Move})
+      sum += b->applyEdit(EditArgs{op, static_cast<int>(SnowLayer::Unstable), static_cast<int>(SnowLayer::Stable), 0.7f, true}, weights);
+  }
+  EXPECT_EQ(cpuSum, gpuSum);
   SnowState a = s, b = s;
   cpu.download(a);
   gpu->download(b);
