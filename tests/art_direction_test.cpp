@@ -558,3 +558,37 @@ TEST(ArtDirection, SceneFileErrorsNameTheKey) {
 
 }  // namespace
 }  // namespace snow
+
+namespace snow {
+namespace {
+
+// The example scene in presets/ bakes (to its masked release, day 46) and uses what it shows:
+// the edits, the masked release from the painted zone, the start-mask skiers and a bare road.
+TEST(ArtDirection, ExamplePresetBakes) {
+  const fs::path d = tempDir("preset");
+  BakeOptions o;
+  o.scene = std::string(SNOWBAKE_SOURCE_DIR) + "/presets/art_direction.toml";
+  o.outDir = (d / "out").string();
+  o.backend = "cpu";
+  o.useCache = false;
+  o.progress = false;
+  o.sets = {"season.days=46", "outputs.frames_days=[0]", "outputs.layers=[\"depth\"]"};
+  std::ostringstream log;
+  const BakeResult r = runBake(o, log);
+  ASSERT_EQ(r.season.edits.size(), 2u);
+  EXPECT_GT(r.season.edits[0].volumeM3, 0.0);
+  EXPECT_GT(r.season.edits[1].volumeM3, 0.0);
+  bool masked = false;
+  for (const auto& a : r.season.avalanches) masked = masked || (a.user && a.released && a.releaseCells > 100);
+  EXPECT_TRUE(masked) << log.str();
+  EXPECT_GT(r.season.noSnowRemovedM3, 0.0);
+  EXPECT_LT(r.season.massBalanceRelativeError(), 1e-6);
+  std::ifstream in(d / "out" / "manifest.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_GE(j["art_direction"]["rasters"].size(), 6u);
+  EXPECT_EQ(j["art_direction"]["edits"].size(), 2u);
+  fs::remove_all(d);
+}
+
+}  // namespace
+}  // namespace snow
