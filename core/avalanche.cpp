@@ -229,7 +229,9 @@ bool AvalancheRun::step() {
   if (x1 <= x0) {
     record_.why = "all moving snow deposited";
     atRest_ = true;
-  } else if (speed < p_.avalancheStopSpeedMps) {
+  } else if (speed < p_.avalancheStopSpeedMps && (record_.maxSpeedMps >= p_.avalancheStopSpeedMps || record_.simulatedS >= 2.0)) {
+    // (Not before the snow has once moved faster than the stop speed, or 2 s have passed: with
+    // short steps, snow that has only begun to accelerate is not yet at rest.)
     record_.why = "at rest (fastest pipe " + std::to_string(speed) + " m/s)";
     atRest_ = true;
   } else if (record_.simulatedS >= p_.avalancheMaxDurationS) {

@@ -17,8 +17,9 @@
 // non-negative whatever the flows. Snow crosses at most one cell a substep, which is what lets
 // the box grow by one cell a substep and no more.
 //
-// At rest: when no pipe carries more than avalanche_stop_speed_mps (flow / pipe cross-section),
-// or after avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
+// At rest: when no pipe carries more than avalanche_stop_speed_mps (flow / pipe cross-section)
+// once the snow has moved faster than that or 2 s have passed (short steps would otherwise stop
+// snow that has only begun to accelerate), or after avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
 // stable snow and the records are kept.
 #pragma once
 #include <chrono>

@@ -20,5 +20,7 @@ bool compiledWithCuda();
 DeviceInfo probeDevice();
 // Throws std::runtime_error naming the CUDA error when no device can be used.
 std::unique_ptr<SnowBackend> createCudaBackend();
+// Device-to-device copy bandwidth (read + write counted), GB/s, best of 5 copies of 512 MiB.
+double deviceCopyBandwidthGBs();
 
 }  // namespace snow::cuda

@@ -15,4 +15,6 @@ std::unique_ptr<SnowBackend> createCudaBackend() {
   throw std::runtime_error("CUDA backend unavailable: " + probeDevice().reason);
 }
 
+double deviceCopyBandwidthGBs() { throw std::runtime_error("CUDA backend unavailable: " + probeDevice().reason); }
+
 }  // namespace snow::cuda

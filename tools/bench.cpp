@@ -3,7 +3,9 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <chrono>
+#include <functional>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -23,6 +25,7 @@
 #include "bakers/rtin.h"
 #include "precompute/terrain_loader.h"
 #include "precompute/wind.h"
+#include "bench_suite.h"
 
 namespace snow {
 
@@ -58,7 +61,6 @@ void writeCsv(const BenchOptions& o, const std::string& name, const std::string&
   table << "\nCSV: " << path << "\n";
 }
 
-std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string windBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string sunBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads);
@@ -70,16 +72,37 @@ std::string meshBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string runBench(const BenchOptions& o, std::ostream& log) {
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  if (o.stage != "all" && o.stage != "season" && o.stage != "wind" && o.stage != "sun" && o.stage != "avalanche" && o.stage != "occlusion" &&
-      o.stage != "mesh")
-    throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche, occlusion, mesh or all");
+  static const std::vector<std::string> stages = {"sun", "wind", "season", "avalanche", "occlusion", "mesh", "scaling", "bandwidth", "agreement", "bake", "all"};
+  if (o.stage == "scaling-child") {  // internal: one size of the scaling stage, in its own process
+    if (o.scalingSizes.size() != 1) throw InputError("--stage scaling-child: needs one size in --sizes");
+    return scalingChild(o, o.scalingSizes[0]) + "\n";
+  }
+  if (std::find(stages.begin(), stages.end(), o.stage) == stages.end())
+    throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche, occlusion, mesh, scaling, bandwidth, agreement, bake or all");
+  const auto t0 = Clock::now();
   std::string out;
-  if (o.stage == "all" || o.stage == "sun") out += sunBench(o, log, threads) + "\n";
-  if (o.stage == "all" || o.stage == "wind") out += windBench(o, log, threads) + "\n";
-  if (o.stage == "all" || o.stage == "season") out += seasonBench(o, log, threads) + "\n";
-  if (o.stage == "all" || o.stage == "avalanche") out += avalancheBench(o, log, threads) + "\n";
-  if (o.stage == "all" || o.stage == "occlusion") out += occlusionBench(o, log, threads) + "\n";
-  if (o.stage == "all" || o.stage == "mesh") out += meshBench(o, log, threads);
+  auto run = [&](const char* name, const std::function<std::string()>& f) {
+    if (o.stage != "all" && o.stage != name) return;
+    const auto ts = Clock::now();
+    log << "bench: " << name << "\n";
+    const std::string body = f();
+    out += "## " + std::string(name) + "\n\n" + body + "\n(stage time " + format("%.0f", since(ts)) + " s)\n\n";
+  };
+  run("sun", [&] { return sunBench(o, log, threads); });
+  run("wind", [&] { return windBench(o, log, threads) + "\n" + windAccuracyBench(o, log, threads); });
+  run("season", [&] { return seasonAccuracyBench(o, log, threads); });
+  run("avalanche", [&] { return avalancheBench(o, log, threads) + "\n" + avalancheAccuracyBench(o, log, threads); });
+  run("occlusion", [&] { return occlusionBench(o, log, threads); });
+  run("mesh", [&] { return meshBench(o, log, threads); });
+  run("scaling", [&] { return scalingBench(o, log, threads); });
+  run("bandwidth", [&] { return bandwidthBench(o, log, threads); });
+  run("agreement", [&] { return agreementBench(o, log, threads); });
+  run("bake", [&] { return bakeBench(o, log, threads); });
+  out += "Total: " + format("%.0f", since(t0)) + " s on " + benchMachineDescription() + ", " + std::to_string(threads) + " threads.\n";
+  if (!o.csvDir.empty()) {
+    std::filesystem::create_directories(o.csvDir);
+    writeTextAtomically((std::filesystem::path(o.csvDir) / "bench.md").string(), out);
+  }
   return out;
 }
 
@@ -109,6 +132,7 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
         << "| quality | method | horizons (s) | sky (s) | direct (s) | indirect (s) | temperature, 120 days (s) | total (s) |\n"
         << "|---|---|---|---|---|---|---|---|\n";
   std::vector<std::string> levels{"draft", "production", "reference"};
+  std::vector<double> levelSeconds;
   for (const auto& name : levels) {
     ExposureSettings es;
     es.quality = sunQuality(name);
@@ -134,6 +158,7 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
     csv << "time," << name << ",horizon," << o.sunSize << "," << e.timings.horizonSeconds << "," << e.timings.skySeconds << ","
         << e.timings.sunSeconds << "," << e.timings.indirectSeconds << "," << tempSeconds << "," << total << ",,,,\n";
     log << "  sun " << name << " " << o.sunSize << "²: " << format("%.1f", total) << " s\n";
+    levelSeconds.push_back(total);
   }
   // Accuracy on one day, against the Embree path at reference quality.
   DefaultTerrainOptions small;
@@ -155,6 +180,7 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
                              p.indirectSunWeightHours / p.directSunWeightHours);
   };
   Grid<float> refSky, refSun, refInd;
+  std::vector<AccuracyRow> accuracy;
   oneDay(sunQuality("reference"), false, refSky, refSun, refInd);
   Grid<float> refTotal = refSky;
   for (size_t i = 0; i < refTotal.size(); ++i) refTotal.values()[i] += refSun.values()[i] + refInd.values()[i];
@@ -173,7 +199,22 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
             << " | " << format("%.4f", ei) << " | " << format("%.4f", et) << " |\n";
       csv << "error," << name << "," << (sweep ? "horizon" : "embree") << "," << o.sunAccuracySize << ",,,,,,," << es << "," << eu << ","
           << ei << "," << et << "\n";
+      if (sweep) {
+        const size_t k = static_cast<size_t>(&name - &levels[0]);
+        accuracy.push_back({name, levelSeconds[k], et, name == "draft"});
+      }
     }
+  table << "\nDefault level: draft (precompute.sun_quality), " << format("%.2f", accuracy[0].seconds) << " s for the season's exposure on "
+        << o.sunSize << "², error of I " << format("%.4f", accuracy[0].error) << ". Error against time, horizon sweep:\n\n"
+        << "| level | season exposure on " << o.sunSize << "² (s) | I, relative L1 |\n|---|---|---|\n";
+  for (const auto& r : accuracy)
+    table << "| " << r.level << (r.isDefault ? " (default)" : "") << " | " << format("%.2f", r.seconds) << " | " << format("%.4f", r.error) << " |\n";
+  {
+    PlotSeries ps{"horizon sweep", {}};
+    for (const auto& r : accuracy) ps.points.push_back({r.seconds, r.error, r.level});
+    writePlot(o, "sun_accuracy", logLogSvg("Sun exposure: error against time", "season exposure, " + std::to_string(o.sunSize) + "² (s)",
+                                           "relative L1 of I (20 January)", {ps}), table);
+  }
   writeCsv(o, "sun.csv", csv.str(), table);
   return table.str();
 }
@@ -223,49 +264,6 @@ std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
     }
   }
   writeCsv(o, "wind.csv", csv.str(), table);
-  return table.str();
-}
-
-std::string seasonBench(const BenchOptions& o, std::ostream& log, int threads) {
-  std::string backendName = o.backend;
-  if (backendName == "auto") backendName = cuda::probeDevice().available ? "cuda" : "cpu";
-  if (backendName == "cuda" && !cuda::probeDevice().available)
-    throw InputError("--backend cuda: no usable CUDA device: " + cuda::probeDevice().reason);
-
-  std::ostringstream table, csv;
-  table << "Season stage, reference scenario (" << o.days << " days; snowfall, melt, stability, powder diffusion, avalanches; no wind), "
-        << (backendName == "cpu" ? machineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
-        << "\n\n";
-  table << "| grid | cell (m) | backend | season (s) | snowfall (s) | melt (s) | stability (s) | diffusion (s) | avalanches (s) | avalanches | events | mass balance error |\n"
-        << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
-  csv << "size,cell_m,backend,threads,season_s,snowfall_s,melt_s,stability_s,diffusion_s,avalanche_s,avalanches,events,mass_error\n";
-  for (int size : o.sizes) {
-    if (size < 8) throw InputError("--sizes: " + std::to_string(size) + " is too small");
-    SnowState state = referenceRangeState(size);
-    const SeasonConfig config = referenceWinter(o.days);
-    computeTemperatureBase(state, config.params);
-    auto backend = backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
-    const auto t0 = Clock::now();
-    const SeasonReport r = runSeason(*backend, state, config);
-    const double seconds = since(t0);
-    double phase[5] = {0, 0, 0, 0, 0};
-    for (const auto& p : r.phenomena) {
-      if (p.name.rfind("snowfall", 0) == 0) phase[0] += p.seconds;
-      if (p.name == "melt") phase[1] += p.seconds;
-      if (p.name == "powder diffusion") phase[2] += p.seconds;
-      if (p.name == "stability") phase[3] += p.seconds;
-      if (p.name == "avalanche") phase[4] += p.seconds;
-    }
-    const double cell = state.spec.cellSizeXM;
-    table << "| " << size << "² | " << format("%.2f", cell) << " | " << backend->name() << " | " << format("%.3f", seconds) << " | "
-          << format("%.3f", phase[0]) << " | " << format("%.3f", phase[1]) << " | " << format("%.3f", phase[3]) << " | "
-          << format("%.3f", phase[2]) << " | " << format("%.3f", phase[4]) << " | " << r.avalanches.size() << " | " << r.events
-          << " | " << format("%.1e", r.massBalanceRelativeError()) << " |\n";
-    csv << size << "," << cell << "," << backend->name() << "," << threads << "," << seconds << "," << phase[0] << "," << phase[1]
-        << "," << phase[3] << "," << phase[2] << "," << phase[4] << "," << r.avalanches.size() << "," << r.events << "," << r.massBalanceRelativeError() << "\n";
-    log << "  " << size << "² done in " << format("%.2f", seconds) << " s\n";
-  }
-  writeCsv(o, "season.csv", csv.str(), table);
   return table.str();
 }
 
@@ -354,15 +352,17 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
     const OcclusionSnow ref = computeOcclusionSnowOnTerrain(scene, ts.heightsM, ts.valid, ts.info.spec, s);
     double refSnow = 0.0;
     for (float v : ref.snowM) refSnow += v;
-    table << "\nQuality levels: error against 4096 rays per cell (builtin range 128² at 40 m), and time on the builtin range " << o.sunSize
-          << "² at " << format("%.0f", 10240.0 / o.sunSize) << " m (10 sun positions, 21 December, 46.5 N):\n\n"
+    const int timingSize = std::max(64, o.sunSize / 2);
+    table << "\nQuality levels: error against 4096 rays per cell (builtin range 128² at 40 m), and time on the builtin range " << timingSize
+          << "² at " << format("%.0f", 10240.0 / timingSize) << " m (10 sun positions, 21 December, 46.5 N):\n\n"
           << "| quality | rays per cell | mean abs error of a | snow, relative L1 | AO (s) | sun (s) | total (s) | M rays/s |\n"
           << "|---|---|---|---|---|---|---|---|\n";
     DefaultTerrainOptions big;
-    big.size = o.sunSize;
-    big.cellSizeM = 10240.0 / o.sunSize;
+    big.size = timingSize;
+    big.cellSizeM = 10240.0 / timingSize;
     const Terrain tb = makeBuiltinTerrain(big);
     const RayScene bigScene(tb.heightsM, tb.info.spec);
+    PlotSeries ps{"ambient occlusion", {}};
     for (const char* q : {"draft", "production", "reference"}) {
       s.aoRays = occlusionRaysForQuality(q);
       const OcclusionSnow r = computeOcclusionSnowOnTerrain(scene, ts.heightsM, ts.valid, ts.info.spec, s);
@@ -379,10 +379,14 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
       table << "| " << q << " | " << s.aoRays << " | " << format("%.4f", errA) << " | " << format("%.4f", errSnow) << " | "
             << format("%.2f", b.aoSeconds) << " | " << format("%.2f", b.sunSeconds) << " | " << format("%.2f", total) << " | "
             << format("%.1f", rate) << " |\n";
-      csv << "quality_" << q << "," << s.aoRays << "," << o.sunSize << "," << b.aoSeconds << "," << b.sunSeconds << "," << total << "," << rate
+      csv << "quality_" << q << "," << s.aoRays << "," << timingSize << "," << b.aoSeconds << "," << b.sunSeconds << "," << total << "," << rate
           << "," << errA << "," << errSnow << "\n";
-      log << "  occlusion " << q << " " << o.sunSize << "²: " << format("%.1f", total) << " s\n";
+      log << "  occlusion " << q << " " << timingSize << "²: " << format("%.1f", total) << " s\n";
+      ps.points.push_back({total, errA, q});
     }
+    table << "\nDefault level: draft (precompute.sun_quality; 64 rays). Error falls monotonically with the rays per cell.\n";
+    writePlot(o, "occlusion_accuracy",
+              logLogSvg("Occlusion mode: error against time", "time on " + std::to_string(timingSize) + "² (s)", "mean |a - a_ref|", {ps}), table);
   }
 
   // 3. The paper's Puget Sound size: a mesh of 500 000 triangles (the builtin range triangulated,
@@ -446,6 +450,7 @@ std::string meshBench(const BenchOptions& o, std::ostream& log, int threads) {
   csv << "bound_m,triangles,vertices,max_error_m,triangulation_s,glb_s,glb_bytes\n";
   const std::string dir = o.csvDir.empty() ? std::filesystem::temp_directory_path().string() : o.csvDir;
   std::filesystem::create_directories(dir);
+  PlotSeries meshSeries{"adaptive triangulation", {}};
   for (double bound : {0.0, 0.05, 0.1, 0.25, 0.5, 1.0, 2.0, 5.0}) {
     const auto t0 = Clock::now();
     const RtinMesh m = buildRtin({&t.heightsM}, t.valid, bound);
@@ -462,8 +467,13 @@ std::string meshBench(const BenchOptions& o, std::ostream& log, int threads) {
     csv << bound << "," << m.triangles.size() << "," << mesh.positions.size() << "," << err << "," << tri << "," << glb << ","
         << std::filesystem::file_size(path) << "\n";
     log << "  mesh bound " << bound << " m: " << m.triangles.size() << " triangles\n";
+    meshSeries.points.push_back({tri + glb, err, format("%g m", bound)});
   }
   std::filesystem::remove(std::filesystem::path(dir) / "mesh_bench.glb");
+  table << "\nDefault level: outputs.mesh_max_error_m = 0.1 m. The measured error grows with the bound (never above it) while the triangle "
+           "count and the time fall.\n";
+  writePlot(o, "mesh_accuracy",
+            logLogSvg("Mesh simplification: error against time", "triangulation + glb (s)", "measured max vertical error (m)", {meshSeries}), table);
   writeCsv(o, "mesh.csv", csv.str(), table);
   return table.str();
 }

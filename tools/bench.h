@@ -1,6 +1,7 @@
-// `snowbake bench`: times the season stage on the reference scenario (core/reference_scenario.h)
-// for a list of grid sizes and prints a Markdown table (and writes CSV). The accuracy-against-
-// time tables of the other stages join it as those stages land (the benchmark-suite issue).
+// `snowbake bench`: the benchmark suite. Per stage, run time against error at several quality
+// levels (tables, CSV and SVG plots), scaling with the grid size (time per stage and peak
+// memory), the machine limit (copy bandwidth against the season kernels' achieved bandwidth) and
+// CPU against CUDA agreement. Every table says the machine and thread count.
 #pragma once
 #include <ostream>
 #include <string>
@@ -9,10 +10,15 @@
 namespace snow {
 
 struct BenchOptions {
-  std::string stage = "all";  // sun | wind | season | avalanche | all
+  std::string stage = "all";  // sun | wind | season | avalanche | occlusion | mesh | scaling | bandwidth | agreement | all
   int sunSize = 1024;          // grid of the sun-exposure timing table
   int sunAccuracySize = 256;   // grid of the sun-exposure accuracy table (the Embree reference is costly)
-  std::vector<int> sizes{256, 512, 1024, 2048};
+  std::vector<int> scalingSizes{256, 512, 1024, 2048, 4096};
+  double scalingBudgetS = 420.0;  // sizes predicted to pass this (from the growth so far) are skipped
+  int seasonAccuracySize = 256;   // grid of the season's step-rate refinement
+  int bandwidthSize = 2048;
+  int bandwidthReps = 10;
+  int agreementSize = 1024;
   std::vector<int> avalancheSizes{512, 4096};  // the same avalanche on a small and a large terrain
   double days = 120.0;
   std::string backend = "cpu";  // cpu | cuda | auto

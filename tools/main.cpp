@@ -3,7 +3,7 @@
 //                [--cache-dir DIR] [--no-cache] [--quiet]
 //   snowbake demo [--out DIR]
 //   snowbake info FILE [--json]
-//   snowbake bench [--stage sun|wind|season|avalanche|occlusion|mesh|all] [--sizes 256,512,...] [--days D] [--backend cpu|cuda|auto] [--threads N]
+//   snowbake bench [--stage sun|wind|season|avalanche|occlusion|mesh|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
 //                  [--csv-dir DIR] [--data DIR]
 // Exit status: 0 success, 2 usage or input error (one line naming the file and the problem),
 // 1 any other failure.
@@ -58,14 +58,15 @@ int main(int argc, char** argv) {
 
   BenchOptions benchOptions;
   std::string benchSizes;
-  CLI::App* benchCmd = app.add_subcommand("bench", "Benchmarks: the wind precompute and the season on reference scenarios.");
-  benchCmd->add_option("--sizes", benchSizes, "Comma-separated grid sizes (default 256,512,1024,2048)");
+  CLI::App* benchCmd = app.add_subcommand("bench", "The benchmark suite: error against time per stage, scaling, machine limit, CPU against CUDA.");
+  benchCmd->add_option("--sizes", benchSizes, "Comma-separated grid sizes of the scaling stage (default 256,512,1024,2048,4096)");
   benchCmd->add_option("--days", benchOptions.days, "Season length in days")->capture_default_str();
   benchCmd->add_option("--backend", benchOptions.backend, "cpu, cuda or auto")->check(CLI::IsMember({"cpu", "cuda", "auto"}))
       ->capture_default_str();
   benchCmd->add_option("--threads", benchOptions.threads, "CPU threads, 0 = all cores");
   benchCmd->add_option("--sun-size", benchOptions.sunSize, "Grid size of the sun-exposure timing table")->capture_default_str();
-  benchCmd->add_option("--stage", benchOptions.stage, "sun, wind, season, avalanche, occlusion, mesh or all")->check(CLI::IsMember({"sun", "season", "wind", "avalanche", "occlusion", "mesh", "all"}))
+  benchCmd->add_option("--stage", benchOptions.stage, "sun, wind, season, avalanche, occlusion, mesh, scaling, bandwidth, agreement, bake or all")
+      ->check(CLI::IsMember({"sun", "season", "wind", "avalanche", "occlusion", "mesh", "scaling", "bandwidth", "agreement", "bake", "all", "scaling-child"}))
       ->capture_default_str();
   benchCmd->add_option("--csv-dir", benchOptions.csvDir, "Folder for the CSV files (empty: none)")->capture_default_str();
   benchCmd->add_option("--data", benchOptions.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();
@@ -101,11 +102,11 @@ int main(int argc, char** argv) {
       std::cerr << "demo: outputs and manifest.json are in " << demoOut << "\n";
     } else if (*benchCmd) {
       if (!benchSizes.empty()) {
-        benchOptions.sizes.clear();
+        benchOptions.scalingSizes.clear();
         std::stringstream list(benchSizes);
         for (std::string item; std::getline(list, item, ',');) {
           try {
-            benchOptions.sizes.push_back(std::stoi(item));
+            benchOptions.scalingSizes.push_back(std::stoi(item));
           } catch (const std::exception&) {
             throw InputError("--sizes: '" + item + "' is not a whole number");
           }

@@ -1,0 +1,40 @@
+// The benchmark suite's newer stages (tools/bench.cpp runs them): accuracy against time for the
+// wind-effect surface, the season and the avalanche step, scaling with the grid size (time per
+// stage and peak memory, each size in its own process), the machine limit (copy bandwidth and
+// the season kernels' achieved bandwidth) and CPU against CUDA agreement.
+#pragma once
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "bench.h"
+#include "plot.h"
+
+namespace snow {
+
+// One accuracy level of a stage: its name, run time, error, and whether it is the default.
+struct AccuracyRow {
+  std::string level;
+  double seconds = 0;
+  double error = 0;
+  bool isDefault = false;
+};
+
+// Writes `svg` to <csvDir>/plots/<name>.svg (when csvDir is set) and says where in `table`.
+void writePlot(const BenchOptions& o, const std::string& name, const std::string& svg, std::ostream& table);
+
+std::string windAccuracyBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string seasonAccuracyBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string avalancheAccuracyBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string bandwidthBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string agreementBench(const BenchOptions& o, std::ostream& log, int threads);
+// The default scene at 1024² with every output, as `snowbake bake` runs it.
+std::string bakeBench(const BenchOptions& o, std::ostream& log, int threads);
+
+// The child side of the scaling stage: one size, every stage, one CSV line on stdout.
+std::string scalingChild(const BenchOptions& o, int size);
+
+std::string benchMachineDescription();
+
+}  // namespace snow
