@@ -3,7 +3,9 @@
 #pragma once
 #include <cstdint>
 #include <cstdio>
+#include <fstream>
 #include <string>
+#include <vector>
 #include <string_view>
 
 namespace snow {
@@ -29,5 +31,17 @@ class Fnv1a64 {
  private:
   uint64_t h_ = 0xcbf29ce484222325ull;
 };
+
+// The FNV-1a 64 hex digest of a file's bytes (of nothing when it cannot be read).
+inline std::string hashFileFnv1a64(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  Fnv1a64 h;
+  std::vector<char> buf(1 << 16);
+  while (in) {
+    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+    h.add(buf.data(), static_cast<size_t>(in.gcount()));
+  }
+  return h.hex();
+}
 
 }  // namespace snow

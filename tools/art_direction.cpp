@@ -13,17 +13,6 @@
 namespace snow {
 namespace {
 
-std::string fileHash(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  Fnv1a64 h;
-  std::vector<char> buf(1 << 16);
-  while (in) {
-    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-    h.add(buf.data(), static_cast<size_t>(in.gcount()));
-  }
-  return h.hex();
-}
-
 std::string num(double v) {
   std::ostringstream o;
   o << std::setprecision(4) << v;
@@ -56,7 +45,7 @@ class RasterCache {
     ManifestRaster r;
     r.role = role;
     r.source = ref.label();
-    r.hash = fileHash(ref.file);
+    r.hash = hashFileFnv1a64(ref.file);
     r.reader = m.reader;
     r.placement = m.placement;
     r.description = m.description;

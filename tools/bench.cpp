@@ -30,36 +30,12 @@
 namespace snow {
 
 namespace {
-std::string machineDescription() {
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line, model = "unknown CPU";
-  while (std::getline(cpuinfo, line))
-    if (line.rfind("model name", 0) == 0) {
-      model = line.substr(line.find(':') + 2);
-      break;
-    }
-  return model + ", " + std::to_string(std::thread::hardware_concurrency()) + " hardware threads";
-}
-
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-std::string format(const char* fmt, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, v);
-  return buf;
-}
+using Clock = BenchClock;
+constexpr auto since = benchSince;
+constexpr auto format = benchFormat;
 }  // namespace
 
 namespace {
-
-void writeCsv(const BenchOptions& o, const std::string& name, const std::string& text, std::ostringstream& table) {
-  if (o.csvDir.empty()) return;
-  std::filesystem::create_directories(o.csvDir);
-  const std::string path = (std::filesystem::path(o.csvDir) / name).string();
-  writeTextAtomically(path, text);
-  table << "\nCSV: " << path << "\n";
-}
 
 std::string windBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string sunBench(const BenchOptions& o, std::ostream& log, int threads);
@@ -128,7 +104,7 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
   big.cellSizeM = 10240.0 / o.sunSize;
   const Terrain tb = makeBuiltinTerrain(big);
   table << "Sun exposure, 120-day season from 1 December at 46.5 N, builtin range " << o.sunSize << "² at "
-        << format("%.0f", big.cellSizeM) << " m, " << machineDescription() << ", " << threads << " threads\n\n"
+        << format("%.0f", big.cellSizeM) << " m, " << benchMachineDescription() << ", " << threads << " threads\n\n"
         << "| quality | method | horizons (s) | sky (s) | direct (s) | indirect (s) | temperature, 120 days (s) | total (s) |\n"
         << "|---|---|---|---|---|---|---|---|\n";
   std::vector<std::string> levels{"draft", "production", "reference"};
@@ -215,13 +191,13 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
     writePlot(o, "sun_accuracy", logLogSvg("Sun exposure: error against time", "season exposure, " + std::to_string(o.sunSize) + "² (s)",
                                            "relative L1 of I (20 January)", {ps}), table);
   }
-  writeCsv(o, "sun.csv", csv.str(), table);
+  writeCsvFile(o, "sun.csv", csv.str(), table);
   return table.str();
 }
 
 std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
   std::ostringstream table, csv;
-  table << "Wind field and wind-effect surface, one wind state (from 300 deg at 12 m/s), tolerance 1e-4, " << machineDescription()
+  table << "Wind field and wind-effect surface, one wind state (from 300 deg at 12 m/s), tolerance 1e-4, " << benchMachineDescription()
         << ", " << threads << " threads\n\n"
         << "| terrain | grid | ordering | iterations | last update | residual | field (s) | surface (s) | converged |\n"
         << "|---|---|---|---|---|---|---|---|---|\n";
@@ -263,7 +239,7 @@ std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
           << " s\n";
     }
   }
-  writeCsv(o, "wind.csv", csv.str(), table);
+  writeCsvFile(o, "wind.csv", csv.str(), table);
   return table.str();
 }
 
@@ -274,7 +250,7 @@ std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads
     throw InputError("--backend cuda: no usable CUDA device: " + cuda::probeDevice().reason);
   std::ostringstream table, csv;
   table << "Avalanche, one release on the embedded range at 5 m cells (core/reference_scenario.h), "
-        << (backendName == "cpu" ? machineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
+        << (backendName == "cpu" ? benchMachineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
         << "\n\n| grid | steps | simulated (s) | ms per step | largest box (cells) | runout (m) | mass error |\n|---|---|---|---|---|---|---|\n";
   csv << "size,backend,steps,simulated_s,ms_per_step,box_cells,runout_m,mass_error\n";
   for (int size : o.avalancheSizes) {
@@ -292,7 +268,7 @@ std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads
         << r.boxCellsMax << "," << r.runoutM << "," << error << "\n";
     log << "  avalanche on " << size << "² done\n";
   }
-  writeCsv(o, "avalanche.csv", csv.str(), table);
+  writeCsvFile(o, "avalanche.csv", csv.str(), table);
   return table.str();
 }
 
@@ -320,7 +296,7 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
     const double analytic = std::cos(std::atan(2.0 * H / W));
     table << "Occlusion mode: ambient occlusion value a at the middle of a canyon floor (W = 100 m, H = 50 m, 2 m cells) against the "
              "analytic sky-view factor cos(atan(2H/W)) = "
-          << format("%.4f", analytic) << ", 100 cells along the floor, " << machineDescription() << ", " << threads << " threads\n\n"
+          << format("%.4f", analytic) << ", 100 cells along the floor, " << benchMachineDescription() << ", " << threads << " threads\n\n"
           << "| rays per point | mean a | mean error | max abs error (one cell) | M rays/s |\n|---|---|---|---|---|\n";
     for (int rays : {16, 64, 256, 1024}) {
       s.aoRays = rays;
@@ -427,7 +403,7 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
       log << "  occlusion mesh " << q << ": " << format("%.1f", total) << " s\n";
     }
   }
-  writeCsv(o, "occlusion.csv", csv.str(), table);
+  writeCsvFile(o, "occlusion.csv", csv.str(), table);
   return table.str();
 }
 
@@ -444,7 +420,7 @@ std::string meshBench(const BenchOptions& o, std::ostream& log, int threads) {
   const size_t full = 2 * static_cast<size_t>(spec.width - 1) * (spec.height - 1);
   table << "Mesh simplification, tyrol_avaWog_5m.asc (" << spec.width << " x " << spec.height << " cells of "
         << format("%.1f", spec.cellSizeXM) << " m; a full-resolution triangulation has " << full << " triangles), "
-        << machineDescription() << ", " << threads << " threads\n\n"
+        << benchMachineDescription() << ", " << threads << " threads\n\n"
         << "| vertical error bound (m) | triangles | share of full | measured max error (m) | triangulation (s) | glb (s) | glb size (MB) |\n"
         << "|---|---|---|---|---|---|---|\n";
   csv << "bound_m,triangles,vertices,max_error_m,triangulation_s,glb_s,glb_bytes\n";
@@ -474,7 +450,7 @@ std::string meshBench(const BenchOptions& o, std::ostream& log, int threads) {
            "count and the time fall.\n";
   writePlot(o, "mesh_accuracy",
             logLogSvg("Mesh simplification: error against time", "triangulation + glb (s)", "measured max vertical error (m)", {meshSeries}), table);
-  writeCsv(o, "mesh.csv", csv.str(), table);
+  writeCsvFile(o, "mesh.csv", csv.str(), table);
   return table.str();
 }
 

@@ -36,22 +36,9 @@ namespace snow {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
-void writeCsvFile(const BenchOptions& o, const std::string& name, const std::string& text, std::ostream& table) {
-  if (o.csvDir.empty()) return;
-  fs::create_directories(o.csvDir);
-  const std::string path = (fs::path(o.csvDir) / name).string();
-  writeTextAtomically(path, text);
-  table << "\nCSV: " << path << "\n";
-}
+using Clock = BenchClock;
+constexpr auto since = benchSince;
+constexpr auto fmt = benchFormat;
 
 // The accuracy table shared by the stages: level, time, error, default marked; monotone check.
 std::string accuracyTable(const std::vector<AccuracyRow>& rows, const std::string& errorName, const std::string& timeName) {
@@ -109,6 +96,14 @@ std::string benchMachineDescription() {
       break;
     }
   return model + ", " + std::to_string(std::thread::hardware_concurrency()) + " hardware threads";
+}
+
+void writeCsvFile(const BenchOptions& o, const std::string& name, const std::string& text, std::ostream& table) {
+  if (o.csvDir.empty()) return;
+  fs::create_directories(o.csvDir);
+  const std::string path = (fs::path(o.csvDir) / name).string();
+  writeTextAtomically(path, text);
+  table << "\nCSV: " << path << "\n";
 }
 
 void writePlot(const BenchOptions& o, const std::string& name, const std::string& svg, std::ostream& table) {

@@ -3,6 +3,8 @@
 // stage and peak memory, each size in its own process), the machine limit (copy bandwidth and
 // the season kernels' achieved bandwidth) and CPU against CUDA agreement.
 #pragma once
+#include <chrono>
+#include <cstdio>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -12,6 +14,15 @@
 
 namespace snow {
 
+using BenchClock = std::chrono::steady_clock;
+inline double benchSince(BenchClock::time_point t) { return std::chrono::duration<double>(BenchClock::now() - t).count(); }
+// printf-style formatting of one number.
+inline std::string benchFormat(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
 // One accuracy level of a stage: its name, run time, error, and whether it is the default.
 struct AccuracyRow {
   std::string level;
@@ -20,6 +31,8 @@ struct AccuracyRow {
   bool isDefault = false;
 };
 
+// Writes `text` to <csvDir>/<name> (when csvDir is set) and says where in `table`.
+void writeCsvFile(const BenchOptions& o, const std::string& name, const std::string& text, std::ostream& table);
 // Writes `svg` to <csvDir>/plots/<name>.svg (when csvDir is set) and says where in `table`.
 void writePlot(const BenchOptions& o, const std::string& name, const std::string& svg, std::ostream& table);
 

@@ -57,17 +57,6 @@ std::string fixed(double v, int digits) {
   return o.str();
 }
 
-std::string hashFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  Fnv1a64 h;
-  std::vector<char> buf(1 << 16);
-  while (in) {
-    in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
-    h.add(buf.data(), static_cast<size_t>(in.gcount()));
-  }
-  return h.hex();
-}
-
 // What a layer name in [outputs].layers means, and its grid.
 Grid<float> layerGrid(const SnowState& s, const std::string& name) {
   // NODATA cells are written as zero; the valid_mask layer says which they are.
@@ -766,7 +755,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   manifest.sceneHash = Fnv1a64().add(scene.canonicalToml).hex();
   manifest.terrainSource = ti.source;
   manifest.terrainHash = scene.terrain.builtin ? Fnv1a64().add(terrain.heightsM.data(), terrain.heightsM.size() * sizeof(float)).hex()
-                                               : hashFile(scene.terrain.file);
+                                               : hashFileFnv1a64(scene.terrain.file);
   manifest.coordinateSystem = ti.coordinateSystem;
   manifest.seed = scene.seed;
   manifest.backend = backendName;
