@@ -295,30 +295,36 @@ SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id
       const double hy = (1 - p_.skiSteering) * heading[1] + p_.skiSteering * want[1], hl = std::hypot(hx, hy);
       heading = hl > 1e-9 ? std::array<double, 2>{hx / hl, hy / hl} : want;
     }
-    const std::array<double, 2> next{pos[0] + heading[0] * stepM, pos[1] + heading[1] * stepM};
-    if (next[0] < 0 || next[1] < 0 || next[0] >= w * dx || next[1] >= h * dy) {
-      r.why = "reached the terrain's edge";
-      break;
-    }
-    const int nx = static_cast<int>(next[0] / dx), ny = static_cast<int>(next[1] / dy);
-    if (!valid_(nx, ny)) {
-      r.why = "NODATA ahead";
-      break;
-    }
-    const int ncell = ny * w + nx;
     // The smooth turn must not carry the skier where it would not go: uphill, out of the snow,
     // or into a dead end (a route much shorter than the target's). Then it turns straight at
-    // the target; if even that fails, it steps to the neighbour nearest the target's direction.
+    // the target (in the same step: redrawing the target would turn it toward an old one, and a
+    // skier could spin in place until the step limit); if even that fails, it steps to the
+    // neighbour nearest the target's direction.
     auto enterable = [&](int cell) {
       return snowOf(cell) >= p_.skiMinSnowM && surfaceOf(cell) <= surfaceOf(cur) &&
              route_.values()[static_cast<size_t>(cell)] >= 0.5f * route_.values()[static_cast<size_t>(chosen)];
     };
+    std::array<double, 2> next{};
+    int ncell = -1;
+    auto aim = [&]() -> const char* {
+      next = {pos[0] + heading[0] * stepM, pos[1] + heading[1] * stepM};
+      if (next[0] < 0 || next[1] < 0 || next[0] >= w * dx || next[1] >= h * dy) return "reached the terrain's edge";
+      const int nx = static_cast<int>(next[0] / dx), ny = static_cast<int>(next[1] / dy);
+      if (!valid_(nx, ny)) return "NODATA ahead";
+      ncell = ny * w + nx;
+      return nullptr;
+    };
+    const char* stop = aim();
+    if (!stop && ncell != cur && !enterable(ncell) && !(heading == want)) {
+      heading = want;
+      stop = aim();
+    }
+    if (stop) {
+      r.why = stop;
+      break;
+    }
     std::array<double, 2> moveTo = next;
     if (ncell != cur && !enterable(ncell)) {
-      if (!(heading == want)) {
-        heading = want;
-        continue;
-      }
       // Even the straight line crosses a cell it would not enter: step to the acceptable
       // neighbour closest in direction to the target instead, or stop.
       int best = -1;

@@ -11,6 +11,7 @@
 #include "core/serial_exec.h"
 #include "core/season.h"
 #include "core/ski.h"
+#include "core/reference_scenario.h"
 #include "test_support.h"
 #include "bake_support.h"
 #include "bakers/grid_writer.h"
@@ -327,6 +328,36 @@ TEST(Ski, DeviceRouteMapLoopGivesTheSameBytes) {
   auto cpu = createCpuBackend();
   Grid<float> unused;
   EXPECT_FALSE(cpu->routeMapOnDevice(unused));  // the host backend leaves it to the sort
+}
+
+}  // namespace
+}  // namespace snow
+
+namespace snow {
+namespace {
+
+// On rough ground, a skier whose smooth turn is refused turns straight at its target in the
+// same step; it used to redraw the target and turn toward the old one, and could spin in place
+// until the step limit (seen in the art-direction example: "1 cells, 10 m; step limit").
+TEST(Ski, NoDescentSpinsInPlaceOnRoughGround) {
+  SnowState s = referenceRangeState(256, 2560.0);
+  s.stableM.fill(1.0f);
+  auto backend = createCpuBackend();
+  backend->upload(s);
+  ModelParameters p;
+  p.skiTriggerFactor = 0.0;
+  SkiRun run(*backend, p, s, nullptr);
+  int spun = 0, moved = 0;
+  for (uint64_t k = 0; k < 400; ++k) {
+    int x = 0, y = 0;
+    ASSERT_TRUE(run.pickStart((k + 0.5) / 400.0, x, y));
+    const SkierRecord r = run.descend(x, y, 1.0, 3, k, false);
+    spun += r.why == "step limit";
+    moved += r.cells > 0;
+  }
+  std::printf("[ measure ] 400 descents on the rough range at 10 m: %d moved, %d hit the step limit\n", moved, spun);
+  EXPECT_EQ(spun, 0);
+  EXPECT_GT(moved, 300);
 }
 
 }  // namespace
