@@ -2,6 +2,7 @@
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <chrono>
@@ -200,6 +201,27 @@ std::unique_ptr<SnowBackend> chooseBackend(const std::string& wanted, std::ostre
 
 }  // namespace
 
+// Where listed output files go while a group of writers runs on its own thread: the manifest
+// entries, paths and per-format seconds of that group, merged in a fixed order afterwards so the
+// manifest is the same whatever ran first.
+struct OutputSink {
+  std::vector<ManifestFile> files;
+  std::vector<std::string> paths;
+  std::map<std::string, double> seconds;
+  Clock::time_point last = Clock::now();
+};
+thread_local OutputSink* tlSink = nullptr;
+struct SinkScope {
+  OutputSink* previous;
+  explicit SinkScope(OutputSink& sink) : previous(tlSink) {
+    tlSink = &sink;
+    sink.last = Clock::now();
+  }
+  ~SinkScope() { tlSink = previous; }
+  SinkScope(const SinkScope&) = delete;
+  SinkScope& operator=(const SinkScope&) = delete;
+};
+
 BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   const auto tStart = Clock::now();
   // 1. Scene
@@ -329,10 +351,19 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   // is the time to compute and write this one.
   std::map<std::string, double> outputSeconds;
   auto lastListed = Clock::now();
+  // Seconds spent on a kind of output (into the current writer group's sink, if any).
+  auto addSeconds = [&](const std::string& kind, double seconds) {
+    if (tlSink) {
+      tlSink->seconds[kind] += seconds;
+      tlSink->last = Clock::now();
+    } else {
+      outputSeconds[kind] += seconds;
+      lastListed = Clock::now();
+    }
+  };
   auto listFile = [&](const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
                       double day, float minValue, float maxValue) {
-    outputSeconds[format.substr(0, format.find(','))] += since(lastListed);
-    lastListed = Clock::now();
+    addSeconds(format.substr(0, format.find(',')), since(tlSink ? tlSink->last : lastListed));
     ManifestFile f;
     f.path = fs::relative(path, options.outDir).string();
     f.content = content;
@@ -341,8 +372,19 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     f.day = day;
     f.minValue = minValue;
     f.maxValue = maxValue;
-    manifest.files.push_back(f);
-    result.files.push_back(path);
+    if (tlSink) {
+      tlSink->files.push_back(f);
+      tlSink->paths.push_back(path);
+    } else {
+      manifest.files.push_back(f);
+      result.files.push_back(path);
+    }
+  };
+  auto lastListedFile = [&]() -> ManifestFile& { return tlSink ? tlSink->files.back() : manifest.files.back(); };
+  auto mergeSink = [&](OutputSink& sink) {
+    manifest.files.insert(manifest.files.end(), sink.files.begin(), sink.files.end());
+    result.files.insert(result.files.end(), sink.paths.begin(), sink.paths.end());
+    for (const auto& [kind, seconds] : sink.seconds) outputSeconds[kind] += seconds;
   };
   // A written float image (EXR or TIFF, as the scene asks).
   auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
@@ -364,181 +406,198 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       dayTag = o.str();
     }
     auto outputBase = [&](const std::string& stem) { return (fs::path(options.outDir) / (frame ? "frames" : "") / (stem + dayTag)).string(); };
-    std::vector<std::string> channelNames;
-    std::vector<Grid<float>> channels;
-    for (const auto& layer : layers) {
-      if (frame && layer == "valid_mask") continue;
-      const std::string base = outputBase(layer);
-      const double outputDay = frame ? day : scene.days;
-      if (layer == "preview") {
-        // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
-        SunPosition sun = sunPosition(latitude, scene.startDayOfYear() + outputDay, 12.0);
-        double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
-        if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
-        const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
-        const std::string path = base + ".png";
-        writeRgbPng(path, s.spec.width, s.spec.height, rgb);
-        listFile(path,
-                 "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, "
-                 "unstable pale blue, stable cream, compacted grey)",
-                 "sRGB", rgbPngFormat, day, 0.f, 255.f);
-        // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
-        const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
-        const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
-        std::vector<uint8_t> thumb(static_cast<size_t>(tw) * th * 3);
-        for (int y = 0; y < th; ++y)
-          for (int x = 0; x < tw; ++x)
-            std::copy_n(&rgb[(static_cast<size_t>(y * stride) * s.spec.width + x * stride) * 3], 3, &thumb[(static_cast<size_t>(y) * tw + x) * 3]);
-        previews.push_back(std::move(thumb));
-        previewWidth = tw, previewHeight = th;
-        continue;
+    // The VDB and the meshes (the larger writers) run beside the layers on another thread; each
+    // group lists its files into its own sink, merged below in a fixed order.
+    auto vdbAndMeshes = [&] {
+      if (scene.outputs.vdb) {
+        VdbOptions vo;
+        vo.voxelSizeM = scene.outputs.vdbVoxelSizeM > 0.0 ? scene.outputs.vdbVoxelSizeM : std::min(s.spec.cellSizeXM, s.spec.cellSizeYM);
+        const std::string path = outputBase("snow") + ".vdb";
+        const VdbSummary v = writeSnowVdb(path, s, vo);
+        listFile(path, "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
+                    fixed(vo.compactedKgPerM3, 0) + "/" + fixed(vo.stableKgPerM3, 0) + "/" + fixed(vo.unstableKgPerM3, 0) + "/" +
+                    fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude",
+                 "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", day, 0.f, 0.f);
       }
-      if (layer == "avalanche_preview") {
+      if (!scene.outputs.meshes.empty()) {
+        // One adaptive triangulation for every part asked (rtin.h), within the vertical error bound
+        // of the surface (and of the bedrock, the body's bottom).
+        const auto& parts = scene.outputs.meshParts;
+        const bool body = std::find(parts.begin(), parts.end(), "body") != parts.end();
         const Grid<float> surface = layerGrid(s, "surface");
-        const std::string path = base + ".png";
-        writeRgbPng(path, s.spec.width, s.spec.height,
-                    avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM));
-        listFile(path, "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)", "sRGB", rgbPngFormat,
-                 day, 0.f, 255.f);
-        continue;
-      }
-      Grid<float> grid;
-      std::string content = layerContent(layer);
-      if (layer == "ski_tracks") {
-        // The finer texture: its own size, listed with each file.
-        content += " (" + std::to_string(skiTracks->factor()) + " x " + std::to_string(skiTracks->factor()) + " texels per cell)";
-        grid = skiTracks->depth();
-      } else if (layer == "ski_route_map") {
-        grid = routeMapGrid.empty() ? Grid<float>(s.spec.width, s.spec.height, 0.f) : routeMapGrid;
-      } else if (occlusionLayers.count(layer)) {
-        grid = occlusionLayers.at(layer);
-      } else if (isWindLayer(layer)) {
-        grid = windLayerGrid(s, wind, outputDay, layer, scene.params.windShadowToleranceM);
-      } else if (layer == "sun_exposure" || layer == "temperature") {
-        // I of the output's day, and T = T0 + k_t A + k_i I.
-        const Grid<float> sun = exposure ? exposure->totalAt(outputDay) : Grid<float>(s.spec.width, s.spec.height, 0.f);
-        const double t0c = scene.weather.at(outputDay).seaLevelTemperatureC;
-        grid = Grid<float>(s.spec.width, s.spec.height, 0.f);
-        for (size_t i = 0; i < grid.size(); ++i) {
-          if (!s.validCell.values()[i]) continue;
-          const float base = temperatureBaseC(scene.params, s.bedrockM.values()[i], sun.values()[i]);
-          grid.values()[i] = layer == "sun_exposure" ? sun.values()[i] : static_cast<float>(t0c + base);
-        }
-      } else {
-        grid = layerGrid(s, layer);
-      }
-      const bool ownSize = grid.width() != s.spec.width || grid.height() != s.spec.height;
-      auto sized = [&] {
-        if (ownSize) manifest.files.back().width = grid.width(), manifest.files.back().height = grid.height();
-      };
-      listImage(writeFloatImage(base, scene.outputs.format, grid, layer), content, layerUnit(layer), day);
-      sized();
-      for (const std::string& encoding : scene.outputs.encodings) {
-        const WrittenImage img = writeNormalised(base, encoding, grid);
-        listFile(img.path, content, layerUnit(layer), normalisedFormat(encoding, grid.width(), grid.height()), day, img.minValue,
-                 img.maxValue);
-        sized();
-      }
-      if (scene.outputs.multichannelExr && !ownSize) {
-        channelNames.push_back(layer);
-        channels.push_back(std::move(grid));
-      }
-    }
-    if (scene.outputs.displacementWidth > 0) {
-      // Displacement maps at the requested resolution: snow depth (for a displacement modifier on
-      // the terrain) and the snow surface's height, bilinear from the grid.
-      for (const std::string what : {"depth", "surface"}) {
-        const Grid<float> g = resampleBilinear(layerGrid(s, what), scene.outputs.displacementWidth, scene.outputs.displacementHeight);
-        listImage(writeFloatImage(outputBase(std::string("displacement_") + what), scene.outputs.format, g, what),
-                  layerContent(what) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                      " over the same extent",
-                  "m", day);
-      }
-    }
-    if (scene.outputs.vdb) {
-      VdbOptions vo;
-      vo.voxelSizeM = scene.outputs.vdbVoxelSizeM > 0.0 ? scene.outputs.vdbVoxelSizeM : std::min(s.spec.cellSizeXM, s.spec.cellSizeYM);
-      const std::string path = outputBase("snow") + ".vdb";
-      const VdbSummary v = writeSnowVdb(path, s, vo);
-      listFile(path, "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
-                  fixed(vo.compactedKgPerM3, 0) + "/" + fixed(vo.stableKgPerM3, 0) + "/" + fixed(vo.unstableKgPerM3, 0) + "/" +
-                  fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude",
-               "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", day, 0.f, 0.f);
-    }
-    if (!scene.outputs.meshes.empty()) {
-      // One adaptive triangulation for every part asked (rtin.h), within the vertical error bound
-      // of the surface (and of the bedrock, the body's bottom).
-      const auto& parts = scene.outputs.meshParts;
-      const bool body = std::find(parts.begin(), parts.end(), "body") != parts.end();
-      const Grid<float> surface = layerGrid(s, "surface");
-      std::vector<const Grid<float>*> fields{&surface};
-      if (body) fields.push_back(&s.bedrockM);
-      const auto tTri = Clock::now();
-      const RtinMesh triangulation = buildRtin(fields, s.validCell, scene.outputs.meshMaxErrorM);
-      outputSeconds["mesh triangulation (adaptive)"] += since(tTri);
-      lastListed = Clock::now();
-      const std::string frameNote = " (adaptive triangulation, vertical error at most " + fixed(scene.outputs.meshMaxErrorM, 3) +
-                                    " m at every grid point; x east, y north from the south-west corner; UVs line up with the maps)";
-      auto writeAll = [&](const std::string& stem, const MeshData& mesh, const std::string& what) {
-        for (const std::string& format : scene.outputs.meshes) {
-          const std::string path = outputBase(stem) + "." + format;
-          writeMesh(path, format, mesh);
-          listFile(path, what + ", " + std::to_string(mesh.positions.size()) + " vertices, " + std::to_string(mesh.triangles.size()) +
-                             " triangles" + frameNote,
-                   "m", meshFormatDescription(format), day, 0.f, 0.f);
-        }
-      };
-      for (const std::string& part : parts) {
-        if (part == "surface") {
-          auto tm = Clock::now();
-          const MeshData mesh = surfaceMesh(triangulation, surface, s.spec);
-          outputSeconds["mesh building"] += since(tm);
-          lastListed = Clock::now();
-          const int tileCells = scene.outputs.meshTileSizeM > 0.0
-                                    ? std::max(1, static_cast<int>(std::lround(scene.outputs.meshTileSizeM / s.spec.cellSizeXM)))
-                                    : 0;
-          if (tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height)) {
-            writeAll("snow_surface", mesh, "snow surface B+C+S+U+P");
+        std::vector<const Grid<float>*> fields{&surface};
+        if (body) fields.push_back(&s.bedrockM);
+        const auto tTri = Clock::now();
+        const RtinMesh triangulation = buildRtin(fields, s.validCell, scene.outputs.meshMaxErrorM);
+        addSeconds("mesh triangulation (adaptive)", since(tTri));
+        const std::string frameNote = " (adaptive triangulation, vertical error at most " + fixed(scene.outputs.meshMaxErrorM, 3) +
+                                      " m at every grid point; x east, y north from the south-west corner; UVs line up with the maps)";
+        auto writeAll = [&](const std::string& stem, const MeshData& mesh, const std::string& what) {
+          for (const std::string& format : scene.outputs.meshes) {
+            const std::string path = outputBase(stem) + "." + format;
+            writeMesh(path, format, mesh);
+            listFile(path, what + ", " + std::to_string(mesh.positions.size()) + " vertices, " + std::to_string(mesh.triangles.size()) +
+                               " triangles" + frameNote,
+                     "m", meshFormatDescription(format), day, 0.f, 0.f);
+          }
+        };
+        for (const std::string& part : parts) {
+          if (part == "surface") {
+            auto tm = Clock::now();
+            const MeshData mesh = surfaceMesh(triangulation, surface, s.spec);
+            addSeconds("mesh building", since(tm));
+            const int tileCells = scene.outputs.meshTileSizeM > 0.0
+                                      ? std::max(1, static_cast<int>(std::lround(scene.outputs.meshTileSizeM / s.spec.cellSizeXM)))
+                                      : 0;
+            if (tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height)) {
+              writeAll("snow_surface", mesh, "snow surface B+C+S+U+P");
+            } else {
+              for (const MeshTile& t : splitIntoTiles(mesh, s.spec, tileCells))
+                writeAll("snow_surface_x" + std::to_string(t.column) + "_y" + std::to_string(t.row), t.mesh,
+                         "snow surface B+C+S+U+P, tile column " + std::to_string(t.column) + " (from the west), row " +
+                             std::to_string(t.row) + " (from the north) of " + std::to_string(tileCells) + " x " +
+                             std::to_string(tileCells) + " cells");
+            }
           } else {
-            for (const MeshTile& t : splitIntoTiles(mesh, s.spec, tileCells))
-              writeAll("snow_surface_x" + std::to_string(t.column) + "_y" + std::to_string(t.row), t.mesh,
-                       "snow surface B+C+S+U+P, tile column " + std::to_string(t.column) + " (from the west), row " +
-                           std::to_string(t.row) + " (from the north) of " + std::to_string(tileCells) + " x " +
-                           std::to_string(tileCells) + " cells");
+            auto tm = Clock::now();
+            const MeshData mesh = snowBodyMesh(triangulation, s.bedrockM, layerGrid(s, "depth"), s.validCell, s.spec);
+            addSeconds("mesh building", since(tm));
+            if (mesh.triangles.empty()) {
+              log << "  snow_body" << dayTag << ": no snow, no mesh written\n";
+              continue;
+            }
+            writeAll("snow_body", mesh, "the snow body alone, closed (top on the snow surface, bottom on the bedrock, walls at the grid's edge)");
+          }
+        }
+        if (snowMesh && !frame)
+          for (const std::string& format : scene.outputs.meshes) {
+            const std::string meshPath = (fs::path(options.outDir) / ("snow_mesh." + format)).string();
+            writeMesh(meshPath, format, MeshData{snowMesh->positions, {}, {}, snowMesh->triangles});
+            listFile(meshPath,
+                     "the input mesh " + snowMesh->source + " with its vertices raised by their snow depth (occlusion mode, per vertex; " +
+                         std::to_string(snowMesh->positions.size()) + " vertices, " + std::to_string(snowMesh->triangles.size()) +
+                         " triangles), in the input's own coordinates",
+                     "m", meshFormatDescription(format), day, 0.f, 0.f);
+          }
+      }
+    };
+    OutputSink layerSink, meshSink;
+    tbb::task_group group;
+    group.run([&] {
+      SinkScope scope(meshSink);
+      vdbAndMeshes();
+    });
+    std::exception_ptr layerError;
+    try {
+      SinkScope scope(layerSink);
+      std::vector<std::string> channelNames;
+      std::vector<Grid<float>> channels;
+      for (const auto& layer : layers) {
+        if (frame && layer == "valid_mask") continue;
+        const std::string base = outputBase(layer);
+        const double outputDay = frame ? day : scene.days;
+        if (layer == "preview") {
+          // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
+          SunPosition sun = sunPosition(latitude, scene.startDayOfYear() + outputDay, 12.0);
+          double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
+          if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
+          const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
+          const std::string path = base + ".png";
+          writeRgbPng(path, s.spec.width, s.spec.height, rgb);
+          listFile(path,
+                   "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, "
+                   "unstable pale blue, stable cream, compacted grey)",
+                   "sRGB", rgbPngFormat, day, 0.f, 255.f);
+          // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
+          const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
+          const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
+          std::vector<uint8_t> thumb(static_cast<size_t>(tw) * th * 3);
+          for (int y = 0; y < th; ++y)
+            for (int x = 0; x < tw; ++x)
+              std::copy_n(&rgb[(static_cast<size_t>(y * stride) * s.spec.width + x * stride) * 3], 3, &thumb[(static_cast<size_t>(y) * tw + x) * 3]);
+          previews.push_back(std::move(thumb));
+          previewWidth = tw, previewHeight = th;
+          continue;
+        }
+        if (layer == "avalanche_preview") {
+          const Grid<float> surface = layerGrid(s, "surface");
+          const std::string path = base + ".png";
+          writeRgbPng(path, s.spec.width, s.spec.height,
+                      avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM));
+          listFile(path, "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)", "sRGB", rgbPngFormat,
+                   day, 0.f, 255.f);
+          continue;
+        }
+        Grid<float> grid;
+        std::string content = layerContent(layer);
+        if (layer == "ski_tracks") {
+          // The finer texture: its own size, listed with each file.
+          content += " (" + std::to_string(skiTracks->factor()) + " x " + std::to_string(skiTracks->factor()) + " texels per cell)";
+          grid = skiTracks->depth();
+        } else if (layer == "ski_route_map") {
+          grid = routeMapGrid.empty() ? Grid<float>(s.spec.width, s.spec.height, 0.f) : routeMapGrid;
+        } else if (occlusionLayers.count(layer)) {
+          grid = occlusionLayers.at(layer);
+        } else if (isWindLayer(layer)) {
+          grid = windLayerGrid(s, wind, outputDay, layer, scene.params.windShadowToleranceM);
+        } else if (layer == "sun_exposure" || layer == "temperature") {
+          // I of the output's day, and T = T0 + k_t A + k_i I.
+          const Grid<float> sun = exposure ? exposure->totalAt(outputDay) : Grid<float>(s.spec.width, s.spec.height, 0.f);
+          const double t0c = scene.weather.at(outputDay).seaLevelTemperatureC;
+          grid = Grid<float>(s.spec.width, s.spec.height, 0.f);
+          for (size_t i = 0; i < grid.size(); ++i) {
+            if (!s.validCell.values()[i]) continue;
+            const float base = temperatureBaseC(scene.params, s.bedrockM.values()[i], sun.values()[i]);
+            grid.values()[i] = layer == "sun_exposure" ? sun.values()[i] : static_cast<float>(t0c + base);
           }
         } else {
-          auto tm = Clock::now();
-          const MeshData mesh = snowBodyMesh(triangulation, s.bedrockM, layerGrid(s, "depth"), s.validCell, s.spec);
-          outputSeconds["mesh building"] += since(tm);
-          lastListed = Clock::now();
-          if (mesh.triangles.empty()) {
-            log << "  snow_body" << dayTag << ": no snow, no mesh written\n";
-            continue;
-          }
-          writeAll("snow_body", mesh, "the snow body alone, closed (top on the snow surface, bottom on the bedrock, walls at the grid's edge)");
+          grid = layerGrid(s, layer);
+        }
+        const bool ownSize = grid.width() != s.spec.width || grid.height() != s.spec.height;
+        auto sized = [&] {
+          if (ownSize) lastListedFile().width = grid.width(), lastListedFile().height = grid.height();
+        };
+        listImage(writeFloatImage(base, scene.outputs.format, grid, layer), content, layerUnit(layer), day);
+        sized();
+        for (const std::string& encoding : scene.outputs.encodings) {
+          const WrittenImage img = writeNormalised(base, encoding, grid);
+          listFile(img.path, content, layerUnit(layer), normalisedFormat(encoding, grid.width(), grid.height()), day, img.minValue,
+                   img.maxValue);
+          sized();
+        }
+        if (scene.outputs.multichannelExr && !ownSize) {
+          channelNames.push_back(layer);
+          channels.push_back(std::move(grid));
         }
       }
-      if (snowMesh && !frame)
-        for (const std::string& format : scene.outputs.meshes) {
-          const std::string meshPath = (fs::path(options.outDir) / ("snow_mesh." + format)).string();
-          writeMesh(meshPath, format, MeshData{snowMesh->positions, {}, {}, snowMesh->triangles});
-          listFile(meshPath,
-                   "the input mesh " + snowMesh->source + " with its vertices raised by their snow depth (occlusion mode, per vertex; " +
-                       std::to_string(snowMesh->positions.size()) + " vertices, " + std::to_string(snowMesh->triangles.size()) +
-                       " triangles), in the input's own coordinates",
-                   "m", meshFormatDescription(format), day, 0.f, 0.f);
+      if (scene.outputs.displacementWidth > 0) {
+        // Displacement maps at the requested resolution: snow depth (for a displacement modifier on
+        // the terrain) and the snow surface's height, bilinear from the grid.
+        for (const std::string what : {"depth", "surface"}) {
+          const Grid<float> g = resampleBilinear(layerGrid(s, what), scene.outputs.displacementWidth, scene.outputs.displacementHeight);
+          listImage(writeFloatImage(outputBase(std::string("displacement_") + what), scene.outputs.format, g, what),
+                    layerContent(what) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                        " over the same extent",
+                    "m", day);
         }
+      }
+      if (!channels.empty()) {
+        const std::string path = outputBase("layers") + ".exr";
+        std::vector<const Grid<float>*> grids;
+        for (const auto& g : channels) grids.push_back(&g);
+        writeMultiChannelExr(path, channelNames, grids);
+        std::string names;
+        for (const auto& n : channelNames) names += (names.empty() ? "" : ", ") + n;
+        listFile(path, "all layers as named channels: " + names, "per channel, as the single-layer files",
+                 "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (zip), linear", day, 0.f, 0.f);
+      }
+    } catch (...) {
+      layerError = std::current_exception();
     }
-    if (!channels.empty()) {
-      const std::string path = outputBase("layers") + ".exr";
-      std::vector<const Grid<float>*> grids;
-      for (const auto& g : channels) grids.push_back(&g);
-      writeMultiChannelExr(path, channelNames, grids);
-      std::string names;
-      for (const auto& n : channelNames) names += (names.empty() ? "" : ", ") + n;
-      listFile(path, "all layers as named channels: " + names, "per channel, as the single-layer files",
-               "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (zip), linear", day, 0.f, 0.f);
-    }
+    group.wait();  // rethrows the VDB and mesh writers' error
+    if (layerError) std::rethrow_exception(layerError);
+    mergeSink(layerSink);
+    mergeSink(meshSink);
   };
 
   SeasonReport report;
