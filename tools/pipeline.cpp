@@ -346,24 +346,20 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   std::optional<TriangleMesh> snowMesh;                 // occlusion mode on a mesh terrain: the input mesh, snow on its vertices
   std::vector<std::vector<uint8_t>> previews;  // for the contact sheet, in the order written
   int previewWidth = 0, previewHeight = 0;
-  // Lists a written file in the manifest and the result.
-  // Time spent per kind of output (by format): the time since the previous file was listed, which
-  // is the time to compute and write this one.
-  std::map<std::string, double> outputSeconds;
-  auto lastListed = Clock::now();
-  // Seconds spent on a kind of output (into the current writer group's sink, if any).
+  // Every file written is listed, in order, in the current writer group's sink (tlSink): here
+  // the bake's own, `outputs`, which becomes the manifest's file list and the result's; groups
+  // that run on other threads list into their own and are merged in a fixed order. Time per kind
+  // of output (by format): the time since the group's previous listing, which is the time to
+  // compute and write this one.
+  OutputSink outputs;
+  const SinkScope outputScope(outputs);
   auto addSeconds = [&](const std::string& kind, double seconds) {
-    if (tlSink) {
-      tlSink->seconds[kind] += seconds;
-      tlSink->last = Clock::now();
-    } else {
-      outputSeconds[kind] += seconds;
-      lastListed = Clock::now();
-    }
+    tlSink->seconds[kind] += seconds;
+    tlSink->last = Clock::now();
   };
   auto listFile = [&](const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
                       double day, float minValue, float maxValue) {
-    addSeconds(format.substr(0, format.find(',')), since(tlSink ? tlSink->last : lastListed));
+    addSeconds(format.substr(0, format.find(',')), since(tlSink->last));
     ManifestFile f;
     f.path = fs::relative(path, options.outDir).string();
     f.content = content;
@@ -372,19 +368,14 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     f.day = day;
     f.minValue = minValue;
     f.maxValue = maxValue;
-    if (tlSink) {
-      tlSink->files.push_back(f);
-      tlSink->paths.push_back(path);
-    } else {
-      manifest.files.push_back(f);
-      result.files.push_back(path);
-    }
+    tlSink->files.push_back(f);
+    tlSink->paths.push_back(path);
   };
-  auto lastListedFile = [&]() -> ManifestFile& { return tlSink ? tlSink->files.back() : manifest.files.back(); };
-  auto mergeSink = [&](OutputSink& sink) {
-    manifest.files.insert(manifest.files.end(), sink.files.begin(), sink.files.end());
-    result.files.insert(result.files.end(), sink.paths.begin(), sink.paths.end());
-    for (const auto& [kind, seconds] : sink.seconds) outputSeconds[kind] += seconds;
+  auto mergeInto = [](OutputSink& into, const OutputSink& from) {
+    into.files.insert(into.files.end(), from.files.begin(), from.files.end());
+    into.paths.insert(into.paths.end(), from.paths.begin(), from.paths.end());
+    for (const auto& [kind, seconds] : from.seconds) into.seconds[kind] += seconds;
+    into.last = Clock::now();
   };
   // A written float image (EXR or TIFF, as the scene asks).
   auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
@@ -394,7 +385,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   };
   const std::string rgbPngFormat = "PNG, 3 channels uint8, sRGB";
   auto writeLayers = [&](const SnowState& s, double day) {
-    lastListed = Clock::now();
+    OutputSink& parent = *tlSink;
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
     // Where an output of this day goes, less its extension: DIR/STEM at the season's end,
@@ -555,7 +546,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         }
         const bool ownSize = grid.width() != s.spec.width || grid.height() != s.spec.height;
         auto sized = [&] {
-          if (ownSize) lastListedFile().width = grid.width(), lastListedFile().height = grid.height();
+          if (ownSize) tlSink->files.back().width = grid.width(), tlSink->files.back().height = grid.height();
         };
         listImage(writeFloatImage(base, scene.outputs.format, grid, layer), content, layerUnit(layer), day);
         sized();
@@ -596,8 +587,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     }
     group.wait();  // rethrows the VDB and mesh writers' error
     if (layerError) std::rethrow_exception(layerError);
-    mergeSink(layerSink);
-    mergeSink(meshSink);
+    mergeInto(parent, layerSink);
+    mergeInto(parent, meshSink);
   };
 
   SeasonReport report;
@@ -848,11 +839,13 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   manifest.initialSnowM3 = report.initial.totalM3();
   manifest.finalSnowM3 = report.final.totalM3();
   for (const auto& p : report.phenomena) manifest.phenomena.push_back({p.name, p.starts, p.steps, p.stops, p.skippedSteps});
+  manifest.files = outputs.files;
+  result.files = outputs.paths;
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, manifestToJson(manifest));
   result.files.push_back(manifestPath);
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(since(t0), 2) << " s)\n";
-  for (const auto& [kind, seconds] : outputSeconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";
+  for (const auto& [kind, seconds] : outputs.seconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";
   log << "total: " << fixed(since(tStart), 2) << " s\n";
   result.season = report;
   result.backendName = backendName;
