@@ -100,18 +100,10 @@ std::string normalisedFormat(const std::string& encoding, int width, int height)
 Grid<float> resampleBilinear(const Grid<float>& g, int width, int height) {
   Grid<float> out(width, height, 0.f);
   const int sw = g.width(), sh = g.height();
-  for (int y = 0; y < height; ++y) {
-    const double fy = std::clamp((y + 0.5) * sh / height - 0.5, 0.0, static_cast<double>(sh - 1));
-    const int y0 = std::min(static_cast<int>(fy), sh - 1), y1 = std::min(y0 + 1, sh - 1);
-    const double ty = fy - y0;
-    for (int x = 0; x < width; ++x) {
-      const double fx = std::clamp((x + 0.5) * sw / width - 0.5, 0.0, static_cast<double>(sw - 1));
-      const int x0 = std::min(static_cast<int>(fx), sw - 1), x1 = std::min(x0 + 1, sw - 1);
-      const double tx = fx - x0;
-      const double top = g(x0, y0) * (1 - tx) + g(x1, y0) * tx, bottom = g(x0, y1) * (1 - tx) + g(x1, y1) * tx;
-      out(x, y) = static_cast<float>(top * (1 - ty) + bottom * ty);
-    }
-  }
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      out(x, y) = static_cast<float>(
+          sampleBilinearClamped(g.data(), sw, sh, (x + 0.5) * sw / width - 0.5, (y + 0.5) * sh / height - 0.5));
   return out;
 }
 

@@ -73,8 +73,17 @@ std::string glbBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
     return "{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) + ",\"byteLength\":" + std::to_string(length) + ",\"target\":" +
            std::to_string(target) + "}";
   };
-  json += view(0, n * 12, 34962) + "," + view(normalOffset, n * 12, 34962) + (uv ? "," + view(uvOffset, n * 8, 34962) : "") + "," +
-          view(indexOffset, t * 12, 34963) + "],\"accessors\":[";
+  // Appended piece by piece (GCC 12 warns falsely, -Wrestrict, on "," + std::string&&).
+  json += view(0, n * 12, 34962);
+  json += ',';
+  json += view(normalOffset, n * 12, 34962);
+  if (uv) {
+    json += ',';
+    json += view(uvOffset, n * 8, 34962);
+  }
+  json += ',';
+  json += view(indexOffset, t * 12, 34963);
+  json += "],\"accessors\":[";
   json += "{\"bufferView\":0,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\",\"min\":[" + num(lo[0]) + "," +
           num(lo[1]) + "," + num(lo[2]) + "],\"max\":[" + num(hi[0]) + "," + num(hi[1]) + "," + num(hi[2]) + "]},";
   json += "{\"bufferView\":1,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\"},";

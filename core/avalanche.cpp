@@ -11,13 +11,6 @@ namespace snow {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-Grid<float> depthGrid(const SnowState& s) {
-  Grid<float> d(s.spec.width, s.spec.height, 0.f);
-  for (int y = 0; y < s.spec.height; ++y)
-    for (int x = 0; x < s.spec.width; ++x) d(x, y) = s.depthM(x, y);
-  return d;
-}
-
 GridCrop crop(const Grid<float>& g, int x0, int y0, int x1, int y1) {
   GridCrop c;
   c.x0 = x0;
@@ -176,7 +169,7 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
     for (size_t i = 0; i < moving.size(); ++i) zone.values()[i] = moving[i] ? 1.f : 0.f;
     record_.maps->release = crop(zone, x0, y0, x1, y1);
     if (frameIntervalS_ > 0.0) {
-      record_.maps->depthAtRelease = depthGrid(s);
+      record_.maps->depthAtRelease = s.depthGrid();
       record_.maps->frames.push_back({0.0, crop(record_.maps->depthAtRelease, x0, y0, x1, y1)});
       nextFrameS_ = frameIntervalS_;
     }
@@ -249,7 +242,7 @@ AvalancheRecord AvalancheRun::runToRest() {
 
 void AvalancheRun::captureFrame() {
   backend_.download(after_);
-  const Grid<float> d = depthGrid(after_);
+  const Grid<float> d = after_.depthGrid();
   record_.maps->frames.push_back({record_.simulatedS, crop(d, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
 }
 
@@ -294,7 +287,7 @@ AvalancheRecord AvalancheRun::settle() {
     record_.maps->scour = crop(scour, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
     record_.maps->deposit = crop(deposit, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
     if (frameIntervalS_ > 0.0)
-      record_.maps->frames.push_back({record_.simulatedS, crop(depthGrid(after), unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
+      record_.maps->frames.push_back({record_.simulatedS, crop(after.depthGrid(), unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
   }
   wallSeconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
   record_.seconds = wallSeconds_;

@@ -47,8 +47,8 @@ class SnowBackend {
   // Moves snow between the stable and unstable layers (conserves mass).
   virtual void stabilityChange(const StabilityArgs& args) = 0;
 
-  // A timeline edit (kernels/edit.h) weighted per cell by `weights` (one per cell, row order);
-  // returns the snow volume it added (negative: removed), in m^3.
+  // A timeline edit (kernels/edit.h) weighted per cell by `weights` (one per cell, row order;
+  // empty: 1 everywhere); returns the snow volume it added (negative: removed), in m^3.
   virtual double applyEdit(const EditArgs& args, const std::vector<float>& weights) = 0;
 
   virtual LayerTotals totals() = 0;

@@ -64,7 +64,7 @@ class ExecBackend final : public SnowBackend {
   double applyEdit(const EditArgs& a, const std::vector<float>& weights) override {
     exec_.upload(editWeight_, weights);
     SnowFieldsView v = view();
-    v.editWeight = editWeight_.data();
+    v.editWeight = weights.empty() ? nullptr : editWeight_.data();
     const double added = runEdit(exec_, v, a);
     exec_.upload(editWeight_, std::vector<float>());
     exec_.finish();

@@ -5,6 +5,7 @@
 // and in ESRI ASCII / GeoTIFF north-up rasters. Cell sizes are in metres and may differ in x
 // and y (DEMs in geographic coordinates have non-square cells).
 #pragma once
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -89,5 +90,17 @@ class Grid {
   int height_ = 0;
   std::vector<T> values_;
 };
+
+// Bilinear value of row-major samples (w x h, sample (i, j) at continuous coordinates (i, j)) at
+// (x, y), the coordinates clamped to the samples' extent (edges repeat outward). Host only.
+inline double sampleBilinearClamped(const float* values, int w, int h, double x, double y) {
+  const double fx = std::clamp(x, 0.0, static_cast<double>(w - 1)), fy = std::clamp(y, 0.0, static_cast<double>(h - 1));
+  const int x0 = std::min(static_cast<int>(fx), w - 1), x1 = std::min(x0 + 1, w - 1);
+  const int y0 = std::min(static_cast<int>(fy), h - 1), y1 = std::min(y0 + 1, h - 1);
+  const double tx = fx - x0, ty = fy - y0;
+  auto at = [&](int i, int j) { return static_cast<double>(values[static_cast<size_t>(j) * w + i]); };
+  const double top = at(x0, y0) * (1 - tx) + at(x1, y0) * tx, bottom = at(x0, y1) * (1 - tx) + at(x1, y1) * tx;
+  return top * (1 - ty) + bottom * ty;
+}
 
 }  // namespace snow

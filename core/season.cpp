@@ -174,8 +174,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   for (const SeasonEdit& edit : cfg.edits) {
     if (edit.day < 0.0 || edit.day > cfg.days) continue;
     scheduler.addAction(edit.day, [&, &edit = edit](double now) {
-      const std::vector<float> everywhere = edit.weights ? std::vector<float>() : std::vector<float>(state.spec.cellCount(), 1.f);
-      const double added = backend.applyEdit(edit.args, edit.weights ? *edit.weights : everywhere);
+      const double added = backend.applyEdit(edit.args, edit.weights ? *edit.weights : std::vector<float>());
       report.editsNetM3 += added;
       report.edits.push_back({now, edit.label, added});
     });
@@ -308,14 +307,12 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
         (*cumulative)[i] = (sum += state.validCell.values()[i] ? std::max(0.f, (*u.startWeights)[i]) : 0.f);
       const uint64_t stream = maskedSkierDraws++;
       scheduler.addAction(u.day, [&, u, cumulative, stream](double now) {
-        if (cumulative->empty() || !(cumulative->back() > 0.0)) return;
         const RandomKey key{cfg.seed};
         for (int k = 0; k < u.count; ++k)
           for (uint32_t attempt = 0; attempt < 16; ++attempt) {
             const Philox4x32 r = key.draw(stream, static_cast<uint32_t>(k) * 16u + attempt, RngStream::SkierStartMask);
-            const double target = uniformOpenDouble(r.v[0], r.v[1]) * cumulative->back();
-            const size_t i = std::min(cumulative->size() - 1, static_cast<size_t>(std::upper_bound(cumulative->begin(), cumulative->end(), target) -
-                                                                                  cumulative->begin()));
+            const long long i = pickByCumulativeWeight(*cumulative, uniformOpenDouble(r.v[0], r.v[1]));
+            if (i < 0) return;
             const int x = static_cast<int>(i % state.spec.width), y = static_cast<int>(i / state.spec.width);
             if (!ski->canStart(x, y)) continue;
             runSkier(x, y, now, true);

@@ -186,11 +186,17 @@ SkiRun::SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& 
     cumulative_[i] = (sum += route_.values()[i] * (spawn ? std::max(0.f, state.skierSpawnFactor.values()[i]) : 1.f));
 }
 
+long long pickByCumulativeWeight(const std::vector<double>& cumulative, double draw) {
+  if (cumulative.empty() || !(cumulative.back() > 0.0)) return -1;
+  const double target = draw * cumulative.back();
+  const auto at = std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin();
+  return std::min(static_cast<long long>(cumulative.size()) - 1, static_cast<long long>(at));
+}
+
 bool SkiRun::pickStart(double draw, int& x, int& y) const {
-  if (cumulative_.empty() || cumulative_.back() <= 0.0) return false;
-  const double target = draw * cumulative_.back();
-  const size_t i = std::min(cumulative_.size() - 1,
-                            static_cast<size_t>(std::upper_bound(cumulative_.begin(), cumulative_.end(), target) - cumulative_.begin()));
+  const long long picked = pickByCumulativeWeight(cumulative_, draw);
+  if (picked < 0) return false;
+  const size_t i = static_cast<size_t>(picked);
   x = static_cast<int>(i % spec_.width);
   y = static_cast<int>(i / spec_.width);
   return true;

@@ -57,6 +57,10 @@ Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, co
 // Turn frequency (1/m) for a segment of slope angle `slopeRad` (see above); 0 at or below the target.
 double turnFrequency(double slopeRad, double targetRad, double amplitudeM, double minFrequencyPerM);
 
+// The cell drawn with probability proportional to its weight, given the running sums of the
+// weights in row order and a draw in (0, 1); -1 when every weight is 0.
+long long pickByCumulativeWeight(const std::vector<double>& cumulative, double draw);
+
 // A path as points in metres (x east from the grid's west edge, y south from its north edge).
 using Path2 = std::vector<std::array<double, 2>>;
 // The refined track of a path; `altitude(x, y)` gives the snow surface; samples at most

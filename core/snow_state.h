@@ -89,6 +89,13 @@ struct SnowState {
   }
   const Grid<float>& layer(SnowLayer l) const { return const_cast<SnowState*>(this)->layer(l); }
   float depthM(int x, int y) const { return compactedM(x, y) + stableM(x, y) + unstableM(x, y) + powderM(x, y); }
+  // C + S + U + P of every cell (NODATA cells included, as stored).
+  Grid<float> depthGrid() const {
+    Grid<float> d(spec.width, spec.height, 0.f);
+    for (int y = 0; y < spec.height; ++y)
+      for (int x = 0; x < spec.width; ++x) d(x, y) = depthM(x, y);
+    return d;
+  }
 };
 
 // What kernels see: plain pointers into the backend's storage (host or device memory).

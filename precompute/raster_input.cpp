@@ -1,8 +1,6 @@
 #include "raster_input.h"
 
 #include <OpenImageIO/imageio.h>
-#include <gdal_priv.h>
-#include <ogr_spatialref.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,10 +8,10 @@
 #include <iomanip>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <sstream>
 
 #include "core/errors.h"
+#include "gdal_support.h"
 
 namespace snow {
 namespace {
@@ -51,22 +49,9 @@ RasterImage readWithOiio(const std::string& path) {
   return r;
 }
 
-struct GdalCloser {
-  void operator()(GDALDataset* d) const { GDALClose(d); }
-};
-
 RasterImage readWithGdal(const std::string& path) {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    GDALAllRegister();
-    CPLSetErrorHandler(CPLQuietErrorHandler);
-  });
-  CPLErrorReset();
-  std::unique_ptr<GDALDataset, GdalCloser> ds(static_cast<GDALDataset*>(GDALOpen(path.c_str(), GA_ReadOnly)));
-  if (!ds) {
-    const char* m = CPLGetLastErrorMsg();
-    throw InputError(path + ": cannot read as a raster: " + (m && *m ? m : "unknown format"));
-  }
+  const GdalDataset ds = openGdalReadOnly(path);
+  if (!ds) throw InputError(path + ": cannot read as a raster: " + lastGdalError());
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
   RasterImage r;
   r.width = ds->GetRasterXSize();
@@ -102,24 +87,8 @@ RasterImage readWithGdal(const std::string& path) {
   r.georeferenced = ds->GetGeoTransform(r.geoTransform) == CE_None;
   if (r.georeferenced && (r.geoTransform[2] != 0.0 || r.geoTransform[4] != 0.0))
     throw InputError(path + ": rotated or sheared rasters are not supported; warp it north-up first (gdalwarp)");
-  if (const OGRSpatialReference* srs = ds->GetSpatialRef(); srs && !srs->IsEmpty()) {
-    char* wkt = nullptr;
-    if (srs->exportToWkt(&wkt) == OGRERR_NONE && wkt) r.crsWkt = wkt;
-    CPLFree(wkt);
-  }
+  r.crsWkt = crsWktOf(*ds);
   return r;
-}
-
-float bilinear(const std::vector<float>& p, int w, int h, double x, double y) {
-  x = std::clamp(x, 0.0, static_cast<double>(w - 1));
-  y = std::clamp(y, 0.0, static_cast<double>(h - 1));
-  const int x0 = std::min(static_cast<int>(x), std::max(0, w - 2)), y0 = std::min(static_cast<int>(y), std::max(0, h - 2));
-  const int x1 = std::min(x0 + 1, w - 1), y1 = std::min(y0 + 1, h - 1);
-  const double fx = x - x0, fy = y - y0;
-  auto at = [&](int xi, int yi) { return static_cast<double>(p[static_cast<size_t>(yi) * w + xi]); };
-  const double top = at(x0, y0) + fx * (at(x1, y0) - at(x0, y0));
-  const double bottom = at(x0, y1) + fx * (at(x1, y1) - at(x0, y1));
-  return static_cast<float>(top + fy * (bottom - top));
 }
 
 }  // namespace
@@ -134,7 +103,7 @@ float sampleRasterCell(const std::vector<float>& pixels, int width, int height, 
       const double x = px + ((i + 0.5) / kx - 0.5) * spanX, y = py + ((j + 0.5) / ky - 0.5) * spanY;
       const bool in = x >= -0.5 && y >= -0.5 && x <= width - 0.5 && y <= height - 0.5;
       inside = inside || in;
-      sum += (in || clampOutside) ? bilinear(pixels, width, height, x, y) : outside;
+      sum += (in || clampOutside) ? sampleBilinearClamped(pixels.data(), width, height, x, y) : outside;
     }
   if (anyInside) *anyInside = inside;
   return static_cast<float>(sum / (static_cast<double>(kx) * ky));

@@ -634,7 +634,7 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       ed.op = e["op"].value<std::string>().value();
       ed.layer = e["layer"].value<std::string>().value();
       ed.declaredAt = where(source, e.source());
-      if (ed.day > number(root["season"]["days"], scene.days))
+      if (ed.day > scene.days)
         fail(source, *e.get("day"), "edits.day", "day " + std::to_string(ed.day) + " is after the season's end");
       if (auto d = e["depth_m"].value<double>()) ed.depthM = *d;
       if (ed.op != "move" && !ed.depthM)

@@ -8,11 +8,11 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <mutex>
 #include <iomanip>
 #include <sstream>
 
 #include "core/errors.h"
+#include "gdal_support.h"
 
 namespace snow {
 
@@ -23,22 +23,6 @@ constexpr int kMinCellsPerSide = 3;
 // writers' copies. A grid needing more than 80% of physical memory is refused up front.
 constexpr double kBytesPerCell = 96.0;
 
-void registerGdal() {
-  static std::once_flag once;
-  std::call_once(once, [] {
-    GDALAllRegister();
-    CPLSetErrorHandler(CPLQuietErrorHandler);  // errors are reported through InputError instead
-  });
-}
-
-std::string lastGdalError() {
-  const char* m = CPLGetLastErrorMsg();
-  return m && *m ? std::string(m) : std::string("unknown format or unreadable file");
-}
-
-struct Closer {
-  void operator()(GDALDataset* d) const { GDALClose(d); }
-};
 }  // namespace
 
 double metresPerDegreeLatitude(double lat) {
@@ -88,12 +72,10 @@ void updateTerrainStatistics(Terrain& t) {
 }
 
 Terrain loadDem(const std::string& path, const std::string& coordinates) {
-  registerGdal();
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": terrain file does not exist");
   if (std::filesystem::file_size(path, ec) == 0) throw InputError(path + ": terrain file is empty");
-  CPLErrorReset();
-  std::unique_ptr<GDALDataset, Closer> ds(static_cast<GDALDataset*>(GDALOpen(path.c_str(), GA_ReadOnly)));
+  const GdalDataset ds = openGdalReadOnly(path);
   if (!ds) throw InputError(path + ": cannot read as a terrain: " + lastGdalError());
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
   const int w = ds->GetRasterXSize(), h = ds->GetRasterYSize();
@@ -197,11 +179,7 @@ Terrain loadDem(const std::string& path, const std::string& coordinates) {
   info.georeferenced = hasTransform;
   info.geoCellX = sizeX;
   info.geoCellY = sizeY;
-  if (hasSrs) {
-    char* wkt = nullptr;
-    if (srs->exportToWkt(&wkt) == OGRERR_NONE && wkt) info.crsWkt = wkt;
-    CPLFree(wkt);
-  }
+  info.crsWkt = crsWktOf(*ds);
 
   GDALRasterBand* band = ds->GetRasterBand(1);
   t.heightsM.resize(w, h);

@@ -269,6 +269,9 @@ TEST(ArtEdits, EditKernelSemantics) {
   EditArgs add{EditOp::Add, static_cast<int>(SnowLayer::Compacted), 0, 0.1f, true};
   added = backend->applyEdit(add, w);
   EXPECT_NEAR(added, area * 0.25, 1e-6);
+  // Without a mask (no weights): everywhere, w = 1.
+  added = backend->applyEdit(add, {});
+  EXPECT_NEAR(added, area * 0.4, 1e-6);
 }
 
 // The bake: an initial-depth raster of another resolution than the grid, read back from the

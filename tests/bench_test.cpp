@@ -7,6 +7,7 @@
 
 #include "core/cpu_backend.h"
 #include "core/reference_scenario.h"
+#include "tools/bench_suite.h"
 #include "tools/plot.h"
 
 namespace snow {
@@ -24,15 +25,7 @@ std::vector<float> seasonDepth(double factor) {
   computeTemperatureBase(s, c.params);
   auto backend = createCpuBackend();
   runSeason(*backend, s, c);
-  std::vector<float> d(s.spec.cellCount());
-  for (size_t i = 0; i < d.size(); ++i) d[i] = s.depthM(static_cast<int>(i % 96), static_cast<int>(i / 96));
-  return d;
-}
-
-double relativeL1(const std::vector<float>& a, const std::vector<float>& b) {
-  double diff = 0, sum = 0;
-  for (size_t i = 0; i < a.size(); ++i) diff += std::abs(a[i] - b[i]), sum += std::abs(b[i]);
-  return diff / sum;
+  return s.depthGrid().values();
 }
 
 // Refining every step rate brings the season toward the finely stepped one: the error against

@@ -38,23 +38,26 @@ class RasterCache {
     const auto key = std::make_tuple(ref.file, pair(ref.values), pair(ref.range), ref.invert, static_cast<int>(use));
     auto it = cache_.find(key);
     if (it == cache_.end()) {
-      MappedRaster m = mapRaster(ref, use, terrain_, state_.validCell);
-      it = cache_.emplace(key, std::move(m)).first;
+      // Read, placed and described once per raster; each use below only adds its role.
+      Entry e{mapRaster(ref, use, terrain_, state_.validCell), {}};
+      const MappedRaster& m = e.mapped;
+      ManifestRaster& d = e.record;
+      d.hash = hashFileFnv1a64(ref.file);
+      d.reader = m.reader;
+      d.placement = m.placement;
+      d.description = m.description;
+      d.width = m.sourceWidth;
+      d.height = m.sourceHeight;
+      d.coverage = m.coverage;
+      d.minValue = m.minValue;
+      d.maxValue = m.maxValue;
+      d.meanValue = m.meanValue;
+      it = cache_.emplace(key, std::move(e)).first;
     }
-    const MappedRaster& m = it->second;
-    ManifestRaster r;
+    const MappedRaster& m = it->second.mapped;
+    ManifestRaster r = it->second.record;
     r.role = role;
     r.source = ref.label();
-    r.hash = hashFileFnv1a64(ref.file);
-    r.reader = m.reader;
-    r.placement = m.placement;
-    r.description = m.description;
-    r.width = m.sourceWidth;
-    r.height = m.sourceHeight;
-    r.coverage = m.coverage;
-    r.minValue = m.minValue;
-    r.maxValue = m.maxValue;
-    r.meanValue = m.meanValue;
     records_.push_back(r);
     log_ << "  " << role << ": " << ref.label() << ", " << m.description << "; " << num(m.minValue) << " to " << num(m.maxValue)
          << ", mean " << num(m.meanValue) << "\n";
@@ -67,7 +70,11 @@ class RasterCache {
   const SnowState& state_;
   std::ostream& log_;
   std::vector<ManifestRaster>& records_;
-  std::map<Key, MappedRaster> cache_;
+  struct Entry {
+    MappedRaster mapped;
+    ManifestRaster record;  // all but the role and the source
+  };
+  std::map<Key, Entry> cache_;
 };
 
 }  // namespace

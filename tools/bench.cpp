@@ -84,12 +84,6 @@ std::string runBench(const BenchOptions& o, std::ostream& log) {
 
 namespace {
 
-double relativeL1(const Grid<float>& a, const Grid<float>& reference) {
-  double diff = 0, sum = 0;
-  for (size_t i = 0; i < a.size(); ++i) diff += std::abs(a.values()[i] - reference.values()[i]), sum += std::abs(reference.values()[i]);
-  return sum > 0 ? diff / sum : 0.0;
-}
-
 // Sun exposure: run time of each term for a 120-day season on a sunSize^2 grid, per quality
 // level, and each level's error on one day against the Embree path at reference quality.
 std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
@@ -170,7 +164,8 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
       oneDay(sunQuality(name), sweep, sky, sun, ind);
       Grid<float> total = sky;
       for (size_t i = 0; i < total.size(); ++i) total.values()[i] += sun.values()[i] + ind.values()[i];
-      const double es = relativeL1(sky, refSky), eu = relativeL1(sun, refSun), ei = relativeL1(ind, refInd), et = relativeL1(total, refTotal);
+      const double es = relativeL1(sky.values(), refSky.values()), eu = relativeL1(sun.values(), refSun.values()),
+                   ei = relativeL1(ind.values(), refInd.values()), et = relativeL1(total.values(), refTotal.values());
       table << "| " << name << " | " << (sweep ? "horizon sweep" : "Embree") << " | " << format("%.4f", es) << " | " << format("%.4f", eu)
             << " | " << format("%.4f", ei) << " | " << format("%.4f", et) << " |\n";
       csv << "error," << name << "," << (sweep ? "horizon" : "embree") << "," << o.sunAccuracySize << ",,,,,,," << es << "," << eu << ","

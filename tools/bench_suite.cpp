@@ -1,7 +1,6 @@
 #include "bench_suite.h"
 
 #include <spawn.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -59,19 +58,6 @@ PlotSeries seriesOf(const std::string& name, const std::vector<AccuracyRow>& row
   return s;
 }
 
-double relativeL1(const std::vector<float>& a, const std::vector<float>& ref) {
-  double diff = 0, sum = 0;
-  for (size_t i = 0; i < a.size(); ++i) diff += std::abs(static_cast<double>(a[i]) - ref[i]), sum += std::abs(static_cast<double>(ref[i]));
-  return sum > 0 ? diff / sum : 0.0;
-}
-
-std::vector<float> depthOf(const SnowState& s) {
-  std::vector<float> d(s.spec.cellCount());
-  for (size_t i = 0; i < d.size(); ++i)
-    d[i] = s.compactedM.values()[i] + s.stableM.values()[i] + s.unstableM.values()[i] + s.powderM.values()[i];
-  return d;
-}
-
 // Least-squares slope of log(y) against log(x).
 double logSlope(const std::vector<double>& x, const std::vector<double>& y) {
   const size_t n = x.size();
@@ -86,6 +72,12 @@ double logSlope(const std::vector<double>& x, const std::vector<double>& y) {
 }
 
 }  // namespace
+
+double relativeL1(const std::vector<float>& a, const std::vector<float>& ref) {
+  double diff = 0, sum = 0;
+  for (size_t i = 0; i < a.size(); ++i) diff += std::abs(static_cast<double>(a[i]) - ref[i]), sum += std::abs(static_cast<double>(ref[i]));
+  return sum > 0 ? diff / sum : 0.0;
+}
 
 std::string benchMachineDescription() {
   std::ifstream cpuinfo("/proc/cpuinfo");
@@ -208,7 +200,7 @@ std::string seasonAccuracyBench(const BenchOptions& o, std::ostream& log, int th
     const auto t0 = Clock::now();
     runSeason(*backend, s, c);
     seconds = since(t0);
-    return depthOf(s);
+    return s.depthGrid().values();
   };
   double refSeconds = 0;
   const std::vector<float> ref = run(4.0, refSeconds);
@@ -250,7 +242,7 @@ std::string avalancheAccuracyBench(const BenchOptions& o, std::ostream& log, int
     rec = a.runToRest();
     seconds = since(t0);
     backend->download(s);
-    return depthOf(s);
+    return s.depthGrid().values();
   };
   double refSeconds = 0;
   AvalancheRecord refRec;
@@ -317,10 +309,7 @@ std::string scalingChild(const BenchOptions& o, int size) {
   fs::create_directories(dir);
   for (SnowLayer l : {SnowLayer::Compacted, SnowLayer::Stable, SnowLayer::Unstable, SnowLayer::Powder})
     writeFloatImage((dir / snowLayerName(l)).string(), "exr", s.layer(l), snowLayerName(l));
-  const std::vector<float> depth = depthOf(s);
-  Grid<float> dg(s.spec.width, s.spec.height, 0.f);
-  dg.values() = depth;
-  writeFloatImage((dir / "depth").string(), "exr", dg, "depth");
+  writeFloatImage((dir / "depth").string(), "exr", s.depthGrid(), "depth");
   fs::remove_all(dir);
   const double outputsS = since(t0);
   // The peak resident set of this process's own address space (VmHWM): the parent's rusage
@@ -383,8 +372,7 @@ std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads) 
     for (ssize_t n; (n = ::read(pipefd[0], buf, sizeof buf)) > 0;) out.append(buf, static_cast<size_t>(n));
     ::close(pipefd[0]);
     int status = 0;
-    struct rusage usage {};
-    ::wait4(pid, &status, 0, &usage);
+    ::waitpid(pid, &status, 0);
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) throw std::runtime_error("the scaling child for " + sizeArg + "² failed");
     // The last line of its output is the CSV line.
     std::istringstream in(out);
@@ -396,7 +384,6 @@ std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads) 
     for (std::string f; std::getline(ls, f, ',');) v.push_back(std::stod(f));
     if (v.size() != 8) throw std::runtime_error("the scaling child for " + sizeArg + "² printed '" + last + "'");
     const double mib = v[7] / 1024.0;
-    (void)usage;
     table << "| " << size << "² | " << fmt("%.2f", v[1]) << " | " << fmt("%.2f", v[2]) << " | " << fmt("%.2f", v[3]) << " | " << fmt("%.2f", v[4])
           << " | " << fmt("%.2f", v[5]) << " | " << fmt("%.2f", v[6]) << " | " << fmt("%.0f", mib) << " |\n";
     csv << last.substr(0, last.rfind(',')) << "," << mib << "\n";

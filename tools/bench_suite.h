@@ -23,6 +23,9 @@ inline std::string benchFormat(const char* f, double v) {
   return buf;
 }
 
+// sum |a - reference| / sum |reference| (0 for an all-zero reference), summed in double.
+double relativeL1(const std::vector<float>& a, const std::vector<float>& reference);
+
 // One accuracy level of a stage: its name, run time, error, and whether it is the default.
 struct AccuracyRow {
   std::string level;

@@ -40,7 +40,7 @@ struct EditKernel {
     const int i = v.index(x, y);
     v.delta[i] = 0.f;
     if (!v.valid[i]) return;
-    const float w = minf(1.f, maxf(0.f, v.editWeight[i]));
+    const float w = v.editWeight ? minf(1.f, maxf(0.f, v.editWeight[i])) : 1.f;  // no mask: everywhere
     if (!(w > 0.f)) return;
     float* field = snowLayerField(v, a.layer);
     const float before = field[i];
