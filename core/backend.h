@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "kernels/avalanche.h"
+#include "kernels/bedform.h"
 #include "kernels/edit.h"
 #include "kernels/melt.h"
 #include "kernels/powder_diffusion.h"
@@ -24,6 +25,17 @@ namespace snow {
 struct LayerTotals {
   double compactedM3 = 0, stableM3 = 0, unstableM3 = 0, powderM3 = 0;
   double totalM3() const { return compactedM3 + stableM3 + unstableM3 + powderM3; }
+};
+
+// What a bedform step did (kernels/bedform.h).
+struct BedformStepReport {
+  long long slabsEroded = 0;    // slabs lifted by the wind
+  long long slabsAvalanched = 0;  // slab moves of the repose relaxation
+  long long domainCells = 0;
+  // The slab ledger: slabs in the domain after the preparation, and after the step (those
+  // that left the domain included); equal, exactly, when transport conserves mass.
+  long long slabsBefore = 0, slabsAfter = 0;
+  bool reposeConverged = true;  // every domain edge within the repose angle at the end
 };
 
 class SnowBackend {
@@ -59,6 +71,13 @@ class SnowBackend {
   // The snow depth (C + S + U + P) and U of cells in rows y0..y0+rows-1, columns x0..x0+cols-1
   // (clipped to the grid by the caller), row after row: a cheap look at a few cells.
   virtual void readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) = 0;
+
+  // Wind bedforms (kernels/bedform.h): `args.rounds` polling rounds over the cells of the domain
+  // (valid, inside state.bedformMask when it is set, bed slope within args.tanMaxSlope); conserves
+  // mass (whole slabs). The cohesion field persists from step to step (0 at upload).
+  virtual BedformStepReport bedformStep(const BedformArgs& args) = 0;
+  // The bedform cohesion per cell (false, and `out` untouched, before the first bedform step).
+  virtual bool bedformCohesion(Grid<float>& out) = 0;
 
   // Skiers (core/ski.h). The route map of the bedrock by the cellular automaton
   // (RouteMapStepKernel) on the backend's device; false on host backends, where a one-pass sort

@@ -5,6 +5,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,6 +38,7 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(avalancheScour_, s.avalancheScourM.values());
     exec_.upload(avalancheDeposit_, s.avalancheDepositM.values());
     avalancheFieldsReady_ = false;
+    bedformFieldsReady_ = false;
     exec_.upload(valid_, s.validCell.values());
     exec_.upload(delta_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
@@ -59,6 +61,8 @@ class ExecBackend final : public SnowBackend {
     hasSnowfallFactor_ = uploadOptional(snowfallFactor_, s.snowfallFactor);
     hasMeltFactor_ = uploadOptional(meltFactor_, s.meltFactor);
     hasWindErosionFactor_ = uploadOptional(windErosionFactor_, s.windErosionFactor);
+    hasBedformMask_ = s.bedformMask.size() == spec_.cellCount() && s.bedformMask.size() > 0;
+    exec_.upload(bedformMask_, hasBedformMask_ ? s.bedformMask.values() : std::vector<uint8_t>());
   }
 
   double applyEdit(const EditArgs& a, const std::vector<float>& weights) override {
@@ -109,6 +113,95 @@ class ExecBackend final : public SnowBackend {
         if (layer == &unstable_) std::copy(row.begin(), row.end(), unstable.begin() + static_cast<size_t>(r) * cols);
       }
     }
+  }
+
+  BedformStepReport bedformStep(const BedformArgs& args) override {
+    const int w = spec_.width, h = spec_.height;
+    const size_t n = spec_.cellCount();
+    if (args.periodic && (w % 2 != 0 || h % 2 != 0))  // the repose edge families need even sizes to wrap
+      throw std::invalid_argument("bedforms: a periodic grid needs an even width and height");
+    if (!(args.slabM > 0.f) || args.batches < 1 || args.rounds < 0)
+      throw std::invalid_argument("bedforms: slab thickness, batches and rounds must be positive");
+    if (!bedformFieldsReady_) {  // allocated on the first bedform step only
+      const std::vector<int> zeroInts(n, 0);
+      const std::vector<float> zeroFloats(n, 0.f);
+      const std::vector<uint8_t> zeroBytes(n, 0);
+      for (auto* b : {&bedSlabs_, &bedSnapshot_, &bedExported_, &bedArrived_, &bedArrivedCohesion_}) exec_.upload(*b, zeroInts);
+      for (auto* b : {&bedCohesion_, &bedBase_, &bedResidual_}) exec_.upload(*b, zeroFloats);
+      for (auto* b : {&bedShadow_, &bedActive_}) exec_.upload(*b, zeroBytes);
+      std::vector<float> powder;
+      exec_.download(powder_, powder);
+      exec_.upload(bedLastPowder_, powder);  // the snow already there is not fresh
+      bedformFieldsReady_ = true;
+    }
+    exec_.upload(bedCounters_, std::vector<int>(4, 0));
+    const SnowFieldsView v = view();
+    const BedformFields f = bedformFields();
+    BedformArgs a = args;
+    exec_.forEachCell(w, h, BedformPrepareKernel{v, f, a});
+    BedformStepReport report;
+    const double cells = exec_.sum(v.surfaceSlope, v.valid, w, h);
+    report.domainCells = static_cast<long long>(cells);
+    a.meanSlabs = cells > 0 ? static_cast<float>(exec_.sum(v.delta, v.valid, w, h) / cells) : 0.f;
+    auto slabTotal = [&] {
+      std::vector<int> slabs, exported;
+      exec_.download(bedSlabs_, slabs);
+      exec_.download(bedExported_, exported);
+      long long total = 0;
+      for (size_t i = 0; i < slabs.size(); ++i) total += static_cast<long long>(slabs[i]) + exported[i];
+      return total;
+    };
+    report.slabsBefore = slabTotal();
+    int relaxed = 0;
+    // Relaxation sweeps over the four edge families until no edge moves (at most maxSweeps).
+    auto relax = [&](int maxSweeps) {
+      for (int sweep = 0; sweep < maxSweeps; ++sweep) {
+        for (int family = 0; family < 4; ++family) {
+          a.family = family;
+          if (family < 2) exec_.forEachCell((w + 1) / 2, h, BedformReposeKernel{v, f, a});
+          else exec_.forEachCell(w, (h + 1) / 2, BedformReposeKernel{v, f, a});
+        }
+        int now = 0;
+        exec_.downloadRange(bedCounters_, 1, 1, &now);
+        if (now == relaxed) return true;
+        relaxed = now;
+      }
+      return false;
+    };
+    if (report.domainCells > 0) {
+      for (int r = 0; r < args.rounds; ++r) {
+        a.round = args.roundBase + static_cast<uint64_t>(r);
+        for (int b = 0; b < args.batches; ++b) {
+          a.batch = b;
+          exec_.forEachCell(w, h, BedformSnapshotKernel{v, f});
+          exec_.forEachCell(w, h, BedformShadowKernel{v, f, a});
+          exec_.forEachCell(w, h, BedformSaltationKernel{v, f, a});
+          relax(16);
+        }
+        BedformArgs c = a;
+        c.dtDays = args.dtDays / static_cast<float>(args.rounds);
+        exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
+      }
+      report.reposeConverged = relax(1 << 16);
+    }
+    report.slabsAfter = slabTotal();
+    BedformArgs c = a;
+    c.dtDays = args.rounds > 0 ? 0.f : args.dtDays;  // the rest of the arrivals; sintering if no round ran
+    exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
+    exec_.forEachCell(w, h, BedformFinishKernel{v, f, a});
+    int counters[2] = {0, 0};
+    exec_.downloadRange(bedCounters_, 0, 2, counters);
+    exec_.finish();
+    report.slabsEroded = counters[0];
+    report.slabsAvalanched = counters[1];
+    return report;
+  }
+
+  bool bedformCohesion(Grid<float>& out) override {
+    if (!bedformFieldsReady_) return false;
+    out = Grid<float>(spec_.width, spec_.height, 0.f);
+    exec_.download(bedCohesion_, out.values());
+    return true;
   }
 
   bool routeMapOnDevice(Grid<float>& out) override {
@@ -208,6 +301,24 @@ class ExecBackend final : public SnowBackend {
   Exec& exec() { return exec_; }
 
  private:
+  BedformFields bedformFields() {
+    BedformFields f;
+    f.slabs = bedSlabs_.data();
+    f.snapshot = bedSnapshot_.data();
+    f.exported = bedExported_.data();
+    f.arrived = bedArrived_.data();
+    f.arrivedCohesion = bedArrivedCohesion_.data();
+    f.counters = bedCounters_.data();
+    f.cohesion = bedCohesion_.data();
+    f.lastPowder = bedLastPowder_.data();
+    f.base = bedBase_.data();
+    f.residual = bedResidual_.data();
+    f.shadow = bedShadow_.data();
+    f.active = bedActive_.data();
+    f.mask = hasBedformMask_ ? bedformMask_.data() : nullptr;
+    return f;
+  }
+
   SnowFieldsView view() {
     SnowFieldsView v;
     v.width = spec_.width;
@@ -233,6 +344,7 @@ class ExecBackend final : public SnowBackend {
     v.snowfallFactor = hasSnowfallFactor_ ? snowfallFactor_.data() : nullptr;
     v.meltFactor = hasMeltFactor_ ? meltFactor_.data() : nullptr;
     v.windErosionFactor = hasWindErosionFactor_ ? windErosionFactor_.data() : nullptr;
+    v.bedformMask = hasBedformMask_ ? bedformMask_.data() : nullptr;
     v.delta = delta_.data();
     v.surfaceSlope = surfaceSlope_.data();
     v.scratchSurface = scratchSurface_.data();
@@ -257,6 +369,10 @@ class ExecBackend final : public SnowBackend {
   typename Exec::template Buffer<float> snowfallFactor_, meltFactor_, windErosionFactor_, editWeight_;
   bool hasSnowfallFactor_ = false, hasMeltFactor_ = false, hasWindErosionFactor_ = false;
   bool avalancheFieldsReady_ = false;
+  typename Exec::template Buffer<int> bedSlabs_, bedSnapshot_, bedExported_, bedArrived_, bedArrivedCohesion_, bedCounters_;
+  typename Exec::template Buffer<float> bedCohesion_, bedLastPowder_, bedBase_, bedResidual_;
+  typename Exec::template Buffer<uint8_t> bedShadow_, bedActive_, bedformMask_;
+  bool bedformFieldsReady_ = false, hasBedformMask_ = false;
 
   bool uploadOptional(typename Exec::template Buffer<float>& buffer, const Grid<float>& grid) {
     const bool present = grid.size() == spec_.cellCount() && grid.size() > 0;

@@ -160,8 +160,46 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     }
     timed(slot, [&] { backend.stabilityChange(makeStabilityArgs(p, dt, w)); });
   });
-  // Wind transport (§5.4), only while the season has wind.
-  if (cfg.windTransport)
+  // Wind bedforms (kernels/bedform.h), hourly steps of rounds_per_hour polling rounds each, only
+  // while some domain cell has wind above the threshold (else only the cohesion grows).
+  const bool bedformsEverywhere = cfg.bedforms && !(state.bedformMask.size() == state.spec.cellCount() && state.bedformMask.size() > 0);
+  if (cfg.bedforms) {
+    const BedformParameters bp = *cfg.bedforms;
+    auto carry = std::make_shared<double>(0.0);
+    auto roundBase = std::make_shared<uint64_t>(0);
+    addContinuous("wind bedforms", 24.0, [&, bp, carry, roundBase](int slot, double day, double dt) {
+      if (!(dt > 0.0)) return;
+      timed(slot, [&] {
+        double maxSpeed = 0.0;
+        const bool masked = !bedformsEverywhere;
+        for (size_t i = 0; i < state.windXMps.size(); ++i) {
+          if (!state.validCell.values()[i] || (masked && !state.bedformMask.values()[i])) continue;
+          const double wx = state.windXMps.values()[i], wy = state.windYMps.values()[i];
+          maxSpeed = std::max(maxSpeed, wx * wx + wy * wy);
+        }
+        const bool windy = cfg.windTransport && std::sqrt(maxSpeed) >= bp.thresholdWindMps;
+        int rounds = 0;
+        if (windy) {
+          const double want = *carry + dt * 24.0 * bp.roundsPerHour;
+          rounds = static_cast<int>(std::floor(want));
+          *carry = want - rounds;
+        } else {
+          ++reports[slot].skippedSteps;
+          ++report.bedforms.calmSteps;
+        }
+        const BedformStepReport r = backend.bedformStep(
+            makeBedformArgs(bp, dt, rounds, *roundBase, cfg.seed, cfg.weather.at(day).seaLevelTemperatureC));
+        *roundBase += static_cast<uint64_t>(rounds);
+        report.bedforms.rounds += rounds;
+        report.bedforms.slabsEroded += r.slabsEroded;
+        report.bedforms.slabsAvalanched += r.slabsAvalanched;
+        report.bedforms.domainCells = r.domainCells;
+        report.bedforms.atRest = report.bedforms.atRest && r.reposeConverged;
+      });
+    });
+  }
+  // Wind transport (§5.4), only while the season has wind (and not where bedforms replace it).
+  if (cfg.windTransport && !bedformsEverywhere)
     addContinuous("wind transport", p.windTransportStepsPerDay, [&](int slot, double, double dt) {
       if (dt > 0.0) timed(slot, [&] { backend.windTransport(makeWindTransportArgs(p, dt)); });
     });

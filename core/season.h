@@ -4,10 +4,12 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "avalanche.h"
+#include "bedform.h"
 #include "backend.h"
 #include "ski.h"
 #include "parameters.h"
@@ -67,6 +69,9 @@ struct SeasonConfig {
   std::function<void(int day, SnowState& state)> updateStaticFields;
   // Wind transport runs only when the season has wind (the static wind fields are non-zero).
   bool windTransport = false;
+  // Wind bedforms (kernels/bedform.h), when set: over the whole terrain (in place of the layered
+  // wind transport) or, with state.bedformMask, inside the mask (the wind transport outside it).
+  std::optional<BedformParameters> bedforms;
 };
 
 struct PhenomenonReport {
@@ -89,6 +94,13 @@ struct SeasonReport {
   std::vector<AvalancheRecord> avalanches;  // every avalanche released, and every user release that could not be
   uint64_t avalancheTries = 0;              // spontaneous release tries (most find nothing to release)
   std::vector<SkierRecord> skiers;          // every skier's descent (path kept for user skiers only)
+  // Wind bedforms: polling rounds run, slabs the wind lifted, slab moves of the repose
+  // relaxation, steps without wind above the threshold (sintering only), and whether every
+  // step ended with the domain at rest (within the repose angle).
+  struct Bedforms {
+    long long rounds = 0, slabsEroded = 0, slabsAvalanched = 0, calmSteps = 0, domainCells = 0;
+    bool atRest = true;
+  } bedforms;
   // |final - (initial + added - melted)| relative to the snow that passed through.
   double massBalanceRelativeError() const;
 };

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/bedform.h"
 #include "core/default_terrain.h"
 #include "core/parameters.h"
 #include "core/weather.h"
@@ -72,6 +73,14 @@ struct Multipliers {
   bool any() const { return snowfall || melt || windErosion || avalancheRelease || skierSpawn || noSnow; }
 };
 
+// [bedforms]: the slab-saltation bedform model (core/kernels/bedform.h) in the season, over the
+// whole terrain or inside `mask` (cells >= 0.5), in place of the layered wind transport there.
+struct BedformScene {
+  bool enabled = false;
+  BedformParameters params;
+  std::optional<RasterRef> mask;
+};
+
 struct Scene {
   std::string sourceName;   // the scene file path, or "preset:default"
   std::string baseDir;      // folder relative terrain paths are resolved against
@@ -104,6 +113,7 @@ struct Scene {
   std::array<InitialSnowLayer, 4> initialSnow;   // [initial_snow], by SnowLayer
   Multipliers multipliers;                       // [multipliers]
   std::vector<EditSpec> edits;                   // [[edits]], in day order
+  BedformScene bedforms;                         // [bedforms]
   OutputRequest outputs;
   bool sunExposure = true;             // precompute.sun: false skips the sun (temperature from altitude alone)
   std::string sunQuality = "draft";    // precompute.sun_quality: draft | production | reference

@@ -144,6 +144,25 @@ const std::vector<Rule>& sceneRules() {
       {"edits.to", Kind::String, -kInf, kInf, {"compacted", "stable", "unstable", "powder"}},
       {"edits.depth_m", Kind::Number, 0, 10000},
       {"edits.mask", Kind::Any},
+      {"bedforms", Kind::Table},
+      {"bedforms.enabled", Kind::Bool},
+      {"bedforms.mask", Kind::Any},
+      {"bedforms.slab_m", Kind::Number, 0.001, 10},
+      {"bedforms.hop_length_m", Kind::Number, 0.01, 1000},
+      {"bedforms.reference_wind_mps", Kind::Number, 0.1, 100},
+      {"bedforms.threshold_wind_mps", Kind::Number, 0, 100},
+      {"bedforms.deposit_on_snow", Kind::Number, 0.001, 1},
+      {"bedforms.deposit_on_bare", Kind::Number, 0.001, 1},
+      {"bedforms.shadow_angle_deg", Kind::Number, 1, 89},
+      {"bedforms.shadow_length_m", Kind::Number, 0, 1000},
+      {"bedforms.repose_angle_deg", Kind::Number, 1, 89},
+      {"bedforms.speedup_linear", Kind::Number, 0, 100},
+      {"bedforms.speedup_quadratic_per_m", Kind::Number, 0, 100},
+      {"bedforms.max_slope_deg", Kind::Number, 0, 89},
+      {"bedforms.sintering_per_day", Kind::Number, 0, 1000},
+      {"bedforms.sintering_scale_c", Kind::Number, 0.1, 100},
+      {"bedforms.rounds_per_hour", Kind::Number, 0.01, 3600},
+      {"bedforms.batches", Kind::Integer, 1, 64},
       {"parameters", Kind::Table},
       {"precompute", Kind::Table},
       {"precompute.sun", Kind::Bool},
@@ -733,6 +752,30 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
     }
   }
   if (auto v = root["mode"].value<std::string>()) scene.mode = *v;
+  if (const toml::table* bt = root["bedforms"].as_table()) {
+    BedformScene& b = scene.bedforms;
+    BedformParameters& bp = b.params;
+    const toml::node_view<const toml::node> t{bt};
+    b.enabled = t["enabled"].value<bool>().value_or(true);
+    bp.slabM = number(t["slab_m"], bp.slabM);
+    bp.hopLengthM = number(t["hop_length_m"], bp.hopLengthM);
+    bp.referenceWindMps = number(t["reference_wind_mps"], bp.referenceWindMps);
+    bp.thresholdWindMps = number(t["threshold_wind_mps"], bp.thresholdWindMps);
+    bp.depositSnow = number(t["deposit_on_snow"], bp.depositSnow);
+    bp.depositBare = number(t["deposit_on_bare"], bp.depositBare);
+    bp.shadowAngleDeg = number(t["shadow_angle_deg"], bp.shadowAngleDeg);
+    bp.shadowLengthM = number(t["shadow_length_m"], bp.shadowLengthM);
+    bp.reposeAngleDeg = number(t["repose_angle_deg"], bp.reposeAngleDeg);
+    bp.speedupLinear = number(t["speedup_linear"], bp.speedupLinear);
+    bp.speedupQuadraticPerM = number(t["speedup_quadratic_per_m"], bp.speedupQuadraticPerM);
+    bp.maxSlopeDeg = number(t["max_slope_deg"], bp.maxSlopeDeg);
+    bp.sinteringPerDay = number(t["sintering_per_day"], bp.sinteringPerDay);
+    bp.sinteringScaleC = number(t["sintering_scale_c"], bp.sinteringScaleC);
+    bp.roundsPerHour = number(t["rounds_per_hour"], bp.roundsPerHour);
+    bp.batches = static_cast<int>(t["batches"].value<int64_t>().value_or(bp.batches));
+    if (const toml::node* mask = bt->get("mask")) b.mask = rasterRef(*mask, source, scene, "bedforms.mask");
+    if (b.enabled && scene.mode == "occlusion") throw InputError(source + ": bedforms: mode = \"occlusion\" has no season to move snow in");
+  }
   {
     OcclusionParameters& o = scene.occlusion;
     o.sMaxM = number(root["occlusion"]["s_max_m"], o.sMaxM);

@@ -86,7 +86,8 @@ ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terr
     for (const auto& e : *events) anyEvent = anyEvent || e.mask.has_value();
   bool anyInitial = false;
   for (const auto& l : scene.initialSnow) anyInitial = anyInitial || l.kind != InitialSnowLayer::Kind::None;
-  if (!anyEvent && !anyInitial && scene.edits.empty() && !scene.multipliers.any()) return plan;
+  const bool bedformMask = scene.bedforms.enabled && scene.bedforms.mask.has_value();
+  if (!anyEvent && !anyInitial && scene.edits.empty() && !scene.multipliers.any() && !bedformMask) return plan;
 
   log << "art direction:\n";
   RasterCache rasters(terrain, state, log, plan.rasters);
@@ -141,6 +142,16 @@ ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terr
     for (size_t i = 0; i < n; ++i)
       if (valid[i] && m.values()[i] >= 0.5f) state.noSnow.values()[i] = 1, ++cells;
     log << "  multipliers.no_snow: " << cells << " cells kept bare (" << num(100.0 * cells / std::max<size_t>(1, n)) << " % of the grid)\n";
+  }
+
+  // Where the wind bedforms run.
+  if (bedformMask) {
+    const Grid<float>& m = rasters.get(*scene.bedforms.mask, RasterUse::Mask, "bedforms.mask");
+    state.bedformMask = Grid<uint8_t>(state.spec.width, state.spec.height, 0);
+    size_t cells = 0;
+    for (size_t i = 0; i < n; ++i)
+      if (valid[i] && m.values()[i] >= 0.5f) state.bedformMask.values()[i] = 1, ++cells;
+    log << "  bedforms.mask: " << cells << " cells (" << num(100.0 * cells / std::max<size_t>(1, n)) << " % of the grid)\n";
   }
 
   // Timeline edits.

@@ -705,6 +705,13 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     }
     config.frameDays = scene.outputs.frameDays;
     config.windTransport = wind.hasWind();
+    if (scene.bedforms.enabled) {
+      const double minCell = std::min(state.spec.cellSizeXM, state.spec.cellSizeYM);
+      const std::string problem = validateBedformParameters(scene.bedforms.params, minCell);
+      if (!problem.empty()) throw InputError(scene.sourceName + ": " + problem);
+      config.bedforms = scene.bedforms.params;
+      if (!config.windTransport) log << "bedforms: the scene has no wind; only the cohesion of the snow will change\n";
+    }
     if (exposure || windChanges)
       config.updateStaticFields = [&](int day, SnowState& s) {
         if (exposure) temperatureForDay(day, s);
@@ -737,6 +744,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       log << "  no-snow mask: " << std::scientific << std::setprecision(4) << report.noSnowRemovedM3 << std::defaultfloat
           << " m^3 of initial snow removed\n";
     if (report.avalancheTries > 0) log << "  spontaneous avalanche tries: " << report.avalancheTries << "\n";
+    if (config.bedforms)
+      log << "  wind bedforms: " << report.bedforms.domainCells << " cells, " << report.bedforms.rounds << " rounds, "
+          << report.bedforms.slabsEroded << " slabs lifted, " << report.bedforms.slabsAvalanched << " slab moves by avalanching, "
+          << report.bedforms.calmSteps << " calm hours; " << (report.bedforms.atRest ? "at rest (within the repose angle)" : "NOT at rest after the relaxation cap") << "\n";
     if (!report.skiers.empty()) {
       int users = 0, triggered = 0, skied = 0;
       double length = 0.0;

@@ -1,0 +1,331 @@
+// Wind bedforms (core/kernels/bedform.h): the slab ledger, repose, shadow geometry, obstacles,
+// any wind direction, determinism, the forms themselves (barchans: horns downwind, sizes,
+// migration, steep lee faces) and cohesion freezing them; the scene option in a season.
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <numeric>
+
+#include <gtest/gtest.h>
+
+#include "core/bedform.h"
+#include "core/cpu_backend.h"
+#include "core/season.h"
+#include "core/serial_exec.h"
+
+namespace snow {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// A test window and its rounds.
+struct Window {
+  SnowState state;
+  BedformParameters params;
+  std::unique_ptr<SnowBackend> backend;
+  uint64_t round = 0;
+
+  Window(SnowState s, BedformParameters p, std::unique_ptr<SnowBackend> b) : state(std::move(s)), params(p), backend(std::move(b)) {
+    backend->upload(state);
+  }
+  BedformStepReport run(int rounds, double dtDays = 0.0, double seaLevelC = 0.0) {
+    const BedformStepReport r = backend->bedformStep(makeBedformArgs(params, dtDays, rounds, round, 11, seaLevelC));
+    round += static_cast<uint64_t>(rounds);
+    backend->download(state);
+    return r;
+  }
+};
+
+BedformParameters periodicParams() {
+  BedformParameters p;
+  p.periodic = true;
+  p.sinteringPerDay = 0.0;
+  return p;
+}
+
+double powderTotal(const SnowState& s) {
+  double t = 0;
+  for (float v : s.powderM.values()) t += v;
+  return t;
+}
+
+// The barchan parameter set of README "Wind bedforms" (the defaults): 0.5 m cells, 2.5 cm slabs,
+// 5 cm of loose snow on a hard bed, hops of 0.5 m at 10 m/s, p_s 0.4, p_ns 0.9; 400 rounds.
+Window barchanField(int n, std::unique_ptr<SnowBackend> backend) {
+  BedformParameters p = periodicParams();
+  return Window(makeBedformWindow(n, n, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3), p, std::move(backend));
+}
+
+TEST(Bedform, SlabLedgerIsExactAndSlopesEndWithinTheRepose) {
+  // Rough start (piles far steeper than the repose), wind 30 deg off the x axis, closed edges
+  // and NODATA holes: every step keeps every slab, and ends at rest.
+  SnowState s = makeBedformWindow(96, 80, 0.5, 0.1, 0.1, 8.66f, 5.f, -5.f, 5);
+  for (int y = 0; y < 80; ++y)
+    for (int x = 0; x < 96; ++x) {
+      if ((x / 8 + y / 8) % 5 == 0) s.powderM(x, y) += 1.5f;  // steep blocks
+      if ((x - 60) * (x - 60) + (y - 20) * (y - 20) < 9) s.validCell(x, y) = 0;  // a hole
+      s.bedrockM(x, y) = 0.02f * static_cast<float>(x);  // a gentle slope
+    }
+  BedformParameters p;  // closed edges
+  p.sinteringPerDay = 0.0;
+  Window w(s, p, createCpuBackend());
+  const double before = powderTotal(w.state);
+  for (int step = 0; step < 4; ++step) {
+    const BedformStepReport r = w.run(10);
+    EXPECT_EQ(r.slabsBefore, r.slabsAfter) << "step " << step;
+    EXPECT_GT(r.slabsEroded, 0);
+    EXPECT_TRUE(r.reposeConverged);
+    EXPECT_LE(maxReposeExcessM(w.state, std::tan(p.reposeAngleDeg * kPi / 180.0), p.slabM, false), 1e-5) << "step " << step;
+    for (size_t i = 0; i < w.state.powderM.size(); ++i) {
+      ASSERT_GE(w.state.powderM.values()[i], 0.f);
+      ASSERT_TRUE(std::isfinite(w.state.powderM.values()[i]));
+      if (!w.state.validCell.values()[i]) { ASSERT_EQ(w.state.powderM.values()[i], s.powderM.values()[i]); }
+    }
+  }
+  // Whole slabs of 2.5 cm moved: the float total changes by rounding only.
+  EXPECT_NEAR(powderTotal(w.state), before, 1e-6 * before);
+}
+
+TEST(Bedform, ShadowIsTheFractionOfTheCellUnderTheFifteenDegreeLine) {
+  // A snow step of height H at the west end of a flat row, wind from the west: the fraction of
+  // a cell at distance d (centre to centre) from the step's top cell under the shadow line is
+  // clamp((H / tan 15 - d + dx) / dx, 0, 1) (plateau geometry, kernels/bedform.h).
+  const int w = 40, h = 3;
+  const float dx = 0.5f, slab = 0.025f;
+  SnowState s = makeBedformWindow(w, h, dx, 0.0, 0.0, 10.f, 0.f, -5.f, 1);
+  const int top = 5, slabsHigh = 24;  // H = 0.6 m
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x <= top; ++x) s.powderM(x, y) = slab * slabsHigh;
+  SnowFieldsView v;
+  v.width = w, v.height = h, v.cellSizeXM = v.cellSizeYM = dx;
+  v.bedrock = s.bedrockM.values().data(), v.compacted = s.compactedM.values().data(), v.stable = s.stableM.values().data();
+  v.unstable = s.unstableM.values().data(), v.powder = s.powderM.values().data(), v.valid = s.validCell.values().data();
+  v.windX = s.windXMps.values().data(), v.windY = s.windYMps.values().data();
+  const size_t n = s.spec.cellCount();
+  std::vector<int> slabs(n), snapshot(n), exported(n), arrived(n), arrivedCohesion(n), counters(4);
+  std::vector<float> cohesion(n), lastPowder(s.powderM.values()), base(n), residual(n), delta(n), slope(n);
+  std::vector<uint8_t> shadow(n), active(n);
+  v.delta = delta.data(), v.surfaceSlope = slope.data();
+  BedformFields f{slabs.data(), snapshot.data(), exported.data(), arrived.data(), arrivedCohesion.data(), counters.data(), cohesion.data(),
+                  lastPowder.data(), base.data(), residual.data(), shadow.data(), active.data(), nullptr};
+  BedformArgs a = makeBedformArgs(BedformParameters{}, 0.0, 1, 0, 1, 0.0);
+  SerialExec exec;
+  exec.forEachCell(w, h, BedformPrepareKernel{v, f, a});
+  exec.forEachCell(w, h, BedformShadowKernel{v, f, a});
+  const double tan15 = std::tan(15.0 * kPi / 180.0), height = slab * slabsHigh;
+  int partial = 0;
+  for (int x = top + 1; x < w; ++x) {
+    const double d = (x - top) * dx;
+    const double expected = std::clamp((height / tan15 - d + dx) / dx, 0.0, 1.0);
+    EXPECT_NEAR(shadow[static_cast<size_t>(w + x)] / 255.0, expected, 0.6 / 255 + 1e-6) << "x = " << x;
+    partial += expected > 0.0 && expected < 1.0;
+  }
+  EXPECT_EQ(partial, 1);                // one cell where the line meets the bed
+  EXPECT_EQ(shadow[static_cast<size_t>(w + top + 1)], 255);  // right behind the step: full
+  EXPECT_EQ(shadow[static_cast<size_t>(w + top + 4)], 255);  // 2 m on: 0.6 / tan 15 = 2.24 m of full shadow
+  EXPECT_EQ(shadow[static_cast<size_t>(w + top + 6)], 0);    // 3 m on: none
+  for (int x = 0; x <= top; ++x) EXPECT_EQ(shadow[static_cast<size_t>(w + x)], 0);
+}
+
+TEST(Bedform, NoErosionInFullShadowAndLandingsThereStay) {
+  // Snow on a flat bed behind a tall block (bedrock, 2 m) with the wind over it: the lee cells
+  // within the block's full shadow (2 / tan 15 - 0.5 = 6.96 m, 13 cells) neither lose a slab
+  // nor see one pass (a slab landing there stays); past the shadow, the wind carries snow away.
+  const int w = 64, h = 16;
+  SnowState s = makeBedformWindow(w, h, 0.5, 0.1, 0.0, 10.f, 0.f, -5.f, 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 10; x < 12; ++x) {
+      s.bedrockM(x, y) = 2.f;
+      s.powderM(x, y) = 0.f;
+    }
+  BedformParameters p;
+  p.sinteringPerDay = 0.0;
+  p.maxSlopeDeg = 89.0;  // the block's cells stay in the domain (their edges are steep)
+  Window win(s, p, createSerialBackend());
+  const SnowState start = win.state;
+  win.run(30);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 12; x < 12 + 13; ++x)
+      EXPECT_GE(win.state.powderM(x, y), start.powderM(x, y) - 1e-6f) << "(" << x << ", " << y << ") lost snow in full shadow";
+    for (int x = 10; x < 12; ++x) EXPECT_EQ(win.state.powderM(x, y), 0.f) << "snow climbed the block";
+  }
+  double farLoss = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 30; x < 50; ++x) farLoss += start.powderM(x, y) - win.state.powderM(x, y);
+  EXPECT_GT(farLoss, 0.5) << "no transport outside the shadow";
+}
+
+TEST(Bedform, SnowStopsAtTheWindwardFaceOfARockAndNeverOnTop) {
+  // "Three rocks" (Cimbura Fig. 6.15): non-erodible blocks 2 m tall in a snow field, periodic,
+  // wind along x: after 300 rounds no snow on their tops, and more snow right upwind of each
+  // rock than the field's mean.
+  const int n = 96;
+  SnowState s = makeBedformWindow(n, n, 0.5, 0.1, 0.025, 10.f, 0.f, -5.f, 2);
+  const int rocks[3][2] = {{20, 20}, {60, 48}, {30, 75}};
+  for (const auto& r : rocks)
+    for (int y = r[1]; y < r[1] + 6; ++y)
+      for (int x = r[0]; x < r[0] + 6; ++x) {
+        s.bedrockM(x, y) = 2.f;
+        s.powderM(x, y) = 0.f;
+      }
+  BedformParameters p = periodicParams();
+  p.maxSlopeDeg = 89.0;
+  Window win(s, p, createCpuBackend());
+  const double mean = powderTotal(win.state) / (n * n - 3 * 36);
+  const BedformStepReport rep = win.run(300);
+  EXPECT_EQ(rep.slabsBefore, rep.slabsAfter);
+  for (const auto& r : rocks) {
+    double top = 0, windward = 0;
+    for (int y = r[1]; y < r[1] + 6; ++y) {
+      for (int x = r[0]; x < r[0] + 6; ++x) top += win.state.powderM(x, y);
+      for (int x = r[0] - 3; x < r[0]; ++x) windward += win.state.powderM(x, y);
+    }
+    EXPECT_EQ(top, 0.0) << "snow on the rock at (" << r[0] << ", " << r[1] << ")";
+    EXPECT_GT(windward / 18.0, 1.5 * mean) << "no drift at the windward face of the rock at (" << r[0] << ", " << r[1] << ")";
+  }
+}
+
+TEST(Bedform, AMoundMovesAlongAnyWindDirectionWithoutLosingSnow) {
+  // A mound on bare ground, wind 35 deg south of east (no grid axis): its centre of mass moves
+  // downwind, within 12 deg of the wind's heading; every slab kept (no grid rotation).
+  const int n = 128;
+  const double cell = 0.5, heading = 35.0 * kPi / 180.0;
+  SnowState s = makeBedformWindow(n, n, cell, 0.0, 0.0, static_cast<float>(10 * std::cos(heading)),
+                                  static_cast<float>(10 * std::sin(heading)), -5.f, 1);
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const double r2 = ((x - 40) * (x - 40) + (y - 40) * (y - 40)) * cell * cell;
+      s.powderM(x, y) = static_cast<float>(std::floor(0.8 * std::exp(-r2 / 32.0) / 0.025) * 0.025);
+    }
+  BedformParameters p;  // closed edges, the mound far from them
+  p.sinteringPerDay = 0.0;
+  Window win(s, p, createCpuBackend());
+  auto centre = [&](const SnowState& st) {
+    double m = 0, mx = 0, my = 0;
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) m += st.powderM(x, y), mx += st.powderM(x, y) * x, my += st.powderM(x, y) * y;
+    return std::array<double, 3>{mx / m, my / m, m};
+  };
+  const auto c0 = centre(win.state);
+  const BedformStepReport r = win.run(60);
+  const auto c1 = centre(win.state);
+  EXPECT_EQ(r.slabsBefore, r.slabsAfter);
+  EXPECT_NEAR(c1[2], c0[2], 1e-6 * c0[2]);
+  const double dx = c1[0] - c0[0], dy = c1[1] - c0[1];
+  EXPECT_GT(std::hypot(dx, dy), 2.0) << "the mound did not move";
+  EXPECT_NEAR(std::atan2(dy, dx) * 180.0 / kPi, 35.0, 12.0);
+}
+
+TEST(Bedform, SameBytesOnOneAndTwoThreadsAndTheSerialReference) {
+  auto runOn = [](std::unique_ptr<SnowBackend> b, int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    SnowState s = makeBedformWindow(64, 48, 0.5, 0.08, 0.04, 7.f, -4.f, -8.f, 9);
+    BedformParameters p = periodicParams();
+    p.sinteringPerDay = 0.4;
+    Window w(s, p, std::move(b));
+    w.run(25, 0.1, -3.0);
+    w.run(25, 0.1, -3.0);
+    Grid<float> cohesion;
+    EXPECT_TRUE(w.backend->bedformCohesion(cohesion));
+    return std::make_pair(w.state.powderM.values(), cohesion.values());
+  };
+  const auto serial = runOn(createSerialBackend(), 1);
+  const auto one = runOn(createCpuBackend(), 1);
+  const auto two = runOn(createCpuBackend(), 2);
+  EXPECT_TRUE(serial.first == one.first && serial.first == two.first) << "powder differs";
+  EXPECT_TRUE(serial.second == one.second && serial.second == two.second) << "cohesion differs";
+}
+
+// Smoothed 3 x 3 (periodic): bodies and slopes of the forms, not of single slabs.
+Grid<float> smoothed(const Grid<float>& d) {
+  const int w = d.width(), h = d.height();
+  Grid<float> o(w, h, 0.f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float s = 0;
+      for (int j = -1; j <= 1; ++j)
+        for (int i = -1; i <= 1; ++i) s += d((x + i + w) % w, (y + j + h) % h);
+      o(x, y) = s / 9.f;
+    }
+  return o;
+}
+
+TEST(Bedform, BarchansFormWithHornsDownwindMigrateDownwindAndHaveSteepLeeFaces) {
+  // README's barchan set from a flat bed with +-1 slab of noise under a steady westerly, 400
+  // rounds: crescents whose horns reach past their crest downwind, 3-20 m long and 0.1-0.5 m
+  // tall (Filhol & Sturm's snow barchans), moving downwind, lee faces steeper than windward ones.
+  const int n = 192;
+  Window w = barchanField(n, createCpuBackend());
+  w.run(380);
+  const Grid<float> before = w.state.powderM;
+  const BedformStepReport r = w.run(20);
+  EXPECT_EQ(r.slabsBefore, r.slabsAfter);
+  // Migration: the field's best shift over 20 rounds, along +x.
+  const int shift = migrationShiftCells(before, w.state.powderM, n / 4);
+  EXPECT_GE(shift, 1) << "forms did not move downwind";
+  // Bodies of the smoothed field above 0.1 m, at least 3 m wide (narrower ones are streaks and
+  // embryos whose horns a 0.5 m grid cannot show).
+  const Grid<float> sm = smoothed(w.state.powderM);
+  int barchans = 0, crescents = 0, trailing = 0, inRange = 0;
+  double lengthSum = 0, heightSum = 0;
+  for (const BedformBody& b : findBedformBodies(sm, 0.5, 0.1)) {
+    if (b.widthM < 3.0 || b.cells < 40) continue;
+    ++barchans;
+    crescents += b.hornLeadM > 0.0;
+    trailing += b.hornLeadM < 0.0;
+    inRange += b.lengthM >= 3.0 && b.lengthM <= 20.0 && b.heightM >= 0.1 && b.heightM <= 0.5 + 0.025;
+    lengthSum += b.lengthM;
+    heightSum += b.heightM;
+  }
+  ASSERT_GE(barchans, 8) << "no bedforms formed";
+  const double meanLength = lengthSum / barchans, meanHeight = heightSum / barchans;
+  // Slip faces: of the faces steeper than 0.7 tan(repose) (22 deg) on the forms, most face downwind.
+  const double steep = 0.7 * std::tan(w.params.reposeAngleDeg * kPi / 180.0);
+  const FaceSlopes f = faceSlopesAlongX(w.state.powderM, 0.5, 0.02, 0.1, steep);
+  std::cout << "barchans: " << barchans << ", " << crescents << " with a horn downwind (" << trailing
+            << " with the centre leading), " << inRange
+            << " within 3-20 m x 0.1-0.5 m; mean length " << meanLength << " m, mean height " << meanHeight
+            << " m; shift " << shift << " cells in 20 rounds; faces steeper than 22 deg: " << f.steepLeeCells << " lee, "
+            << f.steepWindwardCells << " windward\n";
+  EXPECT_GE(crescents, 3 * trailing) << "horns should lead the crest downwind, not trail it";
+  EXPECT_GE(2 * crescents, barchans);
+  EXPECT_GE(3 * inRange, 2 * barchans) << "most bodies should be snow-barchan sized";
+  EXPECT_GE(meanLength, 3.0);
+  EXPECT_LE(meanLength, 20.0);
+  EXPECT_GE(meanHeight, 0.1);
+  EXPECT_LE(meanHeight, 0.5);
+  EXPECT_GT(f.steepLeeCells, 2 * f.steepWindwardCells) << "the steep faces should be the lee faces";
+}
+
+TEST(Bedform, CohesionGrowingOverTheSeasonStopsMigration) {
+  // Form, then keep blowing at -5 degC with sintering on: slabs lifted per day fall to zero and
+  // the forms stop (no shift between the last two states), where without cohesion they move on.
+  const int n = 128;
+  Window w = barchanField(n, createCpuBackend());
+  w.run(400);
+  w.params.sinteringPerDay = 0.5;  // at -5 degC: 0.5 x 10 / 15 = 0.33 a day (fresh slabs start at 0)
+  std::vector<long long> lifted;
+  std::vector<int> shifts;
+  Grid<float> previous;
+  for (int day = 0; day < 4; ++day) {
+    previous = w.state.powderM;
+    lifted.push_back(w.run(40, 1.0, 5.0).slabsEroded);  // 40 rounds a day at -5 degC (T base -10, T0 +5)
+    shifts.push_back(migrationShiftCells(previous, w.state.powderM, n / 4));
+    std::cout << "day " << day << ": " << lifted.back() << " slabs lifted, forms moved " << shifts.back() << " cells\n";
+  }
+  const int lastShift = shifts.back();
+  EXPECT_GT(shifts.front(), 0) << "the forms should move before the snow bonds";
+  for (size_t k = 1; k < lifted.size(); ++k) EXPECT_LE(lifted[k], lifted[k - 1]) << "day " << k;
+  EXPECT_GT(lifted.front(), 0);
+  EXPECT_EQ(lifted.back(), 0);
+  EXPECT_EQ(lastShift, 0);
+  EXPECT_EQ(w.state.powderM.values(), previous.values()) << "frozen forms still moved";
+  Grid<float> cohesion;
+  ASSERT_TRUE(w.backend->bedformCohesion(cohesion));
+  for (float c : cohesion.values()) ASSERT_EQ(c, 1.f);
+}
+
+}  // namespace
+}  // namespace snow
