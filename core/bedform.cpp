@@ -218,4 +218,32 @@ std::vector<BedformBody> findBedformBodies(const Grid<float>& depth, double cell
   return bodies;
 }
 
+BarchanCensus barchanCensus(const Grid<float>& depth, double cellM, double tanRepose, double slabM) {
+  const int w = depth.width(), h = depth.height();
+  Grid<float> smooth(w, h, 0.f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float s = 0;
+      for (int j = -1; j <= 1; ++j)
+        for (int i = -1; i <= 1; ++i) s += depth((x + i + w) % w, (y + j + h) % h);
+      smooth(x, y) = s / 9.f;
+    }
+  BarchanCensus c;
+  for (const BedformBody& b : findBedformBodies(smooth, cellM, 0.1)) {
+    if (b.widthM < 3.0 || b.cells < 40) continue;
+    ++c.bodies;
+    c.hornsDownwind += b.hornLeadM > 0.0;
+    c.centreLeading += b.hornLeadM < 0.0;
+    c.inSnowRange += b.lengthM >= 3.0 && b.lengthM <= 20.0 && b.heightM >= 0.1 && b.heightM <= 0.5 + slabM;
+    c.meanLengthM += b.lengthM;
+    c.meanHeightM += b.heightM;
+  }
+  if (c.bodies > 0) {
+    c.meanLengthM /= c.bodies;
+    c.meanHeightM /= c.bodies;
+  }
+  c.faces = faceSlopesAlongX(depth, cellM, 0.02, 0.1, 0.7 * tanRepose);
+  return c;
+}
+
 }  // namespace snow

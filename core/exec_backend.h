@@ -173,7 +173,8 @@ class ExecBackend final : public SnowBackend {
         a.round = args.roundBase + static_cast<uint64_t>(r);
         for (int b = 0; b < args.batches; ++b) {
           a.batch = b;
-          exec_.forEachCell(w, h, BedformSnapshotKernel{v, f});
+          exec_.forEachCell(w, h, BedformSnapshotKernel{v, f, a.slabM, v.surfaceSlope});
+          a.maxSurface = exec_.maxValue(v.surfaceSlope, v.valid, w, h);
           exec_.forEachCell(w, h, BedformShadowKernel{v, f, a});
           exec_.forEachCell(w, h, BedformSaltationKernel{v, f, a});
           relax(16);

@@ -69,6 +69,7 @@ struct BedformArgs {
   float speedupLinear = 1.2f;    // hop metres per metre of take-off height above the mean
   float speedupQuadraticPerM = 0.018f;
   float meanSlabs = 0.f;         // mean slab count of the domain (set by the step)
+  float maxSurface = 3.0e38f;    // highest surface of the batch's snapshot: bounds the shadow march
   float tanMaxSlope = 0.3639702f;  // domain: cells whose bed slope is at most this (tan 20 deg)
   float sinteringPerDay = 0.5f;
   float sinteringScaleC = 10.f;
@@ -158,12 +159,16 @@ struct BedformPrepareKernel {
   }
 };
 
+// The batch's snapshot of the slab counts, and its surface in `out` (for the highest surface).
 struct BedformSnapshotKernel {
   SnowFieldsView v;
   BedformFields f;
+  float slabM;
+  float* out;
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
     f.snapshot[i] = f.slabs[i];
+    out[i] = f.base[i] + static_cast<float>(f.slabs[i]) * slabM;
   }
 };
 
@@ -190,12 +195,15 @@ struct BedformShadowKernel {
     // The cell's length along the wind (the plateau the shadow falls on).
     const float along = minf(fabsf(ux) > 0.f ? v.cellSizeXM / fabsf(ux) : 3.0e38f, fabsf(uy) > 0.f ? v.cellSizeYM / fabsf(uy) : 3.0e38f);
     const float h = bedform::snapSurface(f, a, i);
-    const int steps = static_cast<int>(a.shadowLengthM / stepM);
+    // Past rise_max / tan + along upwind, not even the highest surface could shade the cell.
+    const float reach = minf(a.shadowLengthM, (a.maxSurface - h) / a.tanShadow + along);
+    const int steps = static_cast<int>(reach / stepM) + 1;
     const float cx = (static_cast<float>(x) + 0.5f) * v.cellSizeXM, cy = (static_cast<float>(y) + 0.5f) * v.cellSizeYM;
     float covered = 0.f;  // metres of the cell under the shadow line
     int last = i;
     for (int s = 1; s <= steps; ++s) {
       const float d = static_cast<float>(s) * stepM;
+      if (d > a.shadowLengthM) break;
       int nx = static_cast<int>(floorf((cx + ux * d) / v.cellSizeXM));
       int ny = static_cast<int>(floorf((cy + uy * d) / v.cellSizeYM));
       if (a.periodic) {
