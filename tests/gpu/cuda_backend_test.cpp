@@ -16,6 +16,7 @@
 #include "core/exec_backend.h"
 #include "core/kernel_registry.h"
 #include "core/avalanche.h"
+#include "core/bedform.h"
 #include "core/season.h"
 #include "core/ski.h"
 #include "core/serial_exec.h"
@@ -257,4 +258,75 @@ TEST(CudaBackend, ArtDirectionMultipliersAndEditsMatchTheCpuBitForBit) {
   cpu.download(a);
   gpu->download(b);
   test::expectSameBytes(a, b);
+}
+
+// Wind bedforms (kernels/bedform.h): saltation by integer atomics, so the device's order of
+// additions cannot change a count; the rest is +, -, *, /, sqrt, floor and ceil. Closed grid with
+// NODATA holes, a bedform mask and a wind turning with the row, then a periodic window.
+TEST(CudaBackend, BedformsMatchTheCpuBitForBit) {
+  SKIP_WITHOUT_CUDA();
+  SnowState s = makeBedformWindow(150, 122, 0.5, 0.08, 0.05, 8.f, 0.f, -6.f, 5);
+  s.bedformMask.resize(150, 122, 0);
+  for (int y = 0; y < 122; ++y)
+    for (int x = 0; x < 150; ++x) {
+      s.windYMps(x, y) = 4.f * std::sin(0.05f * static_cast<float>(y));
+      s.bedrockM(x, y) = 0.01f * static_cast<float>(x) + ((x / 20 + y / 20) % 4 == 0 ? 0.6f : 0.f);
+      s.bedformMask(x, y) = x < 120 ? 1 : 0;
+      if ((x - 75) * (x - 75) + (y - 40) * (y - 40) < 16) s.validCell(x, y) = 0;
+    }
+  BedformParameters p;
+  p.sinteringPerDay = 0.3;
+  p.speedupLinear = 1.2;
+  ExecBackend<SerialExec> cpu;
+  auto gpu = cuda::createCudaBackend();
+  BedformStepReport rc, rg;
+  for (SnowBackend* b : {static_cast<SnowBackend*>(&cpu), gpu.get()}) {
+    b->upload(s);
+    BedformStepReport& r = b == &cpu ? rc : rg;
+    for (int step = 0; step < 3; ++step) r = b->bedformStep(makeBedformArgs(p, 0.2, 15, 15 * step, 7, -2.0));
+  }
+  EXPECT_EQ(rc.slabsEroded, rg.slabsEroded);
+  EXPECT_EQ(rc.slabsAvalanched, rg.slabsAvalanched);
+  EXPECT_EQ(rg.slabsBefore, rg.slabsAfter);
+  SnowState a = s, b = s;
+  cpu.download(a);
+  gpu->download(b);
+  test::expectSameBytes(a, b);
+  Grid<float> ca, cb;
+  ASSERT_TRUE(cpu.bedformCohesion(ca));
+  ASSERT_TRUE(gpu->bedformCohesion(cb));
+  EXPECT_EQ(ca.values(), cb.values());
+
+  SnowState w = makeBedformWindow(256, 256, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3), wa = w, wb = w;
+  BedformParameters q;
+  q.periodic = true;
+  ExecBackend<SerialExec> cpu2;
+  auto gpu2 = cuda::createCudaBackend();
+  cpu2.upload(w);
+  gpu2->upload(w);
+  cpu2.bedformStep(makeBedformArgs(q, 0.5, 40, 0, 1, 0.0));
+  gpu2->bedformStep(makeBedformArgs(q, 0.5, 40, 0, 1, 0.0));
+  cpu2.download(wa);
+  gpu2->download(wb);
+  test::expectSameBytes(wa, wb);
+}
+
+// Time per polling round of README's barchan set on a 1024² periodic window (printed; the bench's
+// `--stage bedforms` measures the same on the CPU).
+TEST(CudaBackend, BedformRoundTimeOn1024Squared) {
+  SKIP_WITHOUT_CUDA();
+  SnowState w = makeBedformWindow(1024, 1024, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3);
+  BedformParameters q;
+  q.periodic = true;
+  q.sinteringPerDay = 0.0;
+  auto gpu = cuda::createCudaBackend();
+  gpu->upload(w);
+  gpu->bedformStep(makeBedformArgs(q, 0.0, 20, 0, 1, 0.0));
+  const auto t0 = std::chrono::steady_clock::now();
+  const BedformStepReport r = gpu->bedformStep(makeBedformArgs(q, 0.0, 50, 20, 1, 0.0));
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.slabsBefore, r.slabsAfter);
+  EXPECT_GT(r.slabsEroded, 0);
+  std::printf("bedforms 1024^2 on %s: %.2f ms per round (%.2f ns per cell and round), %lld slabs lifted per round\n",
+              cuda::probeDevice().description.c_str(), s * 1e3 / 50, s * 1e9 / 50 / (1024.0 * 1024.0), r.slabsEroded / 50);
 }
