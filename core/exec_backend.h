@@ -86,6 +86,10 @@ class ExecBackend final : public SnowBackend {
     exec_.download(melted_, s.meltedM.values());
     exec_.download(avalancheScour_, s.avalancheScourM.values());
     exec_.download(avalancheDeposit_, s.avalancheDepositM.values());
+    if (bedformFieldsReady_) {
+      s.bedformCohesion.resize(spec_.width, spec_.height, 0.f);
+      exec_.download(bedCohesion_, s.bedformCohesion.values());
+    }
   }
 
   double snowfall(const SnowfallArgs& a) override { return runSnowfall(exec_, view(), a); }
@@ -345,7 +349,7 @@ class ExecBackend final : public SnowBackend {
     v.snowfallFactor = hasSnowfallFactor_ ? snowfallFactor_.data() : nullptr;
     v.meltFactor = hasMeltFactor_ ? meltFactor_.data() : nullptr;
     v.windErosionFactor = hasWindErosionFactor_ ? windErosionFactor_.data() : nullptr;
-    v.bedformMask = hasBedformMask_ ? bedformMask_.data() : nullptr;
+    v.bedformActive = bedformFieldsReady_ ? bedActive_.data() : nullptr;
     v.delta = delta_.data();
     v.surfaceSlope = surfaceSlope_.data();
     v.scratchSurface = scratchSurface_.data();

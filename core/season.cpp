@@ -162,7 +162,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   });
   // Wind bedforms (kernels/bedform.h), hourly steps of rounds_per_hour polling rounds each, only
   // while some domain cell has wind above the threshold (else only the cohesion grows).
-  const bool bedformsEverywhere = cfg.bedforms && !(state.bedformMask.size() == state.spec.cellCount() && state.bedformMask.size() > 0);
+  const bool bedformsMasked = state.bedformMask.size() == state.spec.cellCount() && state.bedformMask.size() > 0;
   if (cfg.bedforms) {
     const BedformParameters bp = *cfg.bedforms;
     auto carry = std::make_shared<double>(0.0);
@@ -171,7 +171,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
       if (!(dt > 0.0)) return;
       timed(slot, [&] {
         double maxSpeed = 0.0;
-        const bool masked = !bedformsEverywhere;
+        const bool masked = bedformsMasked;
         for (size_t i = 0; i < state.windXMps.size(); ++i) {
           if (!state.validCell.values()[i] || (masked && !state.bedformMask.values()[i])) continue;
           const double wx = state.windXMps.values()[i], wy = state.windYMps.values()[i];
@@ -198,8 +198,8 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
       });
     });
   }
-  // Wind transport (§5.4), only while the season has wind (and not where bedforms replace it).
-  if (cfg.windTransport && !bedformsEverywhere)
+  // Wind transport (§5.4), only while the season has wind (the kernel leaves the bedforms' cells).
+  if (cfg.windTransport)
     addContinuous("wind transport", p.windTransportStepsPerDay, [&](int slot, double, double dt) {
       if (dt > 0.0) timed(slot, [&] { backend.windTransport(makeWindTransportArgs(p, dt)); });
     });

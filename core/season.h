@@ -69,8 +69,9 @@ struct SeasonConfig {
   std::function<void(int day, SnowState& state)> updateStaticFields;
   // Wind transport runs only when the season has wind (the static wind fields are non-zero).
   bool windTransport = false;
-  // Wind bedforms (kernels/bedform.h), when set: over the whole terrain (in place of the layered
-  // wind transport) or, with state.bedformMask, inside the mask (the wind transport outside it).
+  // Wind bedforms (kernels/bedform.h), when set: over the whole terrain or, with
+  // state.bedformMask, inside the mask; in their domain (cells whose snow bed is at most
+  // max_slope_deg steep) they replace the layered wind transport and powder diffusion.
   std::optional<BedformParameters> bedforms;
 };
 

@@ -54,8 +54,10 @@ struct SnowState {
   Grid<float> avalancheReleaseFactor;  // host only: spontaneous release probability
   Grid<float> skierSpawnFactor;        // host only: where automatic skiers start
   Grid<uint8_t> noSnow;
-  // Wind bedforms (kernels/bedform.h): 1 where the slab-saltation model runs (empty: everywhere).
+  // Wind bedforms (kernels/bedform.h): 1 where the slab-saltation model runs (empty: everywhere),
+  // and the snow's cohesion there (0 loose .. 1 bonded; filled by download once bedforms ran).
   Grid<uint8_t> bedformMask;
+  Grid<float> bedformCohesion;
 
   // Allocates every field for `s`, snow layers zero, all cells valid, static fields zero.
   void allocate(const GridSpec& s) {
@@ -127,8 +129,9 @@ struct SnowFieldsView {
   const float* meltFactor = nullptr;
   const float* windErosionFactor = nullptr;
   const float* editWeight = nullptr;
-  // Wind bedforms' mask (null: none): the layered wind transport leaves these cells to them.
-  const uint8_t* bedformMask = nullptr;
+  // The wind bedforms' domain at their last step (null: no bedforms yet): the layered wind
+  // transport and powder diffusion leave these cells to the slab model (its saltation and repose).
+  const uint8_t* bedformActive = nullptr;
   float* delta = nullptr;  // per-cell scratch: snow volume changed by the last step (for the mass ledger)
   // Per-cell scratch: |grad A| of the snow surface, taken before a per-cell pass that changes A,
   // so the pass never reads a neighbour that another thread is writing.

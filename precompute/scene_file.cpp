@@ -52,7 +52,8 @@ const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable
                                                 "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
                                                 "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit",
                                                 "avalanche_preview", "preview", "ambient_occlusion", "sun_visibility",
-                                                "occlusion_accumulation", "occlusion_dissipation", "ski_tracks", "ski_route_map"};
+                                                "occlusion_accumulation", "occlusion_dissipation", "ski_tracks", "ski_route_map",
+                                                "bedform_cohesion"};
 // Layers only occlusion mode has.
 const std::vector<std::string> kOcclusionLayers = {"ambient_occlusion", "sun_visibility", "occlusion_accumulation",
                                                    "occlusion_dissipation"};
@@ -163,6 +164,7 @@ const std::vector<Rule>& sceneRules() {
       {"bedforms.sintering_scale_c", Kind::Number, 0.1, 100},
       {"bedforms.rounds_per_hour", Kind::Number, 0.01, 3600},
       {"bedforms.batches", Kind::Integer, 1, 64},
+      {"bedforms.periodic", Kind::Bool},
       {"parameters", Kind::Table},
       {"precompute", Kind::Table},
       {"precompute.sun", Kind::Bool},
@@ -773,9 +775,12 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
     bp.sinteringScaleC = number(t["sintering_scale_c"], bp.sinteringScaleC);
     bp.roundsPerHour = number(t["rounds_per_hour"], bp.roundsPerHour);
     bp.batches = static_cast<int>(t["batches"].value<int64_t>().value_or(bp.batches));
+    bp.periodic = t["periodic"].value<bool>().value_or(bp.periodic);
     if (const toml::node* mask = bt->get("mask")) b.mask = rasterRef(*mask, source, scene, "bedforms.mask");
     if (b.enabled && scene.mode == "occlusion") throw InputError(source + ": bedforms: mode = \"occlusion\" has no season to move snow in");
   }
+  if (!scene.bedforms.enabled && std::find(scene.outputs.layers.begin(), scene.outputs.layers.end(), "bedform_cohesion") != scene.outputs.layers.end())
+    fail(source, *root["outputs"]["layers"].node(), "outputs.layers", "'bedform_cohesion' needs [bedforms]");
   {
     OcclusionParameters& o = scene.occlusion;
     o.sMaxM = number(root["occlusion"]["s_max_m"], o.sMaxM);

@@ -364,5 +364,26 @@ TEST(BedformScene, ASeasonWithBedformsInsideAMaskKeepsItsMass) {
   fs::remove_all(dir);
 }
 
+TEST(BedformScene, ThePresetBakes) {
+  // presets/bedforms.toml, half a day of its three: a tileable window, every slab kept, at rest.
+  std::ifstream in(std::string(SNOWBAKE_SOURCE_DIR) + "/presets/bedforms.toml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string scene = text.str();
+  const size_t at = scene.find("days = 3\n");
+  ASSERT_NE(at, std::string::npos);
+  scene.replace(at, 9, "days = 0.5\n");
+  const size_t frames = scene.find("frames_days = [1, 2]");
+  ASSERT_NE(frames, std::string::npos);
+  scene.replace(frames, 20, "frames_days = [0.25]");
+  const test::Bake bake = test::bakeSceneText("bedform_preset", scene);
+  const SeasonReport& r = bake.result.season;
+  EXPECT_EQ(r.bedforms.domainCells, 256 * 256);
+  EXPECT_GT(r.bedforms.slabsEroded, 0);
+  EXPECT_TRUE(r.bedforms.atRest);
+  EXPECT_LT(r.massBalanceRelativeError(), 1e-6);
+  EXPECT_TRUE(std::filesystem::exists(bake.out() / "bedform_cohesion.exr"));
+}
+
 }  // namespace
 }  // namespace snow

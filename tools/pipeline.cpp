@@ -79,6 +79,7 @@ Grid<float> layerGrid(const SnowState& s, const std::string& name) {
       else if (name == "depth") v = s.depthM(x, y);
       else if (name == "surface") v = s.bedrockM(x, y) + s.depthM(x, y);
       else if (name == "valid_mask") v = 1.f;
+      else if (name == "bedform_cohesion") v = s.bedformCohesion.size() == s.spec.cellCount() ? s.bedformCohesion(x, y) : 0.f;
       g(x, y) = v;
     }
   return g;
@@ -106,7 +107,7 @@ Grid<float> windLayerGrid(const SnowState& s, const WindTimeline& wind, double d
 }
 
 std::string layerUnit(const std::string& name) {
-  if (name == "valid_mask" || name == "wind_shadow_mask" || name == "ambient_occlusion" || name == "sun_visibility") return "1";
+  if (name == "valid_mask" || name == "bedform_cohesion" || name == "wind_shadow_mask" || name == "ambient_occlusion" || name == "sun_visibility") return "1";
   if (name == "sun_exposure") return "h";
   if (name == "temperature") return "degC";
   if (name == "wind_speed") return "m/s";
@@ -118,6 +119,7 @@ std::string layerContent(const std::string& name) {
   if (name == "wind_scour") return "snow removed by wind transport since the season start (m)";
   if (name == "wind_deposit") return "snow deposited by wind transport since the season start (m)";
   if (name == "melt") return "snow melted since the season start (m)";
+  if (name == "bedform_cohesion") return "wind bedforms: cohesion of the loose snow, 0 loose .. 1 bonded; wind lifts it above threshold / (1 - cohesion)";
   if (name == "avalanche_scour") return "snow taken away by avalanches since the season start, net per avalanche (m)";
   if (name == "avalanche_deposit") return "snow left by avalanches since the season start, net per avalanche (m)";
   if (name == "sun_exposure") return "sun exposure I = I_sun + I_sky + I_ind, hours of equivalent direct sun per day (§4.1)";
@@ -709,6 +711,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       const double minCell = std::min(state.spec.cellSizeXM, state.spec.cellSizeYM);
       const std::string problem = validateBedformParameters(scene.bedforms.params, minCell);
       if (!problem.empty()) throw InputError(scene.sourceName + ": " + problem);
+      if (scene.bedforms.params.periodic && (state.spec.width % 2 != 0 || state.spec.height % 2 != 0))
+        throw InputError(scene.sourceName + ": bedforms.periodic: the grid is " + std::to_string(state.spec.width) + " x " +
+                         std::to_string(state.spec.height) + " cells; a periodic (tileable) window needs an even width and height");
       config.bedforms = scene.bedforms.params;
       if (!config.windTransport) log << "bedforms: the scene has no wind; only the cohesion of the snow will change\n";
     }

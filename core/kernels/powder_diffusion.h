@@ -159,6 +159,7 @@ struct PowderDiffusionKernel {
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
     if (!v.valid[i]) return;
+    if (v.bedformActive && v.bedformActive[i]) return;  // the bedform model's repose relaxation holds it
     const float powder = v.scratchPowder[i];
     if (!(powder > a.minDepthM)) return;
     const float* snapshot = v.scratchSurface;

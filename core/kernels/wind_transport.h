@@ -32,7 +32,7 @@ struct WindTransportKernel {
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
     if (!v.valid[i]) return;
-    if (v.bedformMask && v.bedformMask[i]) return;  // the bedform model moves this cell's powder
+    if (v.bedformActive && v.bedformActive[i]) return;  // the bedform model moves this cell's powder
     const float powder = v.scratchPowder[i];
     if (!(powder > 0.f)) return;
     const float ap = v.scratchSurface[i];
