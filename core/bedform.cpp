@@ -229,7 +229,7 @@ BarchanCensus barchanCensus(const Grid<float>& depth, double cellM, double tanRe
       smooth(x, y) = s / 9.f;
     }
   BarchanCensus c;
-  for (const BedformBody& b : findBedformBodies(smooth, cellM, 0.1)) {
+  for (const BedformBody& b : findBedformBodies(smooth, cellM, std::max(0.1, 1.5 * slabM))) {
     if (b.widthM < 3.0 || b.cells < 40) continue;
     ++c.bodies;
     c.hornsDownwind += b.hornLeadM > 0.0;
@@ -242,7 +242,7 @@ BarchanCensus barchanCensus(const Grid<float>& depth, double cellM, double tanRe
     c.meanLengthM /= c.bodies;
     c.meanHeightM /= c.bodies;
   }
-  c.faces = faceSlopesAlongX(depth, cellM, 0.02, 0.1, 0.7 * tanRepose);
+  c.faces = faceSlopesAlongX(depth, cellM, 0.02, std::max(0.1, 1.5 * slabM), 0.7 * tanRepose);
   return c;
 }
 

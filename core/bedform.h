@@ -76,11 +76,12 @@ struct BedformBody {
 std::vector<BedformBody> findBedformBodies(const Grid<float>& depth, double cellM, double thresholdM);
 
 // The forms of a field with the wind along +x, as the tests and the benchmark count them: bodies
-// of the 3 x 3-smoothed (periodic) depth above 0.1 m that are at least 3 m wide and 40 cells
+// of the 3 x 3-smoothed (periodic) depth above 0.1 m (or 1.5 slabs, if more: the loose slabs
+// between the forms are not a form) that are at least 3 m wide and 40 cells
 // (narrower ones are streaks and embryos whose horns a 0.5 m grid cannot show); how many have a
 // horn leading the crest downwind, how many the centre leading, how many fall in Filhol & Sturm's
 // snow-barchan range (3-20 m long, 0.1-0.5 m tall, one slab of tolerance), their mean length and
-// height; and, on the unsmoothed field deeper than 0.1 m, the faces steeper than 0.7 tan(repose).
+// height; and, on the unsmoothed field deeper than that, the faces steeper than 0.7 tan(repose).
 struct BarchanCensus {
   int bodies = 0, hornsDownwind = 0, centreLeading = 0, inSnowRange = 0;
   double meanLengthM = 0, meanHeightM = 0;

@@ -274,6 +274,29 @@ TEST(Bedform, BarchansFormWithHornsDownwindMigrateDownwindAndHaveSteepLeeFaces) 
   EXPECT_GE(2 * c.faces.steepLeeCells, 3 * c.faces.steepWindwardCells) << "the steep faces should be the lee faces";
 }
 
+TEST(Bedform, TheThesisBarchanSetGrowsCrescentsOfItsHeight) {
+  // Cimbura's Werner barchans (Tab. 6.1 with the best probabilities of §6.5.6) at their own
+  // scale: cells of one unit (1 m), slabs of 1/3, 3 slabs a cell, L = 5 cells, 30 deg, p_s 0.4,
+  // p_ns 0.9, 256², t = 1000: crescents with their horns downwind, the tallest about 26 slabs
+  // (the thesis's maximum; 25.4 and 27.6 slabs here with two seeds).
+  SnowState s = makeBedformWindow(256, 256, 1.0, 1.0, 1.0 / 3.0, 10.f, 0.f, -10.f, 3);
+  BedformParameters p = periodicParams();
+  p.slabM = 1.0 / 3.0;
+  p.hopLengthM = 5.0;
+  Window w(s, p, createCpuBackend());
+  const BedformStepReport r = w.run(1000);
+  EXPECT_EQ(r.slabsBefore, r.slabsAfter);
+  const BarchanCensus c = barchanCensus(w.state.powderM, 1.0, std::tan(p.reposeAngleDeg * kPi / 180.0), p.slabM);
+  float top = 0;
+  for (float v : w.state.powderM.values()) top = std::max(top, v);
+  std::cout << "thesis set: " << c.bodies << " bodies, " << c.hornsDownwind << " with a horn downwind, tallest "
+            << top / p.slabM << " slabs\n";
+  ASSERT_GE(c.bodies, 1);
+  EXPECT_EQ(c.hornsDownwind, c.bodies);
+  EXPECT_NEAR(top / p.slabM, 26.0, 6.0);
+  EXPECT_GT(c.faces.steepLeeCells, c.faces.steepWindwardCells);
+}
+
 TEST(Bedform, CohesionGrowingOverTheSeasonStopsMigration) {
   // Form, then keep blowing at -5 degC with sintering on: slabs lifted per day fall to zero and
   // the forms stop (no shift between the last two states), where without cohesion they move on.
