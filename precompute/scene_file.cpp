@@ -85,6 +85,7 @@ const std::vector<Rule>& sceneRules() {
       {"terrain.byte_order", Kind::String, -kInf, kInf, {"little", "big"}},
       {"terrain.up_axis", Kind::String, -kInf, kInf, {"z", "y"}},
       {"terrain.resample_cell_size_m", Kind::Number, 0.01, 100000},
+      {"terrain.crop_m", Kind::NumberArray, 0, 1e8},
       {"terrain.resample_size", Kind::NumberArray, 3, 1 << 20},
       {"occluders", Kind::TableArray},
       {"occluders.file", Kind::String},
@@ -496,6 +497,12 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   if (auto v = (*terrain)["byte_order"].value<std::string>()) src.byteOrder = *v;
   if (auto v = (*terrain)["up_axis"].value<std::string>()) src.upAxis = *v;
   if (auto v = (*terrain)["resample_cell_size_m"].value<double>()) src.resampleCellSizeM = *v;
+  if (terrain->contains("crop_m")) {
+    const auto r = arrayOf("crop_m", 4);
+    if (!(r[2] > r[0] && r[3] > r[1]))
+      fail(source, *terrain->get("crop_m"), "terrain.crop_m", "needs [west, north, east, south] metres from the north-west corner, east > west and south > north");
+    src.cropM = std::array<double, 4>{r[0], r[1], r[2], r[3]};
+  }
   if (terrain->contains("resample_size")) {
     const auto r = arrayOf("resample_size", 2);
     for (double v : r)

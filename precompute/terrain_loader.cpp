@@ -269,6 +269,7 @@ Terrain loadTerrain(const TerrainSource& src) {
     throw InputError(src.file + ": unknown terrain.format '" + format + "'");
   }
   if (src.fillNodata && t.info.nodataCells > 0) fillNodata(t);
+  if (src.cropM) t = cropTerrain(t, src);
   if (src.resampleCellSizeM || src.resampleSize) t = resampleTerrain(t, src);
   return t;
 }

@@ -59,6 +59,9 @@ Terrain makeBuiltinTerrain(const DefaultTerrainOptions& options);
 
 // Fills NODATA cells from their valid neighbours (rings inward, then smoothed); returns the count.
 size_t fillNodata(Terrain& terrain);
+// Keeps the cells whose centres lie in source.cropM (metres east and south of the north-west
+// corner); throws InputError naming the key and the terrain's extent when nothing is left.
+Terrain cropTerrain(const Terrain& terrain, const TerrainSource& source);
 // Resamples to a cell size or a grid size (filters documented in README "Terrain input").
 Terrain resampleTerrain(const Terrain& terrain, const TerrainSource& source);
 

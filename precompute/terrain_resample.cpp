@@ -66,6 +66,48 @@ size_t fillNodata(Terrain& t) {
   return count;
 }
 
+Terrain cropTerrain(const Terrain& src, const TerrainSource& request) {
+  const GridSpec& s = src.info.spec;
+  const auto& c = *request.cropM;
+  // Cells whose centres lie in [west, east) x [north, south).
+  const int x0 = std::max(0, static_cast<int>(std::ceil(c[0] / s.cellSizeXM - 0.5)));
+  const int y0 = std::max(0, static_cast<int>(std::ceil(c[1] / s.cellSizeYM - 0.5)));
+  const int x1 = std::min(s.width, static_cast<int>(std::ceil(c[2] / s.cellSizeXM - 0.5)));
+  const int y1 = std::min(s.height, static_cast<int>(std::ceil(c[3] / s.cellSizeYM - 0.5)));
+  std::ostringstream where;
+  where << (request.declaredAt.empty() ? src.info.source : request.declaredAt) << ": terrain.crop_m [" << c[0] << ", " << c[1] << ", "
+        << c[2] << ", " << c[3] << "]";
+  if (x1 - x0 < 3 || y1 - y0 < 3)
+    throw InputError(where.str() + " keeps " + std::to_string(std::max(0, x1 - x0)) + " x " + std::to_string(std::max(0, y1 - y0)) +
+                     " cells of a terrain " + std::to_string(s.width * s.cellSizeXM) + " m east x " + std::to_string(s.height * s.cellSizeYM) +
+                     " m south: a window needs at least 3 x 3 cells inside it");
+  Terrain out;
+  out.info = src.info;
+  out.heightsM.resize(x1 - x0, y1 - y0, 0.f);
+  out.valid.resize(x1 - x0, y1 - y0, 0);
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      out.heightsM(x - x0, y - y0) = src.heightsM(x, y);
+      out.valid(x - x0, y - y0) = src.valid(x, y);
+    }
+  out.info.spec.width = x1 - x0;
+  out.info.spec.height = y1 - y0;
+  // The window's north-west corner, in the source's own units.
+  const double stepX = src.info.georeferenced ? src.info.geoCellX : s.cellSizeXM;
+  const double stepY = src.info.georeferenced ? src.info.geoCellY : s.cellSizeYM;
+  out.info.spec.originX = s.originX + x0 * stepX;
+  out.info.spec.originY = s.originY - y0 * stepY;
+  size_t nodata = 0;
+  for (uint8_t v : out.valid.values()) nodata += v == 0;
+  if (nodata == out.valid.size()) throw InputError(where.str() + ": every cell of the window is NODATA");
+  std::ostringstream o;
+  o << "cropped to cells " << x0 << ".." << x1 - 1 << " x " << y0 << ".." << y1 - 1 << " of " << s.width << " x " << s.height << " ("
+    << (x1 - x0) * s.cellSizeXM << " x " << (y1 - y0) * s.cellSizeYM << " m)";
+  out.info.resampling = src.info.resampling.empty() ? o.str() : src.info.resampling + "; " + o.str();
+  updateTerrainStatistics(out);
+  return out;
+}
+
 Terrain resampleTerrain(const Terrain& src, const TerrainSource& request) {
   const GridSpec& s = src.info.spec;
   const int w = s.width, h = s.height;
@@ -133,7 +175,7 @@ Terrain resampleTerrain(const Terrain& src, const TerrainSource& request) {
   o << (box ? "area-weighted box filter" : "bilinear") << " from " << w << " x " << h << " cells of " << s.cellSizeXM << " x "
     << s.cellSizeYM << " m to " << newW << " x " << newH << " cells of " << cellX << " x " << cellY
     << " m; a cell is NODATA when less than half its footprint (box) or weight (bilinear) is valid";
-  out.info.resampling = o.str();
+  out.info.resampling = src.info.resampling.empty() ? o.str() : src.info.resampling + "; " + o.str();
   updateTerrainStatistics(out);
   return out;
 }

@@ -28,6 +28,9 @@ struct TerrainSource {
   int rawWidth = 0, rawHeight = 0;      // raw files
   std::string byteOrder = "little";     // raw files: little | big
   std::string upAxis = "z";             // meshes: z | y (glTF is y-up)
+  // A window [west, north, east, south] in metres east and south of the grid's north-west corner:
+  // the cells whose centres lie inside it (applied before resampling).
+  std::optional<std::array<double, 4>> cropM;
   std::optional<double> resampleCellSizeM;        // bake at another cell size ...
   std::optional<std::array<int, 2>> resampleSize; // ... or another grid size [width, height]
 

@@ -387,6 +387,27 @@ TEST(BedformScene, ASeasonWithBedformsInsideAMaskKeepsItsMass) {
   fs::remove_all(dir);
 }
 
+TEST(BedformScene, AFinerWindowOfATerrainBakesWithBedforms) {
+  // The finer window: the builtin range at 10 m, cropped to a 64 m square and resampled to
+  // 0.5 m cells (128²), a day of wind with 5 cm of powder: the bedforms run on the window's
+  // gentle cells, every slab kept, at rest.
+  const std::string text =
+      "[terrain]\nbuiltin = \"ridged\"\nsize = 128\ncell_size_m = 10\nmin_altitude_m = 100\nmax_altitude_m = 140\n"
+      "crop_m = [300, 300, 364, 364]\nresample_cell_size_m = 0.5\n"
+      "[season]\ndays = 1\n[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = -8\nwind_direction_deg = 250\nwind_speed_mps = 9\n"
+      "[precompute]\nsun = false\n[initial_snow]\npowder = 0.05\n"
+      "[parameters]\nskiers_per_hour = 0\navalanche_rate_per_km2_per_day = 0\nsnowfall_starts_per_day = 0\n"
+      "[bedforms]\n[outputs]\nlayers = [\"powder\", \"bedform_cohesion\"]\n";
+  const test::Bake bake = test::bakeSceneText("bedform_window", text);
+  const SeasonReport& r = bake.result.season;
+  EXPECT_GT(r.bedforms.domainCells, 128 * 128 / 4);
+  EXPECT_GT(r.bedforms.slabsEroded, 0);
+  EXPECT_TRUE(r.bedforms.atRest);
+  EXPECT_LT(r.massBalanceRelativeError(), 1e-6);
+  const std::filesystem::path powder = bake.out() / "powder.exr";
+  ASSERT_TRUE(std::filesystem::exists(powder));
+}
+
 TEST(BedformScene, ThePresetBakes) {
   // presets/bedforms.toml, half a day of its three: a tileable window, every slab kept, at rest.
   std::ifstream in(std::string(SNOWBAKE_SOURCE_DIR) + "/presets/bedforms.toml");

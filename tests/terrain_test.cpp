@@ -163,3 +163,41 @@ TEST(TerrainLoader, RealTyrolOutlineIsMaskedWhereTheFileSaysNodata) {
   EXPECT_GT(nodataTokens, t.heightsM.size() / 5);
   for (size_t i = 0; i < t.heightsM.size(); ++i) ASSERT_TRUE(std::isfinite(t.heightsM.values()[i]));
 }
+
+TEST(TerrainLoader, CropKeepsTheWindowsCellsAndMovesTheOrigin) {
+  // The builtin range (10 m cells) cropped to [205, 95, 405, 300] m: cells whose centres lie
+  // inside, i.e. columns 20..39 and rows 9..29, the same heights, the origin moved to the
+  // window's north-west corner; then resampled to 2.5 m (a finer window).
+  TerrainSource whole;
+  whole.builtin = true;
+  whole.builtinOptions.size = 64;
+  whole.builtinOptions.cellSizeM = 10.0;
+  const Terrain t = loadTerrain(whole);
+  TerrainSource crop = whole;
+  crop.cropM = std::array<double, 4>{205.0, 95.0, 405.0, 300.0};
+  const Terrain c = loadTerrain(crop);
+  ASSERT_EQ(c.info.spec.width, 20);
+  ASSERT_EQ(c.info.spec.height, 21);
+  for (int y = 0; y < 21; ++y)
+    for (int x = 0; x < 20; ++x) ASSERT_EQ(c.heightsM(x, y), t.heightsM(x + 20, y + 9));
+  EXPECT_DOUBLE_EQ(c.info.spec.originX, t.info.spec.originX + 200.0);
+  EXPECT_DOUBLE_EQ(c.info.spec.originY, t.info.spec.originY - 90.0);
+  EXPECT_NE(c.info.resampling.find("cropped"), std::string::npos);
+  TerrainSource fine = crop;
+  fine.resampleCellSizeM = 2.5;
+  const Terrain f = loadTerrain(fine);
+  EXPECT_EQ(f.info.spec.width, 80);
+  EXPECT_EQ(f.info.spec.height, 84);
+  EXPECT_EQ(f.info.spec.cellSizeXM, 2.5);
+  // A window off the terrain: an error naming the key and the terrain's extent.
+  TerrainSource off = whole;
+  off.cropM = std::array<double, 4>{700.0, 0.0, 800.0, 100.0};
+  try {
+    loadTerrain(off);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("terrain.crop_m"), std::string::npos) << m;
+    EXPECT_NE(m.find("640"), std::string::npos) << m;
+  }
+}
