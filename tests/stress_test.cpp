@@ -1,6 +1,7 @@
 // Stress: 200 random terrains (cliffs, one-cell spikes, flat plateaus, NODATA holes, up to 4000 m
 // of relief on 5 m cells) with parameters drawn across and beyond their documented ranges, through
-// 500-day seasons with wind. Nothing may turn NaN, infinite or negative, and the mass balance
+// 500-day seasons with wind (and wind bedforms on a quarter of them). Nothing may turn NaN,
+// infinite or negative, and the mass balance
 // must hold to float rounding. Layers are float: a cell takes about 0.5 ulp of error per
 // operation, and where a handful of cells hold all the snow through thousands of events those
 // errors do not average out over the grid. The worst case here is a few 1e-6 of the total
@@ -12,6 +13,7 @@
 
 #include "core/cpu_backend.h"
 #include "core/rng.h"
+#include "core/bedform.h"
 #include "core/season.h"
 #include "precompute/wind.h"
 #include "precompute/wind_timeline.h"
@@ -60,7 +62,7 @@ SnowState randomTerrain(Draw& d, int index) {
 
 TEST(Stress, TwoHundredRandomTerrainsAndParameters) {
   Draw d{RandomKey{20261123}};
-  int withWind = 0;
+  int withWind = 0, withBedforms = 0;
   double worst = 0.0;
   for (int index = 0; index < 200; ++index) {
     SnowState s = randomTerrain(d, index);
@@ -100,6 +102,32 @@ TEST(Stress, TwoHundredRandomTerrainsAndParameters) {
       c.windTransport = true;
       ++withWind;
     }
+    // Wind bedforms on every fourth terrain (half of them inside a mask), parameters across and
+    // beyond their ranges; the slab thickness capped where the repose angle would allow less
+    // than one slab's step (the scene file refuses that).
+    if (index % 4 == 1) {
+      BedformParameters b;
+      b.reposeAngleDeg = d.uniform(5.0, 70.0);
+      b.slabM = std::min(d.logUniform(0.002, 0.5),
+                         std::tan(b.reposeAngleDeg * 3.14159265358979 / 180.0) * std::min(s.spec.cellSizeXM, s.spec.cellSizeYM));
+      b.hopLengthM = d.logUniform(0.05, 50.0);
+      b.thresholdWindMps = d.uniform(0.0, 20.0);
+      b.depositSnow = d.uniform(0.01, 1.0);
+      b.depositBare = d.uniform(0.01, 1.0);
+      b.shadowAngleDeg = d.uniform(2.0, 60.0);
+      b.shadowLengthM = d.logUniform(0.1, 200.0);
+      b.speedupLinear = d.uniform(0.0, 5.0);
+      b.maxSlopeDeg = d.uniform(0.0, 80.0);
+      b.sinteringPerDay = d.logUniform(1e-3, 10.0);
+      b.roundsPerHour = d.logUniform(0.01, 0.2);
+      c.bedforms = b;
+      if (index % 8 == 1) {
+        s.bedformMask.resize(s.spec.width, s.spec.height, 0);
+        for (int y = 0; y < s.spec.height; ++y)
+          for (int x = 0; x < s.spec.width; ++x) s.bedformMask(x, y) = (x + y) % 3 != 0;
+      }
+      ++withBedforms;
+    }
     auto backend = createCpuBackend();
     const SeasonReport r = runSeason(*backend, s, c);
     SCOPED_TRACE("terrain " + std::to_string(index));
@@ -112,9 +140,13 @@ TEST(Stress, TwoHundredRandomTerrainsAndParameters) {
         }
       }
     ASSERT_TRUE(std::isfinite(r.final.totalM3()));
+    if (c.bedforms) {
+      EXPECT_TRUE(r.bedforms.atRest);
+    }
     ASSERT_LT(r.massBalanceRelativeError(), 2e-5) << "added " << r.snowfallAddedM3 << " melted " << r.meltRemovedM3;
     worst = std::max(worst, r.massBalanceRelativeError());
   }
   EXPECT_GT(withWind, 120);
+  EXPECT_EQ(withBedforms, 50);
   std::printf("[ measure ] 200 terrains x 500 days: worst relative mass-balance error %.2e\n", worst);
 }
