@@ -77,10 +77,12 @@ Terrain cropTerrain(const Terrain& src, const TerrainSource& request) {
   std::ostringstream where;
   where << (request.declaredAt.empty() ? src.info.source : request.declaredAt) << ": terrain.crop_m [" << c[0] << ", " << c[1] << ", "
         << c[2] << ", " << c[3] << "]";
-  if (x1 - x0 < 3 || y1 - y0 < 3)
-    throw InputError(where.str() + " keeps " + std::to_string(std::max(0, x1 - x0)) + " x " + std::to_string(std::max(0, y1 - y0)) +
-                     " cells of a terrain " + std::to_string(s.width * s.cellSizeXM) + " m east x " + std::to_string(s.height * s.cellSizeYM) +
-                     " m south: a window needs at least 3 x 3 cells inside it");
+  if (x1 - x0 < 3 || y1 - y0 < 3) {
+    std::ostringstream m;
+    m << where.str() << " keeps " << std::max(0, x1 - x0) << " x " << std::max(0, y1 - y0) << " cells of a terrain "
+      << s.width * s.cellSizeXM << " m east x " << s.height * s.cellSizeYM << " m south: a window needs at least 3 x 3 cells inside it";
+    throw InputError(m.str());
+  }
   Terrain out;
   out.info = src.info;
   out.heightsM.resize(x1 - x0, y1 - y0, 0.f);
