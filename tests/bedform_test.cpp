@@ -14,6 +14,7 @@
 #include "core/cpu_backend.h"
 #include "core/season.h"
 #include "core/serial_exec.h"
+#include "core/step_args.h"
 #include "core/errors.h"
 #include "precompute/scene.h"
 #include "tests/bake_support.h"
@@ -323,6 +324,42 @@ TEST(Bedform, CohesionGrowingOverTheSeasonStopsMigration) {
   Grid<float> cohesion;
   ASSERT_TRUE(w.backend->bedformCohesion(cohesion));
   for (float c : cohesion.values()) ASSERT_EQ(c, 1.f);
+}
+
+TEST(Bedform, LayeredWindTransportAndDiffusionLeaveTheBedformDomainAlone) {
+  // A rough field with wind, bedforms inside a mask (the west half): after a bedform step the
+  // layered wind transport and powder diffusion change no cell of the domain, and do their work
+  // outside it.
+  SnowState s = makeBedformWindow(64, 48, 2.0, 0.3, 0.3, 12.f, 3.f, -6.f, 4);
+  s.bedformMask.resize(64, 48, 0);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      s.bedformMask(x, y) = x < 32;
+      s.bedrockM(x, y) = 0.5f * std::sin(0.3f * x) * std::cos(0.2f * y);  // bumps for curvature
+    }
+  auto b = createCpuBackend();
+  b->upload(s);
+  BedformParameters p;
+  p.maxSlopeDeg = 45.0;
+  const BedformStepReport r = b->bedformStep(makeBedformArgs(p, 0.1, 5, 0, 3, 0.0));
+  ASSERT_GT(r.domainCells, 0);
+  SnowState after = s;
+  b->download(after);
+  const ModelParameters mp;
+  b->windTransport(makeWindTransportArgs(mp, 0.5));
+  b->powderDiffusion(makePowderDiffusionArgs(mp, 0.5));
+  SnowState later = s;
+  b->download(later);
+  long long changedInside = 0, changedOutside = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      const bool changed = later.powderM(x, y) != after.powderM(x, y);
+      // Domain cells: the mask, where the bed is gentle enough (all of it here but the steepest bumps).
+      if (x < 31) changedInside += changed;  // (x = 31 may receive from its eastern neighbour)
+      if (x > 32) changedOutside += changed;
+    }
+  EXPECT_EQ(changedInside, 0) << "the layered transport moved snow in the bedform domain";
+  EXPECT_GT(changedOutside, 100);
 }
 
 TEST(BedformScene, KeysAreReadAndBadValuesNameTheirKey) {
