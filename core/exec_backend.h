@@ -138,7 +138,7 @@ class ExecBackend final : public SnowBackend {
       exec_.upload(bedLastPowder_, powder);  // the snow already there is not fresh
       bedformFieldsReady_ = true;
     }
-    exec_.upload(bedCounters_, std::vector<int>(4, 0));
+    exec_.upload(bedCounters_, std::vector<unsigned long long>(4, 0ull));
     const SnowFieldsView v = view();
     const BedformFields f = bedformFields();
     BedformArgs a = args;
@@ -156,7 +156,7 @@ class ExecBackend final : public SnowBackend {
       return total;
     };
     report.slabsBefore = slabTotal();
-    int relaxed = 0;
+    unsigned long long relaxed = 0;
     // Relaxation sweeps over the four edge families until no edge moves (at most maxSweeps).
     auto relax = [&](int maxSweeps) {
       for (int sweep = 0; sweep < maxSweeps; ++sweep) {
@@ -165,7 +165,7 @@ class ExecBackend final : public SnowBackend {
           if (family < 2) exec_.forEachCell((w + 1) / 2, h, BedformReposeKernel{v, f, a});
           else exec_.forEachCell(w, (h + 1) / 2, BedformReposeKernel{v, f, a});
         }
-        int now = 0;
+        unsigned long long now = 0;
         exec_.downloadRange(bedCounters_, 1, 1, &now);
         if (now == relaxed) return true;
         relaxed = now;
@@ -194,11 +194,11 @@ class ExecBackend final : public SnowBackend {
     c.dtDays = args.rounds > 0 ? 0.f : args.dtDays;  // the rest of the arrivals; sintering if no round ran
     exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
     exec_.forEachCell(w, h, BedformFinishKernel{v, f, a});
-    int counters[2] = {0, 0};
+    unsigned long long counters[2] = {0, 0};
     exec_.downloadRange(bedCounters_, 0, 2, counters);
     exec_.finish();
-    report.slabsEroded = counters[0];
-    report.slabsAvalanched = counters[1];
+    report.slabsEroded = static_cast<long long>(counters[0]);
+    report.slabsAvalanched = static_cast<long long>(counters[1]);
     return report;
   }
 
@@ -374,7 +374,8 @@ class ExecBackend final : public SnowBackend {
   typename Exec::template Buffer<float> snowfallFactor_, meltFactor_, windErosionFactor_, editWeight_;
   bool hasSnowfallFactor_ = false, hasMeltFactor_ = false, hasWindErosionFactor_ = false;
   bool avalancheFieldsReady_ = false;
-  typename Exec::template Buffer<int> bedSlabs_, bedSnapshot_, bedExported_, bedArrived_, bedArrivedCohesion_, bedCounters_;
+  typename Exec::template Buffer<int> bedSlabs_, bedSnapshot_, bedExported_, bedArrived_, bedArrivedCohesion_;
+  typename Exec::template Buffer<unsigned long long> bedCounters_;
   typename Exec::template Buffer<float> bedCohesion_, bedLastPowder_, bedBase_, bedResidual_;
   typename Exec::template Buffer<uint8_t> bedShadow_, bedActive_, bedformMask_;
   bool bedformFieldsReady_ = false, hasBedformMask_ = false;

@@ -108,7 +108,8 @@ TEST(Bedform, ShadowIsTheFractionOfTheCellUnderTheFifteenDegreeLine) {
   v.unstable = s.unstableM.values().data(), v.powder = s.powderM.values().data(), v.valid = s.validCell.values().data();
   v.windX = s.windXMps.values().data(), v.windY = s.windYMps.values().data();
   const size_t n = s.spec.cellCount();
-  std::vector<int> slabs(n), snapshot(n), exported(n), arrived(n), arrivedCohesion(n), counters(4);
+  std::vector<int> slabs(n), snapshot(n), exported(n), arrived(n), arrivedCohesion(n);
+  std::vector<unsigned long long> counters(4);
   std::vector<float> cohesion(n), lastPowder(s.powderM.values()), base(n), residual(n), delta(n), slope(n);
   std::vector<uint8_t> shadow(n), active(n);
   v.delta = delta.data(), v.surfaceSlope = slope.data();

@@ -50,6 +50,13 @@ SNOW_HD SNOW_INLINE void atomicAddInt(int* p, int v) {
   __atomic_fetch_add(p, v, __ATOMIC_RELAXED);
 #endif
 }
+SNOW_HD SNOW_INLINE void atomicAddCount(unsigned long long* p, unsigned long long v) {
+#if defined(__CUDA_ARCH__)
+  atomicAdd(p, v);
+#else
+  __atomic_fetch_add(p, v, __ATOMIC_RELAXED);
+#endif
+}
 
 struct BedformArgs {
   float dtDays = 0.f;          // time covered by the step (sintering)
@@ -83,7 +90,7 @@ struct BedformArgs {
 };
 
 // Cohesion carried by moving slabs is summed in fixed point (integer atomics: any order, same sum).
-constexpr float kCohesionUnits = 65536.f;
+constexpr float kCohesionUnits = 4096.f;  // 12 bits: up to 524 287 slabs into one cell between passes
 SNOW_HD SNOW_INLINE int cohesionUnits(float c) { return static_cast<int>(c * kCohesionUnits + 0.5f); }
 
 // The bedform model's own fields (device or host memory), beside the snow fields.
@@ -93,7 +100,7 @@ struct BedformFields {
   int* exported = nullptr;       // slabs that left the domain into this (non-domain) cell
   int* arrived = nullptr;        // slabs that arrived in this cell since the last cohesion pass
   int* arrivedCohesion = nullptr;  // the sum of their cohesions, in units of 1 / kCohesionUnits
-  int* counters = nullptr;       // [0] slabs eroded, [1] slabs moved by relaxation
+  unsigned long long* counters = nullptr;  // [0] slabs eroded, [1] slab moves of the relaxation (a step's totals)
   float* cohesion = nullptr;     // 0 loose .. 1 bonded (persistent)
   float* lastPowder = nullptr;   // P at the end of the previous step (persistent): fresh snow since
   float* base = nullptr;         // surface altitude without the slabs (B + C + S + U + residual)
@@ -143,11 +150,11 @@ struct BedformPrepareKernel {
     if (p > last && p > 0.f) f.cohesion[i] = f.cohesion[i] * (last / p);
     int n = 0;
     if (active && p > 0.f) {
-      n = static_cast<int>(floorf(p / a.slabM));
+      n = static_cast<int>(minf(floorf(p / a.slabM), 1.0e9f));  // deeper powder keeps the rest as residual
       if (n < 0) n = 0;
       // Under float rounding: the residual non-negative and below one slab.
       while (n > 0 && static_cast<float>(n) * a.slabM > p) --n;
-      while (static_cast<float>(n + 1) * a.slabM <= p) ++n;
+      while (n < 1000000000 && static_cast<float>(n + 1) * a.slabM <= p) ++n;
     }
     const float residual = p - static_cast<float>(n) * a.slabM;
     f.slabs[i] = n;
@@ -255,7 +262,7 @@ struct BedformSaltationKernel {
     if (v.windErosionFactor) erodible *= v.windErosionFactor[i];
     if (!(uniformFloat(poll.v[1]) < erodible)) return;
     atomicAddInt(&f.slabs[i], -1);
-    atomicAddInt(&f.counters[0], 1);
+    atomicAddCount(&f.counters[0], 1ull);
     const int carried = cohesionUnits(f.cohesion[i]);  // the slab keeps its age on the way
 
     // Hops, stepped cell by cell in metres from the take-off cell's centre.
@@ -384,7 +391,7 @@ struct BedformReposeKernel {
     f.slabs[to] += move;
     f.arrived[to] += move;
     f.arrivedCohesion[to] += move * cohesionUnits(f.cohesion[from]);
-    atomicAddInt(&f.counters[1], move);
+    atomicAddCount(&f.counters[1], static_cast<unsigned long long>(move));
   }
 };
 
