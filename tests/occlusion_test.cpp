@@ -340,6 +340,55 @@ TEST(Occlusion, BakeOnAMeshWritesTheDisplacedMeshAndAllBakers) {
   EXPECT_NE(manifest.find("snow_mesh.glb"), std::string::npos);
 }
 
+TEST(Occlusion, TheMeshVerticesFollowTheNoSnowMaskAndSnowfallMultiplier) {
+  // The pit mesh in occlusion mode with a no-snow mask over its western quarter and a snowfall
+  // multiplier of 0.5 elsewhere: vertices over the mask stay where they were; the others rise by
+  // half their snow (against the same bake without art direction).
+  const fs::path dir = fs::temp_directory_path() / ("snowbake_occlusion_mesh_art_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const TriangleMesh m = pitMesh();
+  {
+    std::ofstream obj(dir / "pit.obj");
+    for (const auto& p : m.positions) obj << "v " << p[0] << " " << p[1] << " " << p[2] << "\n";
+    for (const auto& t : m.triangles) obj << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+    std::ofstream pgm(dir / "west.pgm", std::ios::binary);  // 40 x 40 cells of 5 m: mask the west 10 columns
+    pgm << "P5\n40 40\n255\n";
+    for (int y = 0; y < 40; ++y)
+      for (int x = 0; x < 40; ++x) pgm.put(static_cast<char>(x < 10 ? 255 : 0));
+    std::ofstream half(dir / "half.pgm", std::ios::binary);
+    half << "P5\n40 40\n255\n";
+    for (int i = 0; i < 1600; ++i) half.put(static_cast<char>(255));
+  }
+  const std::string base = "mode = \"occlusion\"\n[terrain]\nfile = \"" + (dir / "pit.obj").string() +
+                           "\"\nformat = \"mesh\"\ncell_size_m = 5.0\n[site]\nlatitude_deg = 45.0\n[occlusion]\ntau_sun = 1.0\n";
+  const std::string outputs = "[outputs]\nlayers = [\"depth\"]\nmeshes = [\"ply\"]\n";
+  const test::Bake plain = test::bakeSceneText("occlusion_mesh_plain", base + outputs);
+  const test::Bake art = test::bakeSceneText(
+      "occlusion_mesh_art", base + "[multipliers]\nno_snow = \"" + (dir / "west.pgm").string() + "\"\nsnowfall = { file = \"" +
+                                (dir / "half.pgm").string() + "\", range = [0.0, 0.5] }\n" + outputs);
+  const TriangleMesh in = loadTriangleMesh((dir / "pit.obj").string(), "z");
+  const TriangleMesh a = loadTriangleMesh((plain.out() / "snow_mesh.ply").string(), "z");
+  const TriangleMesh b = loadTriangleMesh((art.out() / "snow_mesh.ply").string(), "z");
+  std::map<std::pair<int, int>, float> bed, full;
+  for (const auto& p : in.positions) bed[{static_cast<int>(std::lround(p[0])), static_cast<int>(std::lround(p[1]))}] = p[2];
+  for (const auto& p : a.positions) full[{static_cast<int>(std::lround(p[0])), static_cast<int>(std::lround(p[1]))}] = p[2];
+  int masked = 0, halved = 0;
+  for (const auto& p : b.positions) {
+    const std::pair<int, int> key{static_cast<int>(std::lround(p[0])), static_cast<int>(std::lround(p[1]))};
+    const float z0 = bed.at(key), snow = full.at(key) - z0;
+    if (p[0] < 49.0f) {  // cells 0..9 (x < 50 m); the vertex at x = 50 m reads cell 10
+      ASSERT_NEAR(p[2], z0, 1e-4) << "snow on a no-snow vertex at x = " << p[0];
+      ++masked;
+    } else if (p[0] > 51.0f) {
+      ASSERT_NEAR(p[2] - z0, 0.5f * snow, 1e-4) << "at x = " << p[0];
+      halved += snow > 0.01f;
+    }
+  }
+  EXPECT_GT(masked, 300);
+  EXPECT_GT(halved, 1000);
+  fs::remove_all(dir);
+}
+
 TEST(Occlusion, SceneFilesKeepEachModesLayersApart) {
   const std::string t = "[terrain]\nbuiltin = \"ridged\"\n";
   EXPECT_THROW(loadSceneText(t + "[outputs]\nlayers = [\"ambient_occlusion\"]\n", "season.toml", ""), InputError);

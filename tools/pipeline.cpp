@@ -645,8 +645,22 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       const Grid<float> none;
       const RayScene meshRays(none, GridSpec{}, meshes);
       const OcclusionSnow mo = computeOcclusionSnowOnMesh(meshRays, mesh, os);
+      // The scene's art direction, as on the grid: the snowfall multiplier scales a vertex's snow
+      // and the no-snow mask clears it, read at the grid cell under the vertex (the grid covers
+      // the mesh: x east from its origin, rows south from it).
+      const bool factor = state.snowfallFactor.size() == state.stableM.size(), bare = state.noSnow.size() == state.stableM.size();
       double volume = 0.0;
-      for (size_t k = 0; k < mesh.positions.size(); ++k) mesh.positions[k][2] += mo.snowM[k], volume += mo.snowM[k];
+      for (size_t k = 0; k < mesh.positions.size(); ++k) {
+        float snow = mo.snowM[k];
+        if (factor || bare) {
+          const auto& q = mesh.positions[k];
+          const int i = std::clamp(static_cast<int>(std::floor((q[0] - state.spec.originX) / state.spec.cellSizeXM)), 0, state.spec.width - 1);
+          const int j = std::clamp(static_cast<int>(std::floor((state.spec.originY - q[1]) / state.spec.cellSizeYM)), 0, state.spec.height - 1);
+          if (factor) snow *= state.snowfallFactor(i, j);
+          if (bare && state.noSnow(i, j)) snow = 0.f;
+        }
+        mesh.positions[k][2] += snow, volume += snow;
+      }
       log << "occlusion: mesh " << mesh.source << ", " << mesh.positions.size() << " vertices, " << mesh.triangles.size()
           << " triangles: " << fixed(since(tm), 2) << " s (mean snow " << fixed(volume / std::max<size_t>(1, mesh.positions.size()), 3)
           << " m per vertex)\n";
