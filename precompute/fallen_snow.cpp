@@ -1,0 +1,163 @@
+#include "fallen_snow.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/errors.h"
+#include "core/rng.h"
+#include "ray_scene.h"
+
+namespace snow {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+
+// Edge function of the directed edge P -> Q at (x, y): positive to its left. Evaluated on the
+// edge's endpoints in a fixed order, so the two triangles sharing an edge get the same number
+// with opposite signs, bit for bit (a lattice point on a shared edge belongs to one of them).
+double edgeFunction(const std::array<float, 3>& P, const std::array<float, 3>& Q, double x, double y) {
+  const bool swap = Q[0] < P[0] || (Q[0] == P[0] && Q[1] < P[1]);
+  const auto& p0 = swap ? Q : P;
+  const auto& p1 = swap ? P : Q;
+  const double e = (static_cast<double>(p1[0]) - p0[0]) * (y - p0[1]) - (static_cast<double>(p1[1]) - p0[1]) * (x - p0[0]);
+  return swap ? -e : e;
+}
+// Inside a counter-clockwise edge: left of it, or on it when the edge points up (or left).
+bool insideEdge(double e, const std::array<float, 3>& P, const std::array<float, 3>& Q) {
+  if (e != 0.0) return e > 0.0;
+  const double ex = static_cast<double>(Q[0]) - P[0], ey = static_cast<double>(Q[1]) - P[1];
+  return ey > 0.0 || (ey == 0.0 && ex < 0.0);
+}
+}  // namespace
+
+FallenSnow placeFallenSnow(const TriangleMesh& mesh, const FallenSnowSettings& st) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!(st.siteSpacingM > 0.0) || st.skyCellSites < 1 || st.flakesPerSite < 1 || !(st.swirlHeightM > 0.0) ||
+      !(st.flutterMeanM >= 0.0) || !(st.flutterSigmaM >= 0.0) || !(st.depthM >= 0.0) || !(st.skyClearanceM >= 0.0))
+    throw InputError(mesh.source + ": snow on meshes: site spacing, sky cell, flakes and swirl height must be positive, flutter and depth at least 0");
+  FallenSnow out;
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (const auto& p : mesh.positions)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  if (mesh.triangles.empty() || !(hi[0] > lo[0]) || !(hi[1] > lo[1]))
+    throw InputError(mesh.source + ": snow on meshes: the mesh has no extent in x and y");
+  const double s = st.siteSpacingM;
+  out.columns = static_cast<int>(std::ceil((hi[0] - lo[0]) / s - 1e-9));
+  out.rows = static_cast<int>(std::ceil((hi[1] - lo[1]) / s - 1e-9));
+  out.originX = lo[0];
+  out.originY = hi[1];
+  const int k = st.skyCellSites;
+  out.bucketColumns = (out.columns + k - 1) / k;
+  out.bucketRows = (out.rows + k - 1) / k;
+  const size_t buckets = static_cast<size_t>(out.bucketColumns) * out.bucketRows;
+  if (!st.skyMask.empty() && st.skyMask.size() != buckets)
+    throw InputError(mesh.source + ": snow on meshes: the sky mask has " + std::to_string(st.skyMask.size()) + " values for " +
+                     std::to_string(buckets) + " sky buckets");
+
+  // Sites: lattice points over every upward-facing triangle, in triangle order.
+  for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& a = mesh.positions[mesh.triangles[t][0]];
+    const auto& b = mesh.positions[mesh.triangles[t][1]];
+    const auto& c = mesh.positions[mesh.triangles[t][2]];
+    const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2], vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
+    const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+    const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!(len > 0.0) || nz / len <= 1e-6) continue;  // downward, vertical or degenerate: no snow
+    const int i0 = std::max(0, static_cast<int>(std::ceil((std::min({a[0], b[0], c[0]}) - lo[0]) / s - 0.5)));
+    const int i1 = std::min(out.columns - 1, static_cast<int>(std::floor((std::max({a[0], b[0], c[0]}) - lo[0]) / s - 0.5)));
+    const int j0 = std::max(0, static_cast<int>(std::ceil((hi[1] - std::max({a[1], b[1], c[1]})) / s - 0.5)));
+    const int j1 = std::min(out.rows - 1, static_cast<int>(std::floor((hi[1] - std::min({a[1], b[1], c[1]})) / s - 0.5)));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const double px = lo[0] + (i + 0.5) * s, py = hi[1] - (j + 0.5) * s;
+        // In the xy projection (counter-clockwise: the face looks up).
+        const double eab = edgeFunction(a, b, px, py), ebc = edgeFunction(b, c, px, py), eca = edgeFunction(c, a, px, py);
+        if (!insideEdge(eab, a, b) || !insideEdge(ebc, b, c) || !insideEdge(eca, c, a)) continue;
+        const double sum = eab + ebc + eca;
+        const double z = (ebc * a[2] + eca * b[2] + eab * c[2]) / sum;
+        SnowSite site;
+        site.position = {static_cast<float>(px), static_cast<float>(py), static_cast<float>(z)};
+        site.face = t;
+        site.column = i;
+        site.row = j;
+        site.footprintM2 = static_cast<float>(s * s);
+        out.sites.push_back(site);
+      }
+  }
+
+  // Flakes, site by site in parallel (each site's draws depend on its index only).
+  const Grid<float> noTerrain;  // the scene keeps a reference
+  const RayScene rays(noTerrain, GridSpec{}, {mesh});
+  const double skyZ = hi[2] + std::max(1e-3, st.skyClearanceM);
+  const int flakes = st.flakesPerSite;
+  std::vector<int> bucketOf(out.sites.size() * static_cast<size_t>(flakes), -1);  // -1 blocked, -2 left the world
+  const RandomKey key{st.seed};
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, out.sites.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t si = range.begin(); si < range.end(); ++si) {
+      const SnowSite& site = out.sites[si];
+      for (int f = 0; f < flakes; ++f) {
+        std::array<float, 3> p{site.position[0], site.position[1], site.position[2] + 1e-4f};
+        int result = -1;
+        for (uint32_t step = 0;; ++step) {
+          double r = 0.0, phi = 0.0;
+          if (st.flutterMeanM > 0.0 || st.flutterSigmaM > 0.0) {
+            const Philox4x32 d = key.draw(si, static_cast<uint32_t>(f) << 20 | (step & 0xFFFFF), RngStream::FallenSnowFlake);
+            const double u1 = uniformOpenDouble(d.v[0], d.v[1]), u2 = uniformFloat(d.v[2]), u3 = uniformFloat(d.v[3]);
+            const double normal = std::clamp(std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2), -3.0, 3.0);
+            r = std::max(0.0, st.flutterMeanM + st.flutterSigmaM * normal);
+            phi = 2.0 * kPi * u3;
+          }
+          const std::array<float, 3> q{static_cast<float>(p[0] + r * std::cos(phi)), static_cast<float>(p[1] + r * std::sin(phi)),
+                                       static_cast<float>(p[2] + st.swirlHeightM)};
+          const float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+          const float length = std::sqrt(dx * dx + dy * dy + dz * dz);
+          if (rays.occluded(p, {dx / length, dy / length, dz / length}, length)) break;  // blocked
+          if (q[2] >= skyZ) {
+            const int bi = static_cast<int>(std::floor((q[0] - lo[0]) / (k * s))), bj = static_cast<int>(std::floor((hi[1] - q[1]) / (k * s)));
+            result = bi >= 0 && bj >= 0 && bi < out.bucketColumns && bj < out.bucketRows ? bj * out.bucketColumns + bi : -2;
+            break;
+          }
+          p = q;
+        }
+        bucketOf[si * flakes + static_cast<size_t>(f)] = result;
+      }
+    }
+  });
+
+  // Each bucket's snow shared among the flakes that reached it, by weight (in site order).
+  const double weight = static_cast<double>(s) * s / flakes;
+  std::vector<double> bucketWeight(buckets, 0.0);
+  for (int b : bucketOf)
+    if (b >= 0) bucketWeight[static_cast<size_t>(b)] += weight;
+  auto bucketMass = [&](size_t b) {
+    const int bi = static_cast<int>(b % out.bucketColumns), bj = static_cast<int>(b / out.bucketColumns);
+    const int cols = std::min(k, out.columns - bi * k), rows = std::min(k, out.rows - bj * k);
+    return st.depthM * cols * rows * s * s * (st.skyMask.empty() ? 1.0 : st.skyMask[b]);
+  };
+  for (size_t b = 0; b < buckets; ++b) {
+    if (bucketWeight[b] > 0.0) out.skyMassM3 += bucketMass(b);
+    else ++out.emptyBuckets;
+  }
+  for (size_t si = 0; si < out.sites.size(); ++si) {
+    double volume = 0.0;
+    for (int f = 0; f < flakes; ++f) {
+      const int b = bucketOf[si * flakes + static_cast<size_t>(f)];
+      ++out.flakes;
+      if (b == -1) ++out.blocked;
+      if (b == -2) ++out.leftTheWorld;
+      if (b < 0) continue;
+      volume += bucketMass(static_cast<size_t>(b)) * weight / bucketWeight[static_cast<size_t>(b)];
+      ++out.sites[si].flakesReached;
+    }
+    out.sites[si].depthM = static_cast<float>(volume / out.sites[si].footprintM2);
+    out.placedM3 += volume;
+  }
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+}  // namespace snow
