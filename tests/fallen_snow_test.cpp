@@ -131,7 +131,8 @@ TEST(FallenSnow, WithFlutterSomeSnowReachesUnderTheOverhangAndTheMassIsUnchanged
 }
 
 TEST(FallenSnow, DownwardAndVerticalFacesKeepNothingAndThreadsDoNotMatter) {
-  // A closed box (0.5 m cube) floating 0.3 m above the ground: sites only on upward faces.
+  // A 0.5 m box (top, bottom and two vertical sides) floating 0.3 m above the ground: sites only
+  // on upward faces.
   TriangleMesh m;
   m.source = "box";
   addQuad(m, 0, 0, 2, 2, 0.f, true);
