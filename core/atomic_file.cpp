@@ -12,7 +12,12 @@ namespace fs = std::filesystem;
 
 std::string temporaryPathFor(const std::string& finalPath) {
   const fs::path p(finalPath);
-  const std::string name = "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + p.extension().string();
+  // Appended piecewise: GCC 12's -Wrestrict misreads `"." + std::string&&` (a false positive).
+  std::string name = ".";
+  name += p.stem().string();
+  name += ".tmp";
+  name += std::to_string(::getpid());
+  name += p.extension().string();
   return (p.parent_path() / name).string();
 }
 

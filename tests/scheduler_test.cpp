@@ -22,7 +22,7 @@ PhenomenonSpec continuous(const std::string& name, double perDay) {
 TEST(PoissonScheduler, EventSharesMatchFrequencies) {
   PoissonScheduler s(12345);
   const double f[3] = {2.0, 1.0, 0.25};
-  for (int i = 0; i < 3; ++i) s.add(continuous("p" + std::to_string(i), f[i]));
+  for (int i = 0; i < 3; ++i) s.add(continuous(std::string("p") + std::to_string(i), f[i]));
   s.runUntil(40000.0);
   const auto stats = s.stats();
   double n = 0;
