@@ -18,7 +18,10 @@
 // snow under an overhang is taken from above it, not created). A flake leaving the world's xy
 // bounds brings nothing. A site's depth is the snow it received over its footprint (vertical).
 //
-// Not here yet (README "Snow on meshes"): adaptive site refinement, the stability stage
+// Adaptive sampling: where neighbouring sites' coverage differs (an overhang's shadow edge),
+// the lattice cells are split into quarters (one level) and the flakes traced again.
+//
+// Not here yet (README "Snow on meshes"): deeper refinement levels, the stability stage
 // (angle-of-repose relaxation, snow falling over edges), the snow body (SDF, meshing) and the
 // bake mode.
 #pragma once
@@ -40,6 +43,10 @@ struct FallenSnowSettings {
   double swirlHeightM = 0.1;     // vertical step per swirl
   double skyClearanceM = 0.5;    // the sky plane this far above the mesh's top (the world box's top)
   uint64_t seed = 1;
+  // Adaptive sampling: lattice cells where a site's coverage (the share of its flakes that
+  // reached the sky) differs from a neighbour's by more than this are split into four sites of
+  // half the spacing, and every flake is traced again (1 or more: no refinement).
+  double maxCoverageDiff = 0.25;
   // Optional sky mask (precipitation map): one factor per sky bucket, rows from the north
   // (empty: 1 everywhere).
   std::vector<float> skyMask;
@@ -48,7 +55,8 @@ struct FallenSnowSettings {
 struct SnowSite {
   std::array<float, 3> position{};  // on the face, metres (x east, y north, z up)
   uint32_t face = 0;
-  int column = 0, row = 0;           // lattice cell (row 0 at the north)
+  int level = 0;                     // 0: the lattice; 1: a refined cell's quarter
+  int column = 0, row = 0;           // cell on its level's lattice (row 0 at the north)
   float footprintM2 = 0;             // horizontal area it stands for
   float depthM = 0;                  // vertical snow depth received
   int flakesReached = 0;             // of flakesPerSite
@@ -63,6 +71,7 @@ struct FallenSnow {
   double placedM3 = 0;      // snow on the sites (equals skyMassM3 up to rounding)
   long long flakes = 0, blocked = 0, leftTheWorld = 0;
   int emptyBuckets = 0;     // buckets no flake reached (their snow falls past the geometry)
+  int refinedCells = 0;     // lattice cells split by the adaptive sampling
   double seconds = 0;
 };
 
