@@ -92,18 +92,11 @@ TEST(Bedform, SlabLedgerIsExactAndSlopesEndWithinTheRepose) {
   EXPECT_NEAR(powderTotal(w.state), before, 1e-6 * before);
 }
 
-TEST(Bedform, ShadowIsTheFractionOfTheCellUnderTheFifteenDegreeLine) {
-  // A snow step of height H at the west end of a flat row, wind from the west: the fraction of
-  // a cell at distance d (centre to centre) from the step's top cell under the shadow line is
-  // clamp((H / tan 15 - d + dx) / dx, 0, 1) (plateau geometry, kernels/bedform.h).
-  const int w = 40, h = 3;
-  const float dx = 0.5f, slab = 0.025f;
-  SnowState s = makeBedformWindow(w, h, dx, 0.0, 0.0, 10.f, 0.f, -5.f, 1);
-  const int top = 5, slabsHigh = 24;  // H = 0.6 m
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x <= top; ++x) s.powderM(x, y) = slab * slabsHigh;
+// The shadow kernel alone on a state (serial), its fractions as bytes (0..255), row order.
+std::vector<uint8_t> shadowFractions(SnowState& s, bool periodic) {
   SnowFieldsView v;
-  v.width = w, v.height = h, v.cellSizeXM = v.cellSizeYM = dx;
+  v.width = s.spec.width, v.height = s.spec.height;
+  v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM), v.cellSizeYM = static_cast<float>(s.spec.cellSizeYM);
   v.bedrock = s.bedrockM.values().data(), v.compacted = s.compactedM.values().data(), v.stable = s.stableM.values().data();
   v.unstable = s.unstableM.values().data(), v.powder = s.powderM.values().data(), v.valid = s.validCell.values().data();
   v.windX = s.windXMps.values().data(), v.windY = s.windYMps.values().data();
@@ -115,10 +108,26 @@ TEST(Bedform, ShadowIsTheFractionOfTheCellUnderTheFifteenDegreeLine) {
   v.delta = delta.data(), v.surfaceSlope = slope.data();
   BedformFields f{slabs.data(), snapshot.data(), exported.data(), arrived.data(), arrivedCohesion.data(), counters.data(), cohesion.data(),
                   lastPowder.data(), base.data(), residual.data(), shadow.data(), active.data(), nullptr};
-  BedformArgs a = makeBedformArgs(BedformParameters{}, 0.0, 1, 0, 1, 0.0);
+  BedformParameters p;
+  p.periodic = periodic;
+  const BedformArgs a = makeBedformArgs(p, 0.0, 1, 0, 1, 0.0);
   SerialExec exec;
-  exec.forEachCell(w, h, BedformPrepareKernel{v, f, a});
-  exec.forEachCell(w, h, BedformShadowKernel{v, f, a});
+  exec.forEachCell(v.width, v.height, BedformPrepareKernel{v, f, a});
+  exec.forEachCell(v.width, v.height, BedformShadowKernel{v, f, a});
+  return shadow;
+}
+
+TEST(Bedform, ShadowIsTheFractionOfTheCellUnderTheFifteenDegreeLine) {
+  // A snow step of height H at the west end of a flat row, wind from the west: the fraction of
+  // a cell at distance d (centre to centre) from the step's top cell under the shadow line is
+  // clamp((H / tan 15 - d + dx) / dx, 0, 1) (plateau geometry, kernels/bedform.h).
+  const int w = 40, h = 3;
+  const float dx = 0.5f, slab = 0.025f;
+  SnowState s = makeBedformWindow(w, h, dx, 0.0, 0.0, 10.f, 0.f, -5.f, 1);
+  const int top = 5, slabsHigh = 24;  // H = 0.6 m
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x <= top; ++x) s.powderM(x, y) = slab * slabsHigh;
+  const std::vector<uint8_t> shadow = shadowFractions(s, false);
   const double tan15 = std::tan(15.0 * kPi / 180.0), height = slab * slabsHigh;
   int partial = 0;
   for (int x = top + 1; x < w; ++x) {
@@ -132,6 +141,28 @@ TEST(Bedform, ShadowIsTheFractionOfTheCellUnderTheFifteenDegreeLine) {
   EXPECT_EQ(shadow[static_cast<size_t>(w + top + 4)], 255);  // 2 m on: 0.6 / tan 15 = 2.24 m of full shadow
   EXPECT_EQ(shadow[static_cast<size_t>(w + top + 6)], 0);    // 3 m on: none
   for (int x = 0; x <= top; ++x) EXPECT_EQ(shadow[static_cast<size_t>(w + x)], 0);
+}
+
+TEST(Bedform, AShadowWrapsAroundAPeriodicWindowNarrowerThanItsReach) {
+  // A 6 m periodic window (12 cells) under the default 10 m shadow reach: the upwind march wraps
+  // past the window more than once. Moving the step moves the shadow by as many cells (the
+  // window has no edge), and the cells right behind the step are fully shaded.
+  const int w = 12, h = 2;
+  auto withStepAt = [&](int at) {
+    SnowState s = makeBedformWindow(w, h, 0.5, 0.0, 0.0, 10.f, 0.f, -5.f, 1);
+    for (int y = 0; y < h; ++y)
+      for (int k = 0; k < 3; ++k) s.powderM((at + k) % w, y) = 0.3f;
+    return shadowFractions(s, true);
+  };
+  const std::vector<uint8_t> a = withStepAt(0);
+  for (int shift : {1, 5, 11}) {
+    const std::vector<uint8_t> b = withStepAt(shift);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        ASSERT_EQ(b[static_cast<size_t>(y * w + (x + shift) % w)], a[static_cast<size_t>(y * w + x)]) << "shift " << shift << ", x " << x;
+  }
+  EXPECT_EQ(a[3], 255);
+  EXPECT_EQ(a[0], 0);
 }
 
 TEST(Bedform, NoErosionInFullShadowAndLandingsThereStay) {

@@ -112,7 +112,15 @@ struct BedformFields {
 
 namespace bedform {
 
-SNOW_HD SNOW_INLINE int wrapIndex(int v, int n) { return v < 0 ? v + n : (v >= n ? v - n : v); }
+// Cell (x, y) on the grid: wrapped (any distance) when periodic; false when a closed grid ends.
+SNOW_HD SNOW_INLINE bool onGrid(const SnowFieldsView& v, bool periodic, int& x, int& y) {
+  if (!periodic) return v.inside(x, y);
+  x %= v.width;
+  y %= v.height;
+  if (x < 0) x += v.width;
+  if (y < 0) y += v.height;
+  return true;
+}
 
 // Surface altitude of cell i from the snapshot.
 SNOW_HD SNOW_INLINE float snapSurface(const BedformFields& f, const BedformArgs& a, int i) {
@@ -213,12 +221,7 @@ struct BedformShadowKernel {
       if (d > a.shadowLengthM) break;
       int nx = static_cast<int>(floorf((cx + ux * d) / v.cellSizeXM));
       int ny = static_cast<int>(floorf((cy + uy * d) / v.cellSizeYM));
-      if (a.periodic) {
-        nx = bedform::wrapIndex(nx, v.width);
-        ny = bedform::wrapIndex(ny, v.height);
-      } else if (!v.inside(nx, ny)) {
-        break;
-      }
+      if (!bedform::onGrid(v, a.periodic, nx, ny)) break;  // (a periodic window may be narrower than the reach)
       const int j = v.index(nx, ny);
       if (j == i || j == last) continue;
       last = j;
@@ -284,18 +287,11 @@ struct BedformSaltationKernel {
         const float t = alongX ? tx : ty;
         if (t > length) break;
         int nx = alongX ? cx + sx : cx, ny = alongX ? cy : cy + sy;
-        if (a.periodic) {
-          nx = bedform::wrapIndex(nx, v.width);
-          ny = bedform::wrapIndex(ny, v.height);
-        } else if (!v.inside(nx, ny)) {
-          land(ci, carried);  // the grid's edge is a wall
+        if (!bedform::onGrid(v, a.periodic, nx, ny) || !v.valid[v.index(nx, ny)]) {
+          land(ci, carried);  // the grid's edge and NODATA are walls
           return;
         }
         const int ni = v.index(nx, ny);
-        if (!v.valid[ni]) {
-          land(ci, carried);
-          return;
-        }
         if (!f.active[ni]) {  // leaves the bedform domain: powder of that cell
           atomicAddInt(&f.exported[ni], 1);
           return;
@@ -312,12 +308,12 @@ struct BedformSaltationKernel {
       }
       px += dx * length;
       py += dy * length;
-      if (a.periodic) {  // keep the position inside the grid (the cell was wrapped already)
+      if (a.periodic) {  // back inside the grid (the cell was wrapped already), however long the hop
         const float wM = static_cast<float>(v.width) * v.cellSizeXM, hM = static_cast<float>(v.height) * v.cellSizeYM;
-        if (px < 0.f) px += wM;
-        if (px >= wM) px -= wM;
-        if (py < 0.f) py += hM;
-        if (py >= hM) py -= hM;
+        while (px < 0.f) px += wM;
+        while (px >= wM) px -= wM;
+        while (py < 0.f) py += hM;
+        while (py >= hM) py -= hM;
       }
       // Keep the position inside the current cell under float rounding.
       px = clampf(px, static_cast<float>(cx) * v.cellSizeXM, (static_cast<float>(cx) + 0.999f) * v.cellSizeXM);
