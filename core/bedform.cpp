@@ -88,6 +88,15 @@ SnowState makeBedformWindow(int w, int h, double cellM, double meanDepthM, doubl
   return s;
 }
 
+BedformParameters periodicBedformParameters() {
+  BedformParameters p;
+  p.periodic = true;
+  p.sinteringPerDay = 0.0;
+  return p;
+}
+
+SnowState makeBarchanWindow(int n) { return makeBedformWindow(n, n, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3); }
+
 double maxReposeExcessM(const SnowState& s, double tanRepose, double slabM, bool periodic) {
   const int w = s.spec.width, h = s.spec.height;
   double worst = -std::numeric_limits<double>::infinity();

@@ -45,6 +45,13 @@ BedformArgs makeBedformArgs(const BedformParameters& p, double dtDays, int round
 SnowState makeBedformWindow(int w, int h, double cellM, double meanDepthM, double noiseM, float windXMps,
                             float windYMps, float temperatureC, uint64_t seed);
 
+// README's barchan set, shared by the tests, the benchmark and the GPU tests: the default
+// parameters on a periodic (tileable) window without sintering, and an n x n window of 0.5 m
+// cells holding 5 cm of powder with +-1 slab of noise (seed 3) under a steady 10 m/s westerly at
+// -10 degC.
+BedformParameters periodicBedformParameters();
+SnowState makeBarchanWindow(int n);
+
 // Largest excess of a 4-neighbour surface step over tan(repose) x spacing, among steps whose
 // higher cell holds at least one slab of powder (bare steps are the bed's own): <= 0 means at rest.
 double maxReposeExcessM(const SnowState& s, double tanRepose, double slabM, bool periodic);

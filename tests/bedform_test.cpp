@@ -42,13 +42,6 @@ struct Window {
   }
 };
 
-BedformParameters periodicParams() {
-  BedformParameters p;
-  p.periodic = true;
-  p.sinteringPerDay = 0.0;
-  return p;
-}
-
 double powderTotal(const SnowState& s) {
   double t = 0;
   for (float v : s.powderM.values()) t += v;
@@ -58,8 +51,7 @@ double powderTotal(const SnowState& s) {
 // The barchan parameter set of README "Wind bedforms" (the defaults): 0.5 m cells, 2.5 cm slabs,
 // 5 cm of loose snow on a hard bed, hops of 0.5 m at 10 m/s, p_s 0.4, p_ns 0.9; 500 rounds.
 Window barchanField(int n, std::unique_ptr<SnowBackend> backend) {
-  BedformParameters p = periodicParams();
-  return Window(makeBedformWindow(n, n, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3), p, std::move(backend));
+  return Window(makeBarchanWindow(n), periodicBedformParameters(), std::move(backend));
 }
 
 TEST(Bedform, SlabLedgerIsExactAndSlopesEndWithinTheRepose) {
@@ -206,7 +198,7 @@ TEST(Bedform, SnowStopsAtTheWindwardFaceOfARockAndNeverOnTop) {
         s.bedrockM(x, y) = 2.f;
         s.powderM(x, y) = 0.f;
       }
-  BedformParameters p = periodicParams();
+  BedformParameters p = periodicBedformParameters();
   p.maxSlopeDeg = 89.0;
   Window win(s, p, createCpuBackend());
   const double mean = powderTotal(win.state) / (n * n - 3 * 36);
@@ -258,7 +250,7 @@ TEST(Bedform, SameBytesOnOneAndTwoThreadsAndTheSerialReference) {
   auto runOn = [](std::unique_ptr<SnowBackend> b, int threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
     SnowState s = makeBedformWindow(64, 48, 0.5, 0.08, 0.04, 7.f, -4.f, -8.f, 9);
-    BedformParameters p = periodicParams();
+    BedformParameters p = periodicBedformParameters();
     p.sinteringPerDay = 0.4;
     Window w(s, p, std::move(b));
     w.run(25, 0.1, -3.0);
@@ -313,7 +305,7 @@ TEST(Bedform, TheThesisBarchanSetGrowsCrescentsOfItsHeight) {
   // p_ns 0.9, 256², t = 1000: crescents with their horns downwind, the tallest about 26 slabs
   // (the thesis's maximum; 25.4 and 27.6 slabs here with two seeds).
   SnowState s = makeBedformWindow(256, 256, 1.0, 1.0, 1.0 / 3.0, 10.f, 0.f, -10.f, 3);
-  BedformParameters p = periodicParams();
+  BedformParameters p = periodicBedformParameters();
   p.slabM = 1.0 / 3.0;
   p.hopLengthM = 5.0;
   Window w(s, p, createCpuBackend());

@@ -17,15 +17,6 @@ namespace snow {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
 
-// README's barchan set on an n x n periodic window of 0.5 m cells (5 cm of powder, +-1 slab).
-SnowState barchanWindow(int n) { return makeBedformWindow(n, n, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3); }
-BedformParameters barchanParams() {
-  BedformParameters p;
-  p.periodic = true;
-  p.sinteringPerDay = 0.0;
-  return p;
-}
-
 struct Timing {
   double secondsPerRound = 0;
   long long slabsLifted = 0;
@@ -34,8 +25,8 @@ struct Timing {
 
 // Warm-up rounds (the forms start), then `rounds` timed rounds.
 Timing timeRounds(SnowBackend& b, int n, int warmup, int rounds) {
-  SnowState s = barchanWindow(n);
-  const BedformParameters p = barchanParams();
+  SnowState s = makeBarchanWindow(n);
+  const BedformParameters p = periodicBedformParameters();
   b.upload(s);
   Timing t;
   BedformStepReport r = b.bedformStep(makeBedformArgs(p, 0.0, warmup, 0, 1, 0.0));
@@ -78,8 +69,8 @@ std::string bedformBench(const BenchOptions& o, std::ostream& log, int threads) 
 
   // References: the serial executor's bytes, the repose angle, the barchan census.
   const int n = 192, rounds = 500;
-  const BedformParameters p = barchanParams();
-  SnowState ref = barchanWindow(n), par = ref;
+  const BedformParameters p = periodicBedformParameters();
+  SnowState ref = makeBarchanWindow(n), par = ref;
   auto serial = createSerialBackend();
   auto cpu = createCpuBackend();
   serial->upload(ref);
@@ -106,7 +97,7 @@ std::string bedformBench(const BenchOptions& o, std::ostream& log, int threads) 
         << "| cpu (" << threads << " threads) against the serial executor | same bytes, same ledger | " << differing(par)
         << " cells differ; " << rs.slabsEroded << " and " << rp.slabsEroded << " slabs lifted |\n";
   if (info.available) {
-    SnowState g = barchanWindow(n);
+    SnowState g = makeBarchanWindow(n);
     auto gpu = cuda::createCudaBackend();
     gpu->upload(g);
     gpu->bedformStep(makeBedformArgs(p, 0.0, rounds, 0, 1, 0.0));

@@ -297,9 +297,9 @@ TEST(CudaBackend, BedformsMatchTheCpuBitForBit) {
   ASSERT_TRUE(gpu->bedformCohesion(cb));
   EXPECT_EQ(ca.values(), cb.values());
 
-  SnowState w = makeBedformWindow(256, 256, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3), wa = w, wb = w;
-  BedformParameters q;
-  q.periodic = true;
+  SnowState w = makeBarchanWindow(256), wa = w, wb = w;
+  BedformParameters q = periodicBedformParameters();
+  q.sinteringPerDay = 0.5;  // the cohesion too
   ExecBackend<SerialExec> cpu2;
   auto gpu2 = cuda::createCudaBackend();
   cpu2.upload(w);
@@ -315,10 +315,8 @@ TEST(CudaBackend, BedformsMatchTheCpuBitForBit) {
 // `--stage bedforms` measures the same on the CPU).
 TEST(CudaBackend, BedformRoundTimeOn1024Squared) {
   SKIP_WITHOUT_CUDA();
-  SnowState w = makeBedformWindow(1024, 1024, 0.5, 0.05, 0.025, 10.f, 0.f, -10.f, 3);
-  BedformParameters q;
-  q.periodic = true;
-  q.sinteringPerDay = 0.0;
+  SnowState w = makeBarchanWindow(1024);
+  const BedformParameters q = periodicBedformParameters();
   auto gpu = cuda::createCudaBackend();
   gpu->upload(w);
   gpu->bedformStep(makeBedformArgs(q, 0.0, 20, 0, 1, 0.0));
