@@ -14,7 +14,8 @@ constexpr double kPi = 3.14159265358979323846;
 double tanDeg(double d) { return std::tan(d * kPi / 180.0); }
 }  // namespace
 
-std::string validateBedformParameters(const BedformParameters& p, double minCellM) {
+std::string validateBedformParameters(const BedformParameters& p, const GridSpec& spec) {
+  const double minCellM = std::min(spec.cellSizeXM, spec.cellSizeYM);
   std::ostringstream e;
   if (!(p.slabM > 0.0)) e << "bedforms.slab_m must be positive (got " << p.slabM << ")";
   else if (!(p.hopLengthM > 0.0)) e << "bedforms.hop_length_m must be positive (got " << p.hopLengthM << ")";
@@ -35,6 +36,9 @@ std::string validateBedformParameters(const BedformParameters& p, double minCell
   else if (!(p.roundsPerHour > 0.0) || p.roundsPerHour > 3600.0) e << "bedforms.rounds_per_hour must be in (0, 3600]";
   else if (p.batches < 1 || p.batches > 64) e << "bedforms.batches must be in [1, 64]";
   else if (p.maxHops < 1 || p.maxHops > 4096) e << "bedforms.max_hops must be in [1, 4096]";
+  else if (p.periodic && (spec.width % 2 != 0 || spec.height % 2 != 0))
+    e << "bedforms.periodic: the grid is " << spec.width << " x " << spec.height
+      << " cells; a periodic (tileable) window needs an even width and height";
   return e.str();
 }
 

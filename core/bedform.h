@@ -33,9 +33,9 @@ struct BedformParameters {
   bool periodic = false;             // wrap around (test windows only)
 };
 
-// Empty when the parameters are usable on cells of `minCellM` (the smaller side), else the
-// problem in words (naming the scene key).
-std::string validateBedformParameters(const BedformParameters& p, double minCellM);
+// Empty when the parameters are usable on the grid `spec` (its smaller cell side, and an even
+// width and height when periodic), else the problem in words (naming the scene key).
+std::string validateBedformParameters(const BedformParameters& p, const GridSpec& spec);
 
 BedformArgs makeBedformArgs(const BedformParameters& p, double dtDays, int rounds, uint64_t roundBase, uint64_t seed,
                             double seaLevelTemperatureC);

@@ -410,10 +410,16 @@ TEST(BedformScene, KeysAreReadAndBadValuesNameTheirKey) {
   EXPECT_NE(error("[bedforms]\nhop = 1\n").find("bedforms.hop"), std::string::npos);
   EXPECT_NE(error("[bedforms]\n", "mode = \"occlusion\"\n").find("bedforms: mode = \"occlusion\""), std::string::npos);
   // The repose angle must allow one slab's step on the terrain's cells.
+  GridSpec grid;
+  grid.width = 64, grid.height = 63, grid.cellSizeXM = grid.cellSizeYM = 0.5;
   BedformParameters thick;
   thick.slabM = 0.5;
-  EXPECT_NE(validateBedformParameters(thick, 0.5).find("bedforms.repose_angle_deg"), std::string::npos);
-  EXPECT_EQ(validateBedformParameters(BedformParameters{}, 0.5), "");
+  EXPECT_NE(validateBedformParameters(thick, grid).find("bedforms.repose_angle_deg"), std::string::npos);
+  EXPECT_EQ(validateBedformParameters(BedformParameters{}, grid), "");
+  // A tileable window needs even sizes (the repose relaxation's edge families).
+  EXPECT_NE(validateBedformParameters(periodicBedformParameters(), grid).find("bedforms.periodic"), std::string::npos);
+  grid.height = 64;
+  EXPECT_EQ(validateBedformParameters(periodicBedformParameters(), grid), "");
 }
 
 TEST(BedformScene, ASeasonWithBedformsInsideAMaskKeepsItsMass) {

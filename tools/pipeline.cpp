@@ -279,8 +279,12 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   state.allocate(ti.spec);
   state.bedrockM = terrain.heightsM;
   state.validCell = terrain.valid;
-  // Painted rasters first: a bad mask fails before any precompute runs.
+  // Painted rasters first: a bad mask fails before any precompute runs; so do bedform
+  // parameters that do not suit the grid.
   const ArtDirectionPlan art = prepareArtDirection(scene, ti, state, log);
+  if (scene.bedforms.enabled && !occlusionMode)
+    if (const std::string problem = validateBedformParameters(scene.bedforms.params, state.spec); !problem.empty())
+      throw InputError(scene.sourceName + ": " + problem);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
   std::optional<Exposure> exposure;
   if (occlusionMode) {
@@ -722,12 +726,6 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     config.frameDays = scene.outputs.frameDays;
     config.windTransport = wind.hasWind();
     if (scene.bedforms.enabled) {
-      const double minCell = std::min(state.spec.cellSizeXM, state.spec.cellSizeYM);
-      const std::string problem = validateBedformParameters(scene.bedforms.params, minCell);
-      if (!problem.empty()) throw InputError(scene.sourceName + ": " + problem);
-      if (scene.bedforms.params.periodic && (state.spec.width % 2 != 0 || state.spec.height % 2 != 0))
-        throw InputError(scene.sourceName + ": bedforms.periodic: the grid is " + std::to_string(state.spec.width) + " x " +
-                         std::to_string(state.spec.height) + " cells; a periodic (tileable) window needs an even width and height");
       config.bedforms = scene.bedforms.params;
       if (!config.windTransport) log << "bedforms: the scene has no wind; only the cohesion of the snow will change\n";
     }
