@@ -247,11 +247,20 @@ class ExecBackend final : public SnowBackend {
       exec_.downloadRange(unstable_, i, 1, &u);
       exec_.downloadRange(stable_, i, 1, &st);
       exec_.downloadRange(compacted_, i, 1, &c);
+      // A part of a layer moves as transport moves it (the source gives exactly what the
+      // receiver gained, giveTo), so the cell's total does not drift by a rounding at every
+      // skier; a whole layer moves whole (the source left at 0).
+      auto move = [](float& from, float& to, float amount) {
+        if (amount >= from) {
+          to += from;
+          from = 0.f;
+        } else {
+          from = giveTo(to, amount, from, nullptr);
+        }
+      };
       const float fromU = std::min(u, amountM);
-      const float fromS = std::min(st + fromU, amountM - fromU);  // what U lacked, from S (after U's share arrived)
-      u -= fromU;
-      st = st + fromU - fromS;
-      c += fromS;
+      move(u, st, fromU);
+      move(st, c, std::min(st, amountM - fromU));  // what U lacked, from S (after U's share arrived)
       exec_.uploadRange(unstable_, i, 1, &u);
       exec_.uploadRange(stable_, i, 1, &st);
       exec_.uploadRange(compacted_, i, 1, &c);

@@ -293,18 +293,20 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   // drawn by the route map, and the scene's user skiers. A descent runs whole at its event (the
   // bake has no real-time display to zoom for); an avalanche it triggers starts at once.
   std::optional<SkiRun> ski;
+  // At function scope: the scheduler's events call runSkier (and it counts skierId) long after
+  // the block below has ended.
+  uint64_t skierId = 0;
+  auto runSkier = [&](int x, int y, double day, bool user) {
+    SkierRecord r = ski->descend(x, y, day, cfg.seed, skierId++, user);
+    if (r.triggered && avalancheId >= 0) {
+      pendingAvalanches.push_back({day, r.triggerX, r.triggerY, true, nullptr});
+      scheduler.start(avalancheId);
+    }
+    if (!user) r.path.clear();  // keep the records small; user skiers keep their paths
+    report.skiers.push_back(std::move(r));
+  };
   if (skiing) {
     ski.emplace(backend, p, state, cfg.skiTracks);
-    uint64_t skierId = 0;
-    auto runSkier = [&](int x, int y, double day, bool user) {
-      SkierRecord r = ski->descend(x, y, day, cfg.seed, skierId++, user);
-      if (r.triggered && avalancheId >= 0) {
-        pendingAvalanches.push_back({day, r.triggerX, r.triggerY, true, nullptr});
-        scheduler.start(avalancheId);
-      }
-      if (!user) r.path.clear();  // keep the records small; user skiers keep their paths
-      report.skiers.push_back(std::move(r));
-    };
     const double startsPerDay = p.skiersPerHour * p.skiHoursPerDay;
     if (startsPerDay > 0.0) {
       PhenomenonSpec s;
