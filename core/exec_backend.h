@@ -130,8 +130,8 @@ class ExecBackend final : public SnowBackend {
       const std::vector<int> zeroInts(n, 0);
       const std::vector<float> zeroFloats(n, 0.f);
       const std::vector<uint8_t> zeroBytes(n, 0);
-      for (auto* b : {&bedSlabs_, &bedSnapshot_, &bedExported_, &bedArrived_, &bedArrivedCohesion_}) exec_.upload(*b, zeroInts);
-      for (auto* b : {&bedCohesion_, &bedBase_, &bedResidual_}) exec_.upload(*b, zeroFloats);
+      for (auto* b : {&bedSlabs_, &bedSnapshot_, &bedExported_, &bedArrived_, &bedArrivedCohesion_, &bedInitial_}) exec_.upload(*b, zeroInts);
+      for (auto* b : {&bedCohesion_, &bedBase_}) exec_.upload(*b, zeroFloats);
       for (auto* b : {&bedShadow_, &bedActive_}) exec_.upload(*b, zeroBytes);
       std::vector<float> powder;
       exec_.download(powder_, powder);
@@ -326,7 +326,7 @@ class ExecBackend final : public SnowBackend {
     f.cohesion = bedCohesion_.data();
     f.lastPowder = bedLastPowder_.data();
     f.base = bedBase_.data();
-    f.residual = bedResidual_.data();
+    f.initial = bedInitial_.data();
     f.shadow = bedShadow_.data();
     f.active = bedActive_.data();
     f.mask = hasBedformMask_ ? bedformMask_.data() : nullptr;
@@ -383,9 +383,9 @@ class ExecBackend final : public SnowBackend {
   typename Exec::template Buffer<float> snowfallFactor_, meltFactor_, windErosionFactor_, editWeight_;
   bool hasSnowfallFactor_ = false, hasMeltFactor_ = false, hasWindErosionFactor_ = false;
   bool avalancheFieldsReady_ = false;
-  typename Exec::template Buffer<int> bedSlabs_, bedSnapshot_, bedExported_, bedArrived_, bedArrivedCohesion_;
+  typename Exec::template Buffer<int> bedSlabs_, bedSnapshot_, bedExported_, bedArrived_, bedArrivedCohesion_, bedInitial_;
   typename Exec::template Buffer<unsigned long long> bedCounters_;
-  typename Exec::template Buffer<float> bedCohesion_, bedLastPowder_, bedBase_, bedResidual_;
+  typename Exec::template Buffer<float> bedCohesion_, bedLastPowder_, bedBase_;
   typename Exec::template Buffer<uint8_t> bedShadow_, bedActive_, bedformMask_;
   bool bedformFieldsReady_ = false, hasBedformMask_ = false;
 

@@ -93,13 +93,13 @@ std::vector<uint8_t> shadowFractions(SnowState& s, bool periodic) {
   v.unstable = s.unstableM.values().data(), v.powder = s.powderM.values().data(), v.valid = s.validCell.values().data();
   v.windX = s.windXMps.values().data(), v.windY = s.windYMps.values().data();
   const size_t n = s.spec.cellCount();
-  std::vector<int> slabs(n), snapshot(n), exported(n), arrived(n), arrivedCohesion(n);
+  std::vector<int> slabs(n), snapshot(n), exported(n), arrived(n), arrivedCohesion(n), initial(n);
   std::vector<unsigned long long> counters(4);
-  std::vector<float> cohesion(n), lastPowder(s.powderM.values()), base(n), residual(n), delta(n), slope(n);
+  std::vector<float> cohesion(n), lastPowder(s.powderM.values()), base(n), delta(n), slope(n);
   std::vector<uint8_t> shadow(n), active(n);
   v.delta = delta.data(), v.surfaceSlope = slope.data();
   BedformFields f{slabs.data(), snapshot.data(), exported.data(), arrived.data(), arrivedCohesion.data(), counters.data(), cohesion.data(),
-                  lastPowder.data(), base.data(), residual.data(), shadow.data(), active.data(), nullptr};
+                  lastPowder.data(), base.data(), initial.data(), shadow.data(), active.data(), nullptr};
   BedformParameters p;
   p.periodic = periodic;
   const BedformArgs a = makeBedformArgs(p, 0.0, 1, 0, 1, 0.0);

@@ -104,7 +104,7 @@ struct BedformFields {
   float* cohesion = nullptr;     // 0 loose .. 1 bonded (persistent)
   float* lastPowder = nullptr;   // P at the end of the previous step (persistent): fresh snow since
   float* base = nullptr;         // surface altitude without the slabs (B + C + S + U + residual)
-  float* residual = nullptr;     // powder below one slab, left in place
+  int* initial = nullptr;        // slab counts at the step's start (the rest of the powder, under one slab, stays put)
   uint8_t* shadow = nullptr;
   uint8_t* active = nullptr;     // in the bedform domain this step
   const uint8_t* mask = nullptr; // scene mask (null: whole terrain)
@@ -167,7 +167,7 @@ struct BedformPrepareKernel {
     const float residual = p - static_cast<float>(n) * a.slabM;
     f.slabs[i] = n;
     f.snapshot[i] = n;
-    f.residual[i] = residual;
+    f.initial[i] = n;
     f.base[i] = bed + residual;
     v.delta[i] = active ? static_cast<float>(n) : 0.f;  // for the domain's mean slab count
     v.surfaceSlope[i] = active ? 1.f : 0.f;             // for the domain's cell count
@@ -429,7 +429,12 @@ struct BedformFinishKernel {
     const int i = v.index(x, y);
     const float before = v.powder[i];
     float after = before;
-    if (f.active[i]) after = f.residual[i] + static_cast<float>(f.slabs[i]) * a.slabM;
+    // The slabs gained or lost, added once: a cell whose count did not change keeps its powder
+    // to the bit (re-adding residual and slabs would round every domain cell every step).
+    if (f.active[i]) {
+      if (f.slabs[i] != f.initial[i]) after = before + static_cast<float>(f.slabs[i] - f.initial[i]) * a.slabM;
+      if (after < 0.f) after = 0.f;  // (never: a cell loses at most the slabs it had; float guard)
+    }
     else if (f.exported[i] > 0) after = before + static_cast<float>(f.exported[i]) * a.slabM;
     v.powder[i] = after;
     if (after < before) v.windScour[i] += before - after;
