@@ -272,6 +272,7 @@ class ExecBackend final : public SnowBackend {
     if (!avalancheFieldsReady_) {  // allocated on the first avalanche only
       exec_.upload(flows_, std::vector<float>(4 * spec_.cellCount(), 0.f));
       exec_.upload(avalancheBefore_, std::vector<float>(spec_.cellCount(), 0.f));
+      exec_.upload(avalancheU_, std::vector<double>(spec_.cellCount(), 0.0));
       exec_.upload(rowStats_, std::vector<float>(4 * static_cast<size_t>(spec_.height), 0.f));
       avalancheFieldsReady_ = true;
     }
@@ -365,6 +366,7 @@ class ExecBackend final : public SnowBackend {
     v.scratchPowder = scratchPowder_.data();
     v.flows = flows_.data();
     v.avalancheBefore = avalancheBefore_.data();
+    v.avalancheU = avalancheU_.data();
     v.avalancheScour = avalancheScour_.data();
     v.avalancheDeposit = avalancheDeposit_.data();
     v.rowStats = rowStats_.data();
@@ -380,6 +382,7 @@ class ExecBackend final : public SnowBackend {
   typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
   typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_;
   typename Exec::template Buffer<float> flows_, avalancheBefore_, avalancheScour_, avalancheDeposit_, rowStats_;
+  typename Exec::template Buffer<double> avalancheU_;
   typename Exec::template Buffer<float> snowfallFactor_, meltFactor_, windErosionFactor_, editWeight_;
   bool hasSnowfallFactor_ = false, hasMeltFactor_ = false, hasWindErosionFactor_ = false;
   bool avalancheFieldsReady_ = false;

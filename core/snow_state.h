@@ -145,6 +145,7 @@ struct SnowFieldsView {
   // floats per row of statistics for the host.
   float* flows = nullptr;
   float* avalancheBefore = nullptr;
+  double* avalancheU = nullptr;  // during an avalanche: U in double (the float layer is its rounding)
   float* avalancheScour = nullptr;
   float* avalancheDeposit = nullptr;
   float* rowStats = nullptr;
