@@ -12,6 +12,7 @@
 #include "kernels/bedform.h"
 #include "kernels/edit.h"
 #include "kernels/melt.h"
+#include "kernels/ski.h"
 #include "kernels/powder_diffusion.h"
 #include "kernels/snowfall.h"
 #include "kernels/stability.h"
@@ -86,9 +87,13 @@ class SnowBackend {
     (void)out;
     return false;
   }
-  // In each listed cell (y * width + x, in order), `amountM` of unstable
-  // snow becomes stable, and what U lacks of it, stable becomes compacted (conserves mass).
-  virtual void skierCompaction(const std::vector<int>& cells, float amountM) = 0;
+  // The route map the skier kernels read (kernels/ski.h); before the first skierBatch.
+  virtual void uploadRouteMap(const Grid<float>& route) = 0;
+  // A batch of skiers moved together, one move of every skier at a time, until all have stopped
+  // (kernels/ski.h): in, each agent's startCell and id; out, their final state, and in `paths`
+  // each one's large-scale path as x, y pairs (metres). Each cell a skier enters (its start cell
+  // too) turns args.compactionM of U into S, or of S into C where U runs short (conserves mass).
+  virtual void skierBatch(const SkierArgs& args, std::vector<SkierAgent>& agents, std::vector<std::vector<double>>& paths) = 0;
 
   // Avalanches (kernels/avalanche.h; the host loop is core/avalanche.h). Release: `moving` (one
   // byte per cell) marks the released cells; records U + P and joins their powder to U.

@@ -26,6 +26,17 @@ class TbbExec : public HostStorage {
         for (int x = 0; x < width; ++x) kernel(x, y);
     });
   }
+  // kernel(i) for i in [0, n) (agents, not cells): a few per task, they are few and costly.
+  template <class K>
+  void forEachIndex(int n, const K& kernel) {
+    if (n <= 1) {
+      if (n == 1) kernel(0);
+      return;
+    }
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 2), [&](const tbb::blocked_range<int>& r) {
+      for (int i = r.begin(); i < r.end(); ++i) kernel(i);
+    });
+  }
   template <class K>
   void forEachCellOfColour(int width, int height, int colour, const K& kernel) {
     tbb::parallel_for(tbb::blocked_range<int>(0, height, kRowGrain), [&](const tbb::blocked_range<int>& rows) {

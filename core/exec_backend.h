@@ -4,6 +4,7 @@
 // by the CUDA backend's .cu file, so it must stay free of TBB and CUDA headers.
 #pragma once
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -240,30 +241,67 @@ class ExecBackend final : public SnowBackend {
     }
   }
 
-  void skierCompaction(const std::vector<int>& cells, float amountM) override {
-    for (int cell : cells) {
-      const size_t i = static_cast<size_t>(cell);
-      float u = 0.f, st = 0.f, c = 0.f;
-      exec_.downloadRange(unstable_, i, 1, &u);
-      exec_.downloadRange(stable_, i, 1, &st);
-      exec_.downloadRange(compacted_, i, 1, &c);
-      // A part of a layer moves as transport moves it (the source gives exactly what the
-      // receiver gained, giveTo), so the cell's total does not drift by a rounding at every
-      // skier; a whole layer moves whole (the source left at 0).
-      auto move = [](float& from, float& to, float amount) {
-        if (amount >= from) {
-          to += from;
-          from = 0.f;
-        } else {
-          from = giveTo(to, amount, from, nullptr);
-        }
-      };
-      const float fromU = std::min(u, amountM);
-      move(u, st, fromU);
-      move(st, c, std::min(st, amountM - fromU));  // what U lacked, from S (after U's share arrived)
-      exec_.uploadRange(unstable_, i, 1, &u);
-      exec_.uploadRange(stable_, i, 1, &st);
-      exec_.uploadRange(compacted_, i, 1, &c);
+  void uploadRouteMap(const Grid<float>& route) override {
+    exec_.upload(skierRoute_, route.values());
+    exec_.upload(skierClaim_, std::vector<int>(spec_.cellCount(), INT_MAX));
+    exec_.upload(skierCounters_, std::vector<int>(2, 0));
+    exec_.finish();
+  }
+
+  void skierBatch(const SkierArgs& args, std::vector<SkierAgent>& agents, std::vector<std::vector<double>>& paths) override {
+    const int n = static_cast<int>(agents.size());
+    paths.assign(agents.size(), {});
+    if (n == 0) return;
+    // The path buffer holds kSkierPathChunk points a skier; the host empties it every
+    // kSkierPathChunk - 1 moves (a move adds at most one point; the start adds the first).
+    constexpr int kSkierPathChunk = 64;
+    SkierArgs a = args;
+    a.pathStride = kSkierPathChunk;
+    exec_.upload(skierAgents_, agents);
+    exec_.upload(skierPath_, std::vector<double>(2 * static_cast<size_t>(kSkierPathChunk) * n));
+    const SkierFields f{skierAgents_.data(), n, skierPath_.data(), skierRoute_.data(), skierClaim_.data(), skierCounters_.data()};
+    const SnowFieldsView v = view();
+    auto counter = [&](int k) {
+      int c = 0;
+      exec_.downloadRange(skierCounters_, static_cast<size_t>(k), 1, &c);
+      return c;
+    };
+    auto resetCounter = [&](int k) {
+      const int zero = 0;
+      exec_.uploadRange(skierCounters_, static_cast<size_t>(k), 1, &zero);
+    };
+    // Claim rounds until every entry of this move is applied (one when no two skiers share a cell).
+    auto enterAll = [&] {
+      for (int round = 0; round <= n; ++round) {
+        resetCounter(1);
+        exec_.forEachIndex(n, SkierClaimKernel{f});
+        exec_.forEachIndex(n, SkierEnterKernel{v, f, a});
+        if (counter(1) == 0) return;
+      }
+      throw std::logic_error("skier entries: a claim round applied nothing");
+    };
+    std::vector<double> chunk;
+    auto takePaths = [&] {
+      exec_.download(skierAgents_, agents);
+      for (int i = 0; i < n; ++i) {
+        SkierAgent& s = agents[static_cast<size_t>(i)];
+        if (s.pathCount == 0) continue;
+        chunk.resize(2 * static_cast<size_t>(s.pathCount));
+        exec_.downloadRange(skierPath_, 2 * static_cast<size_t>(i) * kSkierPathChunk, chunk.size(), chunk.data());
+        paths[static_cast<size_t>(i)].insert(paths[static_cast<size_t>(i)].end(), chunk.begin(), chunk.end());
+        s.pathCount = 0;
+      }
+      exec_.upload(skierAgents_, agents);
+    };
+    exec_.forEachIndex(n, SkierStartKernel{v, f, a});
+    enterAll();
+    for (int moves = 1;; ++moves) {
+      resetCounter(0);
+      exec_.forEachIndex(n, SkierMoveKernel{v, f, a});
+      enterAll();
+      const bool running = counter(0) > 0;
+      if (!running || moves % (kSkierPathChunk - 1) == 0) takePaths();
+      if (!running) break;
     }
     exec_.finish();
   }
@@ -388,6 +426,10 @@ class ExecBackend final : public SnowBackend {
   bool avalancheFieldsReady_ = false;
   typename Exec::template Buffer<int> bedSlabs_, bedSnapshot_, bedExported_, bedArrived_, bedArrivedCohesion_, bedInitial_;
   typename Exec::template Buffer<unsigned long long> bedCounters_;
+  typename Exec::template Buffer<SkierAgent> skierAgents_;
+  typename Exec::template Buffer<double> skierPath_;
+  typename Exec::template Buffer<float> skierRoute_;
+  typename Exec::template Buffer<int> skierClaim_, skierCounters_;
   typename Exec::template Buffer<float> bedCohesion_, bedLastPowder_, bedBase_;
   typename Exec::template Buffer<uint8_t> bedShadow_, bedActive_, bedformMask_;
   bool bedformFieldsReady_ = false, hasBedformMask_ = false;

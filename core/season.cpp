@@ -289,43 +289,57 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     });
   }
 
-  // Skiers (§6.2): automatic ones at skiers_per_hour x ski_hours_per_day a day, each from a cell
-  // drawn by the route map, and the scene's user skiers. A descent runs whole at its event (the
-  // bake has no real-time display to zoom for); an avalanche it triggers starts at once.
+  // Skiers (§6.2, §7.3): automatic ones, about skiers_per_hour in each of the day's
+  // ski_hours_per_day hours (an hour's skiers, a Poisson number, start together from cells drawn
+  // by the route map), and the scene's user skiers (a group starts together). The skiers of a
+  // batch move together on the backend, one move of each at a time (kernels/ski.h); the bake has
+  // no real-time display, so a batch runs to its end at its event. Avalanches they trigger start
+  // after the batch, in skier order.
   std::optional<SkiRun> ski;
-  // At function scope: the scheduler's events call runSkier (and it counts skierId) long after
+  // At function scope: the scheduler's events call runSkiers (and it counts skierId) long after
   // the block below has ended.
   uint64_t skierId = 0;
-  auto runSkier = [&](int x, int y, double day, bool user) {
-    SkierRecord r = ski->descend(x, y, day, cfg.seed, skierId++, user);
-    if (r.triggered && avalancheId >= 0) {
-      pendingAvalanches.push_back({day, r.triggerX, r.triggerY, true, nullptr});
-      scheduler.start(avalancheId);
+  auto runSkiers = [&](std::vector<SkierStart> starts, double day) {
+    if (starts.empty()) return;
+    for (SkierStart& st : starts) st.id = skierId++;
+    std::vector<SkierRecord> records = ski->descendTogether(starts, day, cfg.seed);
+    for (SkierRecord& r : records) {
+      if (r.triggered && avalancheId >= 0) {
+        pendingAvalanches.push_back({day, r.triggerX, r.triggerY, true, nullptr});
+        scheduler.start(avalancheId);
+      }
+      if (!r.user) r.path.clear();  // keep the records small; user skiers keep their paths
+      report.skiers.push_back(std::move(r));
     }
-    if (!user) r.path.clear();  // keep the records small; user skiers keep their paths
-    report.skiers.push_back(std::move(r));
   };
   if (skiing) {
     ski.emplace(backend, p, state, cfg.skiTracks);
-    const double startsPerDay = p.skiersPerHour * p.skiHoursPerDay;
-    if (startsPerDay > 0.0) {
+    if (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) {
       PhenomenonSpec s;
       s.name = "skier";
       s.alwaysActive = true;
-      s.stepsPerDay = startsPerDay;
+      s.stepsPerDay = p.skiHoursPerDay;
       const int slot = static_cast<int>(reports.size());
       s.onStep = [&, slot](const EventContext& e) {
         timed(slot, [&] {
-          // Cells drawn by the route map until one has snow enough to ski (at most 16 draws).
           const RandomKey key{cfg.seed};
-          for (uint32_t k = 0; k < 16; ++k) {
-            const Philox4x32 r = key.draw(e.eventIndex, k, RngStream::Skier);
-            int x = 0, y = 0;
-            if (!ski->pickStart(uniformOpenDouble(r.v[0], r.v[1]), x, y)) break;
-            if (!ski->canStart(x, y)) continue;
-            runSkier(x, y, e.day, false);
-            break;
-          }
+          const int count = poissonCount(p.skiersPerHour, [&](uint32_t k) {
+            const Philox4x32 r = key.draw(e.eventIndex, k, RngStream::SkierCount);
+            return uniformOpenDouble(r.v[0], r.v[1]);
+          });
+          // Each skier's cell drawn by the route map until one has snow enough to ski (at most
+          // 16 draws).
+          std::vector<SkierStart> starts;
+          for (int k = 0; k < count; ++k)
+            for (uint32_t attempt = 0; attempt < 16; ++attempt) {
+              const Philox4x32 r = key.draw(e.eventIndex, static_cast<uint32_t>(k) * 16u + attempt, RngStream::Skier);
+              int x = 0, y = 0;
+              if (!ski->pickStart(uniformOpenDouble(r.v[0], r.v[1]), x, y)) break;
+              if (!ski->canStart(x, y)) continue;
+              starts.push_back({x, y, 0, false});
+              break;
+            }
+          runSkiers(std::move(starts), e.day);
         });
       };
       addPhenomenon(std::move(s));
@@ -335,7 +349,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
       if (u.day < 0.0 || u.day > cfg.days) continue;
       if (!u.startWeights) {
         scheduler.addAction(u.day, [&, u](double now) {
-          for (int k = 0; k < u.count; ++k) runSkier(u.x, u.y, now, true);
+          runSkiers(std::vector<SkierStart>(static_cast<size_t>(u.count), SkierStart{u.x, u.y, 0, true}), now);
         });
         continue;
       }
@@ -348,16 +362,18 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
       const uint64_t stream = maskedSkierDraws++;
       scheduler.addAction(u.day, [&, u, cumulative, stream](double now) {
         const RandomKey key{cfg.seed};
+        std::vector<SkierStart> starts;
         for (int k = 0; k < u.count; ++k)
           for (uint32_t attempt = 0; attempt < 16; ++attempt) {
             const Philox4x32 r = key.draw(stream, static_cast<uint32_t>(k) * 16u + attempt, RngStream::SkierStartMask);
             const long long i = pickByCumulativeWeight(*cumulative, uniformOpenDouble(r.v[0], r.v[1]));
-            if (i < 0) return;
+            if (i < 0) break;
             const int x = static_cast<int>(i % state.spec.width), y = static_cast<int>(i / state.spec.width);
             if (!ski->canStart(x, y)) continue;
-            runSkier(x, y, now, true);
+            starts.push_back({x, y, 0, true});
             break;
           }
+        runSkiers(std::move(starts), now);
       });
     }
   }

@@ -17,7 +17,7 @@
 
 namespace snow {
 
-// Skiers asked for in the scene: start cell, day, how many (one after the other). With
+// Skiers asked for in the scene: start cell, day, how many (they start together, one batch). With
 // `startWeights` (one per cell, from a start mask), each skier's start cell is drawn from the
 // weights instead (among cells with snow enough to ski).
 struct UserSkier {

@@ -69,6 +69,11 @@ class SerialExec : public HostStorage {
     for (int y = 0; y < height; ++y)
       for (int x = 0; x < width; ++x) kernel(x, y);
   }
+  // kernel(i) for i in [0, n) (agents, not cells).
+  template <class K>
+  void forEachIndex(int n, const K& kernel) {
+    for (int i = 0; i < n; ++i) kernel(i);
+  }
   template <class K>
   void forEachCellOfColour(int width, int height, int colour, const K& kernel) {
     for (int y = 0; y < height; ++y)

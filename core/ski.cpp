@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <unordered_map>
+#include <stdexcept>
 
 #include "rng.h"
 
@@ -29,6 +29,27 @@ Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, co
   const RouteMapStepKernel k{altitude.data(), valid.data(), d.data(), d.data(), w, h, dx, dy, std::sqrt(dx * dx + dy * dy)};
   for (int i : order) k(i % w, i / w);
   return d;
+}
+
+int poissonCount(double mean, const std::function<double(uint32_t)>& uniform) {
+  if (!(mean > 0.0)) return 0;
+  if (!(mean < 1e6)) throw std::invalid_argument("poissonCount: mean too large");
+  const uint32_t parts = static_cast<uint32_t>(std::ceil(mean / 30.0));
+  const double lambda = mean / parts;
+  int total = 0;
+  for (uint32_t j = 0; j < parts; ++j) {
+    const double u = uniform(j);
+    double p = std::exp(-lambda), cdf = p;
+    int k = 0;
+    while (u > cdf && k < 1000) {
+      ++k;
+      p *= lambda / k;
+      cdf += p;
+      if (!(p > 0.0)) break;  // the tail's rounding: u beyond the representable CDF
+    }
+    total += k;
+  }
+  return total;
 }
 
 double turnFrequency(double slope, double target, double a, double minFrequency) {
@@ -178,6 +199,7 @@ SkiRun::SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& 
   // On a GPU backend, the paper's automaton on the device; on the host, the one-pass sort (the
   // same bytes, tested).
   if (!backend.routeMapOnDevice(route_)) route_ = snow::routeMap(state.bedrockM, state.validCell, state.spec);
+  backend.uploadRouteMap(route_);
   cumulative_.resize(route_.size());
   double sum = 0.0;
   // The scene's skier_spawn multiplier (art direction) scales where automatic skiers start.
@@ -209,191 +231,100 @@ bool SkiRun::canStart(int x, int y) {
   return depth[0] >= p_.skiMinSnowM;
 }
 
-SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id, bool user) {
-  SkierRecord r;
-  r.day = day, r.startX = x, r.startY = y, r.user = user;
+const char* skierStopReason(int status) {
+  switch (status) {
+    case kSkierActive: return "still running";
+    case kSkierStepLimit: return "step limit";
+    case kSkierRouteEnd: return "end of the route";
+    case kSkierNoCellAhead: return "no acceptable cell ahead (a dead end, or no snow)";
+    case kSkierReachedEdge: return "reached the terrain's edge";
+    case kSkierNodataAhead: return "NODATA ahead";
+    case kSkierSnowRanOut: return "the snow ran out";
+    case kSkierTriggered: return "triggered an avalanche";
+    case kSkierStartNodata: return "the start cell is NODATA";
+    case kSkierNoSnowAtStart: return "not enough snow at the start";
+    default: return "unknown";
+  }
+}
+
+SkierArgs SkiRun::args(uint64_t seed) const {
+  SkierArgs a;
+  a.dx = spec_.cellSizeXM;
+  a.dy = spec_.cellSizeYM;
+  a.stepM = std::min(a.dx, a.dy);
+  a.reach = std::max(1, static_cast<int>(std::lround(p_.skiLookaheadM / a.stepM)));
+  a.reachM = a.reach * a.stepM;
+  a.targetRad = p_.skierTargetSlopeDeg * kPi / 180.0;
+  a.sigmaRad = p_.skiSlopeToleranceDeg * kPi / 180.0;
+  a.cosHalfCone = std::cos(100.0 * kPi / 180.0);
+  a.tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
+  a.minSnowM = p_.skiMinSnowM;
+  a.steering = p_.skiSteering;
+  a.triggerFactor = p_.skiTriggerFactor;
+  a.minUnstableM = p_.avalancheMinUnstableM;
+  a.compactionM = static_cast<float>(p_.skiCompactionM);
+  a.maxSteps = 4 * (spec_.width + spec_.height);
+  a.seed = seed;
+  return a;
+}
+
+std::vector<SkierRecord> SkiRun::descendTogether(const std::vector<SkierStart>& starts, double day, uint64_t seed) {
   const int w = spec_.width, h = spec_.height;
-  const double dx = spec_.cellSizeXM, dy = spec_.cellSizeYM, stepM = std::min(dx, dy);
-  const int R = std::max(1, static_cast<int>(std::lround(p_.skiLookaheadM / stepM)));
-  const double target = p_.skierTargetSlopeDeg * kPi / 180.0, sigma = p_.skiSlopeToleranceDeg * kPi / 180.0;
-  const double tanC = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
-  std::unordered_map<int, std::array<float, 2>> seen;  // cell -> {surface, unstable}
+  std::vector<SkierAgent> agents(starts.size());
+  std::vector<SkierRecord> records(starts.size());
+  for (size_t k = 0; k < starts.size(); ++k) {
+    const SkierStart& st = starts[k];
+    if (st.x < 0 || st.y < 0 || st.x >= w || st.y >= h) throw std::invalid_argument("skier start outside the grid");
+    agents[k].startCell = st.y * w + st.x;
+    agents[k].id = st.id;
+    records[k].day = day, records[k].startX = st.x, records[k].startY = st.y, records[k].user = st.user;
+  }
+  std::vector<std::vector<double>> paths;
+  backend_.skierBatch(args(seed), agents, paths);
+
+  const double dx = spec_.cellSizeXM, dy = spec_.cellSizeYM;
   std::vector<float> depth, unstable;
-  auto readAround = [&](int cx, int cy, int reach) {
-    const int x0 = std::max(0, cx - reach), y0 = std::max(0, cy - reach);
-    const int x1 = std::min(w - 1, cx + reach), y1 = std::min(h - 1, cy + reach);
+  for (size_t k = 0; k < agents.size(); ++k) {
+    const SkierAgent& s = agents[k];
+    SkierRecord& r = records[k];
+    r.why = skierStopReason(s.status);
+    if (s.status == kSkierStartNodata || s.status == kSkierNoSnowAtStart) continue;
+    r.cells = s.cells;
+    r.lengthM = s.lengthM;
+    r.triggered = s.status == kSkierTriggered;
+    if (r.triggered) r.triggerX = s.triggerCell % w, r.triggerY = s.triggerCell / w;
+    for (size_t i = 0; i + 1 < paths[k].size(); i += 2) r.path.push_back({paths[k][i], paths[k][i + 1]});
+    // The snow surface around the path (skiers change no surface: the values of the descent).
+    int x0 = w, y0 = h, x1 = 0, y1 = 0;
+    for (const auto& q : r.path) {
+      const int qx = std::clamp(static_cast<int>(q[0] / dx), 0, w - 1), qy = std::clamp(static_cast<int>(q[1] / dy), 0, h - 1);
+      x0 = std::min(x0, qx), x1 = std::max(x1, qx), y0 = std::min(y0, qy), y1 = std::max(y1, qy);
+    }
+    x0 = std::max(0, x0 - 2), y0 = std::max(0, y0 - 2), x1 = std::min(w - 1, x1 + 2), y1 = std::min(h - 1, y1 + 2);
     backend_.readCells(x0, y0, x1 - x0 + 1, y1 - y0 + 1, depth, unstable);
-    for (int yy = y0; yy <= y1; ++yy)
-      for (int xx = x0; xx <= x1; ++xx) {
-        const size_t k = static_cast<size_t>(yy - y0) * (x1 - x0 + 1) + (xx - x0);
-        seen[yy * w + xx] = {bedrock_(xx, yy) + depth[k], unstable[k]};
-      }
-  };
-  auto surfaceOf = [&](int cell) -> float {
-    const auto it = seen.find(cell);
-    return it != seen.end() ? it->second[0] : bedrock_.values()[static_cast<size_t>(cell)];
-  };
-  auto snowOf = [&](int cell) { return surfaceOf(cell) - bedrock_.values()[static_cast<size_t>(cell)]; };
-  if (!valid_(x, y)) {
-    r.why = "the start cell is NODATA";
-    return r;
-  }
-  readAround(x, y, R + 1);
-  if (snowOf(y * w + x) < p_.skiMinSnowM) {
-    r.why = "not enough snow at the start";
-    return r;
-  }
-  const RandomKey key{seed};
-  std::array<double, 2> pos{(x + 0.5) * dx, (y + 0.5) * dy}, heading{0.0, 0.0};
-  r.path.push_back(pos);
-  int cx = x, cy = y;
-  std::vector<int> entered{y * w + x};
-  const int maxSteps = 4 * (w + h);
-  for (int step = 0;; ++step) {
-    if (step >= maxSteps) {
-      r.why = "step limit";
-      break;
-    }
-    const int cur = cy * w + cx;
-    if (route_.values()[static_cast<size_t>(cur)] <= 0.f) {
-      r.why = "end of the route";
-      break;
-    }
-    readAround(cx, cy, R + 1);
-    // Eq. 4 over the cells ahead.
-    std::vector<std::pair<int, double>> candidates;
-    double total = 0.0;
-    const float here = surfaceOf(cur);
-    for (int oy = -R; oy <= R; ++oy)
-      for (int ox = -R; ox <= R; ++ox) {
-        const int nx = cx + ox, ny = cy + oy;
-        if ((ox == 0 && oy == 0) || nx < 0 || ny < 0 || nx >= w || ny >= h || !valid_(nx, ny)) continue;
-        const double ddx = ox * dx, ddy = oy * dy, dist = std::hypot(ddx, ddy);
-        if (dist > R * stepM * 1.0001) continue;
-        if ((heading[0] != 0.0 || heading[1] != 0.0) && ddx * heading[0] + ddy * heading[1] < std::cos(100.0 * kPi / 180.0) * dist) continue;
-        const int n = ny * w + nx;
-        if (snowOf(n) < p_.skiMinSnowM) continue;
-        const double drop = here - surfaceOf(n);
-        if (!(drop > 0.0)) continue;
-        const double sn = std::atan2(drop, dist), e = (sn - target) / sigma;
-        const double weight = std::exp(-e * e) * (route_.values()[static_cast<size_t>(n)] + dist);
-        if (weight <= 0.0) continue;
-        candidates.push_back({n, weight});
-        total += weight;
-      }
-    if (candidates.empty() || !(total > 0.0)) {
-      r.why = "no acceptable cell ahead (a dead end, or no snow)";
-      break;
-    }
-    const Philox4x32 draw = key.draw(id * 1000003ull + static_cast<uint64_t>(step), 0, RngStream::Skier);
-    double u = uniformOpenDouble(draw.v[0], draw.v[1]) * total;
-    int chosen = candidates.back().first;
-    for (const auto& [n, wgt] : candidates)
-      if ((u -= wgt) <= 0.0) {
-        chosen = n;
-        break;
-      }
-    const double tx = (chosen % w + 0.5) * dx - pos[0], ty = (chosen / w + 0.5) * dy - pos[1], tl = std::hypot(tx, ty);
-    std::array<double, 2> want{tx / tl, ty / tl};
-    if (heading[0] == 0.0 && heading[1] == 0.0) heading = want;
-    else {
-      const double hx = (1 - p_.skiSteering) * heading[0] + p_.skiSteering * want[0];
-      const double hy = (1 - p_.skiSteering) * heading[1] + p_.skiSteering * want[1], hl = std::hypot(hx, hy);
-      heading = hl > 1e-9 ? std::array<double, 2>{hx / hl, hy / hl} : want;
-    }
-    // The smooth turn must not carry the skier where it would not go: uphill, out of the snow,
-    // or into a dead end (a route much shorter than the target's). Then it turns straight at
-    // the target (in the same step: redrawing the target would turn it toward an old one, and a
-    // skier could spin in place until the step limit); if even that fails, it steps to the
-    // neighbour nearest the target's direction.
-    auto enterable = [&](int cell) {
-      return snowOf(cell) >= p_.skiMinSnowM && surfaceOf(cell) <= surfaceOf(cur) &&
-             route_.values()[static_cast<size_t>(cell)] >= 0.5f * route_.values()[static_cast<size_t>(chosen)];
+    const std::vector<float> box = depth;
+    auto surfaceOf = [&](int cell) -> float {
+      const int cx = cell % w, cy = cell / w;
+      if (cx >= x0 && cx <= x1 && cy >= y0 && cy <= y1)
+        return bedrock_.values()[static_cast<size_t>(cell)] + box[static_cast<size_t>(cy - y0) * (x1 - x0 + 1) + (cx - x0)];
+      backend_.readCells(cx, cy, 1, 1, depth, unstable);
+      return bedrock_.values()[static_cast<size_t>(cell)] + depth[0];
     };
-    std::array<double, 2> next{};
-    int ncell = -1;
-    auto aim = [&]() -> const char* {
-      next = {pos[0] + heading[0] * stepM, pos[1] + heading[1] * stepM};
-      if (next[0] < 0 || next[1] < 0 || next[0] >= w * dx || next[1] >= h * dy) return "reached the terrain's edge";
-      const int nx = static_cast<int>(next[0] / dx), ny = static_cast<int>(next[1] / dy);
-      if (!valid_(nx, ny)) return "NODATA ahead";
-      ncell = ny * w + nx;
-      return nullptr;
-    };
-    const char* stop = aim();
-    if (!stop && ncell != cur && !enterable(ncell) && !(heading == want)) {
-      heading = want;
-      stop = aim();
-    }
-    if (stop) {
-      r.why = stop;
-      break;
-    }
-    std::array<double, 2> moveTo = next;
-    if (ncell != cur && !enterable(ncell)) {
-      // Even the straight line crosses a cell it would not enter: step to the acceptable
-      // neighbour closest in direction to the target instead, or stop.
-      int best = -1;
-      double bestDot = std::cos(60.0 * kPi / 180.0);
-      for (int oy = -1; oy <= 1; ++oy)
-        for (int ox = -1; ox <= 1; ++ox) {
-          const int bx = cx + ox, by = cy + oy;
-          if ((ox == 0 && oy == 0) || bx < 0 || by < 0 || bx >= w || by >= h || !valid_(bx, by)) continue;
-          const int b = by * w + bx;
-          if (!enterable(b)) continue;
-          const double ex = (bx + 0.5) * dx - pos[0], ey = (by + 0.5) * dy - pos[1], el = std::hypot(ex, ey);
-          const double dot = (ex * want[0] + ey * want[1]) / el;
-          if (dot > bestDot) bestDot = dot, best = b;
-        }
-      if (best < 0) {
-        r.why = "no acceptable cell ahead (a dead end, or no snow)";
-        break;
-      }
-      moveTo = {(best % w + 0.5) * dx, (best / w + 0.5) * dy};
-      const double ex = moveTo[0] - pos[0], ey = moveTo[1] - pos[1], el = std::hypot(ex, ey);
-      heading = {ex / el, ey / el};
-    }
-    r.lengthM += std::hypot(moveTo[0] - pos[0], moveTo[1] - pos[1]);
-    pos = moveTo;
-    r.path.push_back(pos);
-    const int mx = static_cast<int>(pos[0] / dx), my = static_cast<int>(pos[1] / dy), entering = my * w + mx;
-    if (entering == cur) continue;
-    cx = mx, cy = my;
-    entered.push_back(entering);
-    ++r.cells;
-    if (snowOf(entering) < p_.skiMinSnowM) {
-      r.why = "the snow ran out";
-      break;
-    }
-    // Crossing unstable snow on a slope above the rest angle: the raised release probability.
-    const auto seenEntering = seen.find(entering);
-    const float U = seenEntering != seen.end() ? seenEntering->second[1] : 0.f;
-    if (U >= p_.avalancheMinUnstableM && p_.skiTriggerFactor > 0.0) {
-      auto at = [&](int xx, int yy) { return surfaceOf(std::clamp(yy, 0, h - 1) * w + std::clamp(xx, 0, w - 1)); };
-      const double gx = (at(cx + 1, cy) - at(cx - 1, cy)) / (2 * dx), gy = (at(cx, cy + 1) - at(cx, cy - 1)) / (2 * dy);
-      const double s = std::hypot(gx, gy);
-      if (s > tanC) {
-        const double pRelease = std::min(1.0, p_.skiTriggerFactor * U * (s - tanC) / (1.0 - tanC));
-        const Philox4x32 t = key.draw(id * 1000003ull + static_cast<uint64_t>(step), 1, RngStream::Skier);
-        if (uniformOpenDouble(t.v[0], t.v[1]) < pRelease) {
-          r.triggered = true, r.triggerX = cx, r.triggerY = cy;
-          r.why = "triggered an avalanche";
-          break;
-        }
-      }
+    r.dropM = surfaceOf(s.startCell) - surfaceOf(s.cell);
+    if (tracks_ && r.path.size() >= 2) {
+      auto altitude = [&](double px, double py) {
+        const int ix = std::clamp(static_cast<int>(px / dx), 0, w - 1), iy = std::clamp(static_cast<int>(py / dy), 0, h - 1);
+        return static_cast<double>(surfaceOf(iy * w + ix));
+      };
+      const Path2 track = refineTrack(r.path, altitude, p_, 0.5 * std::min(dx, dy) / tracks_->factor());
+      tracks_->stamp(track, p_.skiTrackDepthM, p_.skiTrackWidthM, surfaceOf);
     }
   }
-  r.dropM = surfaceOf(y * w + x) - surfaceOf(cy * w + cx);
-  backend_.skierCompaction(entered, static_cast<float>(p_.skiCompactionM));
-  if (tracks_ && r.path.size() >= 2) {
-    auto altitude = [&](double px, double py) {
-      const int ix = std::clamp(static_cast<int>(px / dx), 0, w - 1), iy = std::clamp(static_cast<int>(py / dy), 0, h - 1);
-      return static_cast<double>(surfaceOf(iy * w + ix));
-    };
-    const Path2 track = refineTrack(r.path, altitude, p_, 0.5 * std::min(dx, dy) / tracks_->factor());
-    tracks_->stamp(track, p_.skiTrackDepthM, p_.skiTrackWidthM, surfaceOf);
-  }
-  return r;
+  return records;
+}
+
+SkierRecord SkiRun::descend(int x, int y, double day, uint64_t seed, uint64_t id, bool user) {
+  return descendTogether({SkierStart{x, y, id, user}}, day, seed).front();
 }
 
 }  // namespace snow

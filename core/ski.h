@@ -32,8 +32,13 @@
 // surface since the track was made (snowfall, wind or diffusion deposits, avalanche debris), so a
 // snowfall deeper than the track erases it and a light one softens it (the paper's alpha-blending).
 //
+// Agents in parallel (§7.3): the skiers of a batch (an hour's automatic skiers, a scene's group)
+// move together, one move of every skier at a time, on the backend (kernels/ski.h: a move only
+// reads the snow, so all skiers move at once; the cells they enter are then written one skier at
+// a time in skier order through integer claims): the same bytes on any thread count and on CUDA.
+//
 // Snow: each cell a skier enters turns ski_compaction_m of U into S, or of S into C where U runs
-// short (backend skierCompaction). Crossing unstable snow on a slope above the avalanche rest
+// short, as it enters (later skiers of the batch, and the same skier coming back, see it). Crossing unstable snow on a slope above the avalanche rest
 // angle raises the cell's release probability (the spontaneous one, core/avalanche.h) by
 // ski_trigger_factor: when the draw releases, the skier stops there and an avalanche starts.
 #pragma once
@@ -53,6 +58,11 @@
 namespace snow {
 
 Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec);
+
+// A Poisson count of mean `mean` by inversion of uniform draws in (0, 1) from uniform(0),
+// uniform(1), ...; a mean above 30 is split into equal parts, each drawn on its own (so exp(-part)
+// stays far from underflow).
+int poissonCount(double mean, const std::function<double(uint32_t)>& uniform);
 
 // Turn frequency (1/m) for a segment of slope angle `slopeRad` (see above); 0 at or below the target.
 double turnFrequency(double slopeRad, double targetRad, double amplitudeM, double minFrequencyPerM);
@@ -100,7 +110,14 @@ struct SkierRecord {
   Path2 path;              // the large-scale path (metres, x east, y south)
 };
 
-// Skiers on a backend. Reads only the cells around each skier; writes its compaction.
+struct SkierStart {
+  int x = 0, y = 0;
+  uint64_t id = 0;
+  bool user = false;
+};
+const char* skierStopReason(int status);
+
+// Skiers on a backend: the route map, start cells, and batches of descents.
 class SkiRun {
  public:
   SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& state, SkiTracks* tracks);
@@ -110,9 +127,14 @@ class SkiRun {
   bool pickStart(double draw, int& x, int& y) const;
   // Whether the cell has snow enough to start a descent (reads one cell).
   bool canStart(int x, int y);
-  // One descent from cell (x, y); `randomKey` and `id` seed its choices. When it triggers an
-  // avalanche the record says where.
+  // Descents from the given cells, all skiers moved together (one move of every skier at a time,
+  // on the backend: kernels/ski.h), in the order given; `seed` and each skier's id seed its
+  // choices. When one triggers an avalanche its record says where. Tracks are stamped in order.
+  std::vector<SkierRecord> descendTogether(const std::vector<SkierStart>& starts, double day, uint64_t seed);
+  // One descent from cell (x, y): a batch of one.
   SkierRecord descend(int x, int y, double day, uint64_t seed, uint64_t id, bool user);
+  // The kernels' arguments for this run's parameters and grid.
+  SkierArgs args(uint64_t seed) const;
 
  private:
   SnowBackend& backend_;

@@ -50,6 +50,12 @@ __global__ void forEachCellKernel(K kernel, int width, int height) {
 }
 
 template <class K>
+__global__ void forEachIndexKernel(K kernel, int n) {
+  const int i = blockIdx.x * blockDim.x + threadIdx.x;
+  if (i < n) kernel(i);
+}
+
+template <class K>
 __global__ void forEachCellOfColourKernel(K kernel, int width, int height, int colour) {
   const int k = blockIdx.x * blockDim.x + threadIdx.x;
   const int y = blockIdx.y * blockDim.y + threadIdx.y;
@@ -120,6 +126,12 @@ class CudaExec {
     const dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
     forEachCellKernel<<<grid, block>>>(kernel, width, height);
     check(cudaGetLastError(), "forEachCell launch");
+  }
+  template <class K>
+  void forEachIndex(int n, const K& kernel) {
+    if (n <= 0) return;
+    forEachIndexKernel<<<(n + 127) / 128, 128>>>(kernel, n);
+    check(cudaGetLastError(), "forEachIndex launch");
   }
   template <class K>
   void forEachCellOfColour(int width, int height, int colour, const K& kernel) {

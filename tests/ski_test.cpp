@@ -2,6 +2,7 @@
 // refined tracks (effective slope, continuity, straight running), dead ends, fading, the snow
 // interaction and the avalanche a skier sets off.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <numeric>
@@ -358,6 +359,160 @@ TEST(Ski, NoDescentSpinsInPlaceOnRoughGround) {
   std::printf("[ measure ] 400 descents on the rough range at 10 m: %d moved, %d hit the step limit\n", moved, spun);
   EXPECT_EQ(spun, 0);
   EXPECT_GT(moved, 300);
+}
+
+}  // namespace
+}  // namespace snow
+
+namespace snow {
+namespace {
+
+// The skier kernels' own atan and exp (kernels/ski.h: + - * / only, so every executor gives the
+// same bytes) against the C library.
+TEST(Ski, KernelMathMatchesTheLibrary) {
+  double worstAtan = 0.0, worstExp = 0.0;
+  for (int k = 0; k <= 200000; ++k) {
+    const double t = k < 100000 ? k * 2e-5 : std::pow(10.0, (k - 100000) * 8e-5);  // [0, 2] then [1, 1e8]
+    worstAtan = std::max(worstAtan, std::abs(skimath::atanPositive(t) - std::atan(t)));
+    const double x = -699.0 * k / 200000.0;
+    worstExp = std::max(worstExp, std::abs(skimath::expNonPositive(x) - std::exp(x)) / std::exp(x));
+  }
+  std::printf("[ measure ] largest error: atan %.2e (absolute), exp %.2e (relative)\n", worstAtan, worstExp);
+  EXPECT_LT(worstAtan, 1e-15);
+  EXPECT_LT(worstExp, 1e-14);
+  EXPECT_EQ(skimath::expNonPositive(-800.0), 0.0);
+  EXPECT_EQ(skimath::expNonPositive(std::nan("")), 0.0);
+}
+
+std::vector<SkierStart> manyStarts(const SkiRun& run, int n, uint64_t firstId) {
+  std::vector<SkierStart> starts;
+  for (int k = 0; k < n; ++k) {
+    int x = 0, y = 0;
+    EXPECT_TRUE(run.pickStart((k + 0.5) / n, x, y));
+    starts.push_back({x, y, firstId + static_cast<uint64_t>(k), false});
+  }
+  return starts;
+}
+
+// Skiers moved together (kernels/ski.h) take the paths they take alone (a move reads only the
+// surface, which skiers do not change), and the cells they enter are compacted exactly as if each
+// entry were applied one after the other in (move, skier) order: the batch's layers equal a host
+// replay of the paths, to the bit, with 16 skiers sharing one start cell among 200.
+TEST(Ski, SkiersMovedTogetherKeepTheirPathsAndCompactInSkierOrder) {
+  SnowState s = referenceRangeState(192, 1920.0);
+  s.stableM.fill(0.6f);
+  s.unstableM.fill(0.12f);
+  ModelParameters p;
+  p.skiTriggerFactor = 0.0;
+  p.skiCompactionM = 0.05;
+  auto together = createCpuBackend();
+  together->upload(s);
+  SkiRun run(*together, p, s, nullptr);
+  std::vector<SkierStart> starts = manyStarts(run, 184, 0);
+  for (int k = 0; k < 16; ++k) starts.push_back({starts[7].x, starts[7].y, 1000u + static_cast<uint64_t>(k), true});
+  const std::vector<SkierRecord> batch = run.descendTogether(starts, 1.0, 5);
+  SnowState after = s;
+  together->download(after);
+
+  // Alone, on the untouched snow: the same paths.
+  size_t moved = 0;
+  for (size_t k = 0; k < starts.size(); k += 9) {
+    auto alone = createCpuBackend();
+    alone->upload(s);
+    SkiRun one(*alone, p, s, nullptr);
+    const SkierRecord r = one.descend(starts[k].x, starts[k].y, 1.0, 5, starts[k].id, true);
+    EXPECT_EQ(r.path, batch[k].path) << k;
+    EXPECT_EQ(r.why, batch[k].why) << k;
+  }
+  for (const SkierRecord& r : batch) moved += r.cells > 3;
+  EXPECT_GT(moved, 120u);
+
+  // Host replay: every entry (the start cell at move 0, then each cell change along the path at
+  // its move), applied in (move, skier) order with the kernel's arithmetic.
+  struct Entry {
+    size_t move, skier;
+    int cell;
+  };
+  std::vector<Entry> entries;
+  const int w = s.spec.width;
+  for (size_t k = 0; k < batch.size(); ++k) {
+    const auto& path = batch[k].path;
+    if (path.empty()) continue;
+    int last = -1;
+    for (size_t m = 0; m < path.size(); ++m) {
+      const int cell = static_cast<int>(path[m][1] / s.spec.cellSizeYM) * w + static_cast<int>(path[m][0] / s.spec.cellSizeXM);
+      if (cell != last) entries.push_back({m, k, cell});
+      last = cell;
+    }
+  }
+  std::stable_sort(entries.begin(), entries.end(), [](const Entry& a, const Entry& b) {
+    return a.move != b.move ? a.move < b.move : a.skier < b.skier;
+  });
+  SnowState replay = s;
+  SnowFieldsView v;
+  v.width = w;
+  v.height = s.spec.height;
+  v.unstable = replay.unstableM.data();
+  v.stable = replay.stableM.data();
+  v.compacted = replay.compactedM.data();
+  for (const Entry& e : entries) skier::compact(v, e.cell, static_cast<float>(p.skiCompactionM));
+  EXPECT_EQ(replay.unstableM.values(), after.unstableM.values());
+  EXPECT_EQ(replay.stableM.values(), after.stableM.values());
+  EXPECT_EQ(replay.compactedM.values(), after.compactedM.values());
+  // The shared start cell: 16 group skiers and the one drawn there took 0.12 m of U, then S.
+  const int c = starts[7].y * w + starts[7].x;
+  EXPECT_EQ(after.unstableM.values()[static_cast<size_t>(c)], 0.f);
+  EXPECT_GT(after.compactedM.values()[static_cast<size_t>(c)], 0.5f);
+  std::printf("[ measure ] %zu skiers moved together, %zu entries replayed\n", batch.size(), entries.size());
+}
+
+// The same batch (with avalanche triggers on, which read U as the batch leaves it) gives the same
+// records and bytes on the serial executor and on TBB with 1 and 2 threads.
+TEST(Ski, SkierBatchSameBytesOnEveryExecutor) {
+  SnowState s = referenceRangeState(160, 1600.0);
+  s.stableM.fill(0.5f);
+  s.unstableM.fill(0.3f);
+  ModelParameters p;
+  p.skiTriggerFactor = 0.3;
+  auto runOn = [&](SnowBackend& b, SnowState& out) {
+    b.upload(s);
+    SkiRun run(b, p, s, nullptr);
+    std::vector<SkierStart> starts = manyStarts(run, 120, 0);
+    for (int k = 0; k < 8; ++k) starts.push_back({starts[3].x, starts[3].y, 500u + static_cast<uint64_t>(k), true});
+    auto records = run.descendTogether(starts, 1.0, 77);
+    out = s;
+    b.download(out);
+    return records;
+  };
+  ExecBackend<SerialExec> serial;
+  SnowState a, b1, b2;
+  const auto ra = runOn(serial, a);
+  std::vector<SkierRecord> rb1, rb2;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    auto cpu = createCpuBackend();
+    rb1 = runOn(*cpu, b1);
+  }
+  {
+    tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+    auto cpu = createCpuBackend();
+    rb2 = runOn(*cpu, b2);
+  }
+  int triggered = 0, moved = 0;
+  for (size_t k = 0; k < ra.size(); ++k) {
+    moved += ra[k].cells > 3;
+    for (const auto* other : {&rb1, &rb2}) {
+      EXPECT_EQ(ra[k].path, (*other)[k].path) << k;
+      EXPECT_EQ(ra[k].why, (*other)[k].why) << k;
+      EXPECT_EQ(ra[k].cells, (*other)[k].cells) << k;
+    }
+    triggered += ra[k].triggered;
+  }
+  std::printf("[ measure ] %zu skiers: %d moved more than 3 cells, %d triggered an avalanche\n", ra.size(), moved, triggered);
+  EXPECT_GT(triggered, 0);
+  EXPECT_GT(moved, 40);
+  test::expectSameBytes(a, b1);
+  test::expectSameBytes(a, b2);
 }
 
 }  // namespace

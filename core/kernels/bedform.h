@@ -39,24 +39,9 @@
 #include "../hd.h"
 #include "../rng.h"
 #include "../snow_state.h"
+#include "atomics.h"
 
 namespace snow {
-
-// Integer atomic addition: the order of additions does not change the result.
-SNOW_HD SNOW_INLINE void atomicAddInt(int* p, int v) {
-#if defined(__CUDA_ARCH__)
-  atomicAdd(p, v);
-#else
-  __atomic_fetch_add(p, v, __ATOMIC_RELAXED);
-#endif
-}
-SNOW_HD SNOW_INLINE void atomicAddCount(unsigned long long* p, unsigned long long v) {
-#if defined(__CUDA_ARCH__)
-  atomicAdd(p, v);
-#else
-  __atomic_fetch_add(p, v, __ATOMIC_RELAXED);
-#endif
-}
 
 struct BedformArgs {
   float dtDays = 0.f;          // time covered by the step (sintering)

@@ -204,8 +204,10 @@ TEST(CudaBackend, AvalancheStepTimeDoesNotGrowWithTheTerrain) {
 }
 
 // The skiers' route map: the paper's cellular automaton on the GPU gives the host's one-pass
-// bytes; and the skier compaction edits the device's layers as the host's.
-TEST(CudaBackend, RouteMapAndSkierCompactionMatchTheCpu) {
+// bytes; and a batch of skiers moved together on the device (kernels/ski.h: moves, then claim
+// rounds for the cells entered, several skiers sharing start cells) gives the serial executor's
+// paths, stops and layers, bit for bit.
+TEST(CudaBackend, RouteMapAndSkierBatchMatchTheCpu) {
   SKIP_WITHOUT_CUDA();
   SnowState s = test::makeRoughState(181, 143, 31);
   auto gpu = cuda::createCudaBackend();
@@ -215,13 +217,30 @@ TEST(CudaBackend, RouteMapAndSkierCompactionMatchTheCpu) {
   EXPECT_EQ(onDevice.values(), routeMap(s.bedrockM, s.validCell, s.spec).values());
   ExecBackend<SerialExec> cpu;
   cpu.upload(s);
-  const std::vector<int> cells{5, 181 * 20 + 17, 181 * 20 + 18, 181 * 100 + 90};
-  cpu.skierCompaction(cells, 0.05f);
-  gpu->skierCompaction(cells, 0.05f);
-  SnowState a = s, b = s;
-  cpu.download(a);
-  gpu->download(b);
-  test::expectSameBytes(a, b);
+  ModelParameters p;
+  p.skiMinSnowM = 0.2;
+  p.skiTriggerFactor = 0.5;
+  p.skiLookaheadM = 20.0;
+  SkiRun onCpu(cpu, p, s, nullptr), onGpu(*gpu, p, s, nullptr);
+  std::vector<SkierStart> starts;
+  for (int k = 0; k < 48; ++k) starts.push_back({20 + (k % 6) * 3, 10 + (k / 6) * 15, static_cast<uint64_t>(k), k % 2 == 0});
+  for (int k = 0; k < 8; ++k) starts.push_back({40, 70, static_cast<uint64_t>(100 + k), true});  // one start cell
+  const auto a = onCpu.descendTogether(starts, 1.0, 11), b = onGpu.descendTogether(starts, 1.0, 11);
+  ASSERT_EQ(a.size(), b.size());
+  size_t moved = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(a[k].why, b[k].why) << k;
+    EXPECT_EQ(a[k].cells, b[k].cells) << k;
+    EXPECT_EQ(a[k].lengthM, b[k].lengthM) << k;
+    EXPECT_EQ(a[k].path, b[k].path) << k;
+    EXPECT_EQ(a[k].triggered, b[k].triggered) << k;
+    moved += a[k].cells > 0;
+  }
+  EXPECT_GT(moved, 10u);
+  SnowState x = s, y = s;
+  cpu.download(x);
+  gpu->download(y);
+  test::expectSameBytes(x, y);
 }
 
 // Art direction on the device: snowfall, melt and wind transport with painted multipliers, then
