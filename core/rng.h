@@ -48,7 +48,7 @@ SNOW_HD SNOW_INLINE double uniformOpenDouble(uint32_t hi, uint32_t lo) {
 }
 
 // Streams separate independent uses of the same (seed, event, cell).
-enum class RngStream : uint32_t { Scheduler = 1, Snowfall = 2, Melt = 3, Diffusion = 4, Terrain = 5, Avalanche = 6, Skier = 7, SkierStartMask = 8, BedformPoll = 9, BedformHop = 10, FallenSnowFlake = 11, SkierCount = 12, Test = 99 };
+enum class RngStream : uint32_t { Scheduler = 1, Snowfall = 2, Melt = 3, Diffusion = 4, Terrain = 5, Avalanche = 6, Skier = 7, SkierStartMask = 8, BedformPoll = 9, BedformHop = 10, FallenSnowFlake = 11, SkierCount = 12, FallenSnowStability = 13, Test = 99 };
 
 struct RandomKey {
   uint64_t seed = 0;

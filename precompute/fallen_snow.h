@@ -21,9 +21,32 @@
 // Adaptive sampling: where neighbouring sites' coverage differs (an overhang's shadow edge),
 // the lattice cells are split into quarters (one level) and the flakes traced again.
 //
-// Not here yet (README "Snow on meshes"): deeper refinement levels, the stability stage
-// (angle-of-repose relaxation, snow falling over edges), the snow body (SDF, meshing) and the
-// bake mode.
+// Stability (thesis Ch. 8), stabilizeFallenSnow below: the placed snow is laid down in a few
+// deposit rounds, each relaxed to its angle of repose on the sites' neighbourhood graph:
+//  - Neighbours: sites within 1.5 spacings (the coarser site's) in xy whose bases are joined by a
+//    slope of at most connectAngleDeg and with nothing between them (a segment lifted half their
+//    distance is clear): a roof and the ground below its edge, or the ground on either side of a
+//    wall, are not neighbours.
+//  - Each pass moves snow everywhere at once (the thesis's multi-pass "everything moves at once",
+//    as a Jacobi step: outflows from the pass's snow tops, then a gather): site s sheds toward a
+//    lower neighbour n the volume that brings their snow tops' slope down to an angle theta*
+//    drawn from the transition curve (uniform over [AOR - w/2, AOR + w/2], seeded per pass and
+//    pair: the thesis's stochastic stability; w = 0 is a sharp AOR), divided by its receivers + 1
+//    (they may fill from elsewhere in the same pass), all outflows scaled to the snow there. In
+//    double: the mass is kept to double rounding.
+//  - Lattice directions with no neighbour: a stab from the base rising at the connect angle to
+//    just past the footprint finds a wall (snow rests against it); otherwise an edge at the
+//    height z_e of the surface at the footprint's edge: snow standing above it by more than the
+//    repose slope goes over and falls straight down from just past the footprint; where it lands
+//    (a ray) it is spread over the sites near the landing point in sight of it (a Gaussian, not
+//    snapped to one site: the thesis's stalagmites). A fall that meets nothing leaves the world
+//    (counted: placed = kept + left the world, to rounding).
+//  - A round ends when no site shed more than stopFraction of the round's mean deposit in a
+//    pass (the thesis's 0.5 %; a steady stream down a face counts as moving), or at
+//    maxPassesPerRound (counted as unconverged).
+//
+// Not here yet (README "Snow on meshes"): deeper refinement levels, wind in the stability phase,
+// the snow body (SDF, meshing) and the bake mode.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -72,9 +95,36 @@ struct FallenSnow {
   long long flakes = 0, blocked = 0, leftTheWorld = 0;
   int emptyBuckets = 0;     // buckets no flake reached (their snow falls past the geometry)
   int refinedCells = 0;     // lattice cells split by the adaptive sampling
+  double siteSpacingM = 0;  // the lattice's (level 0)
   double seconds = 0;
 };
 
 FallenSnow placeFallenSnow(const TriangleMesh& mesh, const FallenSnowSettings& settings);
+
+struct FallenSnowStability {
+  double reposeAngleDeg = 38.0;      // AOR (Kuroiwa, thesis Tab. 2.5: 40-50 degrees for dry pulverised snow)
+  double transitionWidthDeg = 10.0;  // w: stable below AOR - w/2, unstable above AOR + w/2, linear between
+  int depositRounds = 4;             // the storm laid down in this many equal rounds
+  double stopFraction = 0.005;       // a round ends when no site moved more than this share of its mean deposit in a pass
+  int maxPassesPerRound = 20000;
+  double connectAngleDeg = 80.0;     // steepest base-to-base slope that still joins two sites
+  double landingSpreadSpacings = 1.0;  // sigma of the landing splat, in lattice spacings
+  uint64_t seed = 1;
+};
+
+struct FallenSnowStabilityReport {
+  int rounds = 0, passes = 0;
+  int unconvergedRounds = 0;        // rounds that hit maxPassesPerRound
+  double lastMovedM = 0;            // the largest move of the last pass
+  long long neighbourLinks = 0;     // directed
+  long long wallDirections = 0, dropDirections = 0, unlandedDrops = 0;
+  double overEdgesM3 = 0;           // snow that went over a drop
+  double leftTheWorldM3 = 0;        // of it, snow that landed on nothing
+  double placedM3 = 0, finalM3 = 0; // placedM3 = finalM3 + leftTheWorldM3 to rounding
+  double seconds = 0;
+};
+
+// Relaxes `snow` (from placeFallenSnow on `mesh`) to its angle of repose; sites' depthM updated.
+FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSnow& snow, const FallenSnowStability& settings);
 
 }  // namespace snow
