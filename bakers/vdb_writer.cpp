@@ -13,8 +13,36 @@
 
 #include "core/atomic_file.h"
 #include "core/hash.h"
+#include "vdb_file.h"
 
 namespace snow {
+
+void writeVdbGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids) {
+  writeAtomically(path, [&](const std::string& temp) {
+    openvdb::io::File file(temp);
+    file.write(grids);
+    const std::string tag = file.getUniqueTag();
+    file.close();
+    // OpenVDB stamps each file with a random UUID; replace it with one derived from the content
+    // so the same bake gives the same bytes.
+    std::ifstream in(temp, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    const size_t at = bytes.find(tag);
+    if (tag.size() == 36 && at != std::string::npos && at < 256) {
+      std::string rest = bytes;
+      rest.replace(at, tag.size(), std::string(tag.size(), '0'));
+      const uint64_t a = Fnv1a64().add(rest).value(), b = Fnv1a64().add("snowbake").add(rest).value();
+      char uuid[40];
+      std::snprintf(uuid, sizeof uuid, "%08x-%04x-%04x-%04x-%012llx", static_cast<unsigned>(a >> 32), static_cast<unsigned>((a >> 16) & 0xffff),
+                    static_cast<unsigned>(a & 0xffff), static_cast<unsigned>(b >> 48), static_cast<unsigned long long>(b & 0xffffffffffffull));
+      bytes.replace(at, tag.size(), std::string(uuid, 36));
+      std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      if (!out) throw std::runtime_error("cannot write " + path);
+    }
+  });
+}
 
 VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOptions& o) {
   openvdb::initialize();
@@ -79,30 +107,7 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
     layers[l]->insertMeta("density_kg_per_m3", openvdb::FloatMetadata(static_cast<float>(layerDensity[l])));
     grids.push_back(layers[l]);
   }
-  writeAtomically(path, [&](const std::string& temp) {
-    openvdb::io::File file(temp);
-    file.write(grids);
-    const std::string tag = file.getUniqueTag();
-    file.close();
-    // OpenVDB stamps each file with a random UUID; replace it with one derived from the content
-    // so the same bake gives the same bytes.
-    std::ifstream in(temp, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    in.close();
-    const size_t at = bytes.find(tag);
-    if (tag.size() == 36 && at != std::string::npos && at < 256) {
-      std::string rest = bytes;
-      rest.replace(at, tag.size(), std::string(tag.size(), '0'));
-      const uint64_t a = Fnv1a64().add(rest).value(), b = Fnv1a64().add("snowbake").add(rest).value();
-      char uuid[40];
-      std::snprintf(uuid, sizeof uuid, "%08x-%04x-%04x-%04x-%012llx", static_cast<unsigned>(a >> 32), static_cast<unsigned>((a >> 16) & 0xffff),
-                    static_cast<unsigned>(a & 0xffff), static_cast<unsigned>(b >> 48), static_cast<unsigned long long>(b & 0xffffffffffffull));
-      bytes.replace(at, tag.size(), std::string(uuid, 36));
-      std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-      if (!out) throw std::runtime_error("cannot write " + path);
-    }
-  });
+  writeVdbGridsAtomically(path, grids);
   return summary;
 }
 

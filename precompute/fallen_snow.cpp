@@ -260,6 +260,24 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
     const float ex = Q[0] - P[0], ey = Q[1] - P[1], ez = Q[2] - P[2], len = std::sqrt(ex * ex + ey * ey + ez * ez);
     return !rays.occluded(from, {ex / len, ey / len, ez / len}, len);
   };
+  // Buried sites: the first face above is hit from behind (an upward-facing face: the site is
+  // inside a closed solid, e.g. the ground under a block). They take no part (no links, no landings).
+  std::vector<uint8_t> buried(n, 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t a = range.begin(); a < range.end(); ++a) {
+      const auto& P = sites[a].position;
+      float t = 0.f;
+      int meshIndex = -1;
+      unsigned tri = 0;
+      if (!rays.intersectPrimitive({P[0], P[1], P[2] + 1e-4f}, {0.f, 0.f, 1.f}, INFINITY, t, meshIndex, tri) || meshIndex != 0) continue;
+      const auto& T = mesh.triangles[tri];
+      const auto &A = mesh.positions[T[0]], &B = mesh.positions[T[1]], &C = mesh.positions[T[2]];
+      const double nz = (static_cast<double>(B[0]) - A[0]) * (static_cast<double>(C[1]) - A[1]) -
+                        (static_cast<double>(B[1]) - A[1]) * (static_cast<double>(C[0]) - A[0]);
+      buried[a] = nz > 0.0;
+    }
+  });
+  for (uint8_t b : buried) rep.buriedSites += b;
   std::vector<uint32_t> first(n + 1, 0), nbr;
   std::vector<double> dist;
   {
@@ -267,7 +285,7 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t a = range.begin(); a < range.end(); ++a)
         forSitesNear(sites[a].position[0], sites[a].position[1], 2, [&](uint32_t b) {
-          if (b == a) return;
+          if (b == a || buried[a] || buried[b]) return;
           const double d = xyDistance(a, b);
           if (!(d > 0.0) || d > 1.5 * std::max(spacing(a), spacing(b)) + 1e-9) return;
           if (std::abs(static_cast<double>(sites[a].position[2]) - sites[b].position[2]) > d * tanConnect) return;
@@ -312,6 +330,7 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
   const double cosConnect = std::cos(st.connectAngleDeg * kPi / 180.0), sinConnect = std::sin(st.connectAngleDeg * kPi / 180.0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t a = range.begin(); a < range.end(); ++a) {
+      if (buried[a]) continue;
       const double h = spacing(a);
       const auto& P = sites[a].position;
       for (int k = 0; k < 8; ++k) {
@@ -346,7 +365,7 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
           double total = 0.0;
           forSitesNear(hx, hy, static_cast<int>(std::ceil(2.0 * sigma / s)) + 1, [&](uint32_t b) {
             const double ex = sites[b].position[0] - hx, ey = sites[b].position[1] - hy, r2 = ex * ex + ey * ey;
-            if (r2 > 4.0 * sigma * sigma) return;
+            if (r2 > 4.0 * sigma * sigma || buried[b]) return;
             if (std::abs(sites[b].position[2] - hz) > std::max(std::sqrt(r2), 0.5 * s) * tanConnect) return;
             if (r2 > 0.0) {  // and in sight of the landing point (not behind a wall)
               const float lift = static_cast<float>(0.5 * std::sqrt(r2));

@@ -23,6 +23,9 @@
 //
 // Stability (thesis Ch. 8), stabilizeFallenSnow below: the placed snow is laid down in a few
 // deposit rounds, each relaxed to its angle of repose on the sites' neighbourhood graph:
+//  - Sites inside a closed solid (the first face straight above is an upward face, hit from behind:
+//    the ground under a block) take no part. (A single upward sheet with nothing under it reads
+//    as a solid's top too: give roofs an underside.)
 //  - Neighbours: sites within 1.5 spacings (the coarser site's) in xy whose bases are joined by a
 //    slope of at most connectAngleDeg and with nothing between them (a segment lifted half their
 //    distance is clear): a roof and the ground below its edge, or the ground on either side of a
@@ -117,6 +120,7 @@ struct FallenSnowStabilityReport {
   int unconvergedRounds = 0;        // rounds that hit maxPassesPerRound
   double lastMovedM = 0;            // the largest move of the last pass
   long long neighbourLinks = 0;     // directed
+  long long buriedSites = 0;        // inside a closed solid (the first face above seen from behind): left out
   long long wallDirections = 0, dropDirections = 0, unlandedDrops = 0;
   double overEdgesM3 = 0;           // snow that went over a drop
   double leftTheWorldM3 = 0;        // of it, snow that landed on nothing

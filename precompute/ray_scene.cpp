@@ -146,4 +146,24 @@ float RayScene::intersect(const std::array<float, 3>& o, const std::array<float,
   return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? std::numeric_limits<float>::infinity() : rh.ray.tfar;
 }
 
+bool RayScene::intersectPrimitive(const std::array<float, 3>& o, const std::array<float, 3>& d, float tfar, float& t, int& mesh,
+                                  unsigned& triangle) const {
+  setFlushToZero();
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh{};
+  rh.ray.org_x = o[0], rh.ray.org_y = o[1], rh.ray.org_z = o[2];
+  rh.ray.dir_x = d[0], rh.ray.dir_y = d[1], rh.ray.dir_z = d[2];
+  rh.ray.tnear = 0.f;
+  rh.ray.tfar = tfar;
+  rh.ray.mask = 0xffffffffu;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(impl_->scene, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
+  t = rh.ray.tfar;
+  mesh = static_cast<int>(rh.hit.geomID) - tiles_;
+  triangle = rh.hit.primID;
+  return true;
+}
+
 }  // namespace snow

@@ -32,6 +32,11 @@ class RayScene {
   // Distance to the first hit, or +infinity.
   float intersect(const std::array<float, 3>& origin, const std::array<float, 3>& direction, float tfar) const;
 
+  // The first hit, with what it hit: `mesh` the occluder's index (-1 for the terrain) and its
+  // triangle. False on a miss.
+  bool intersectPrimitive(const std::array<float, 3>& origin, const std::array<float, 3>& direction, float tfar, float& t, int& mesh,
+                          unsigned& triangle) const;
+
   std::array<float, 3> cellPoint(int i, int j) const;  // the terrain vertex of cell (i, j)
   int tileCount() const { return tiles_; }
 
