@@ -50,7 +50,9 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
   const double vs = o.voxelSizeM;
   const int w = s.spec.width, h = s.spec.height;
   const double dx = s.spec.cellSizeXM, dy = s.spec.cellSizeYM;
+  // Voxel (i, j, k) is filled from its centre ((i + 1/2) vs, ...): the transform puts it there.
   const auto transform = openvdb::math::Transform::createLinearTransform(vs);
+  transform->postTranslate(openvdb::Vec3d(0.5 * vs, 0.5 * vs, 0.5 * vs));
   auto fog = openvdb::FloatGrid::create(0.f);
   auto topology = openvdb::BoolGrid::create(false);
   const char* layerNames[4] = {"compacted", "stable", "unstable", "powder"};
@@ -90,6 +92,7 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
     }
   }
   openvdb::GridPtrVec grids;
+  topology->setTransform(transform);  // the level set's distances in metres
   auto sdf = summary.snowVoxels > 0 ? openvdb::tools::topologyToLevelSet(*topology, 3, 0)
                                     : openvdb::createLevelSet<openvdb::FloatGrid>(vs, 3.0);
   sdf->setTransform(transform);

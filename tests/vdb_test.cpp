@@ -51,6 +51,13 @@ TEST(Vdb, SnowBodyReadsBackWithItsSurfaceWithinAVoxel) {
   EXPECT_EQ(density->getGridClass(), openvdb::GRID_FOG_VOLUME);
   EXPECT_NEAR(sdf->voxelSize()[0], 0.25, 1e-12);
   EXPECT_NEAR(density->voxelSize()[2], 0.25, 1e-12);
+  // Voxel (i, j, k) holds what lies around ((i + 1/2), (j + 1/2), (k + 1/2)) x 0.25 m: its world
+  // position says so (it said i x 0.25 before: the body sat half a voxel off the terrain).
+  const openvdb::Vec3d c = sdf->transform().indexToWorld(openvdb::Coord(4, 5, 6));
+  EXPECT_NEAR(c[0], 4.5 * 0.25, 1e-12);
+  EXPECT_NEAR(c[1], 5.5 * 0.25, 1e-12);
+  EXPECT_NEAR(c[2], 6.5 * 0.25, 1e-12);
+  EXPECT_NEAR(density->transform().indexToWorld(openvdb::Coord(4, 5, 6))[2], 6.5 * 0.25, 1e-12);
 
   // Along the vertical through the centre of each cell, the level set changes sign within one
   // voxel of the snow surface (and of the bedrock below).
