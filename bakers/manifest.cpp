@@ -97,4 +97,40 @@ std::string manifestToJson(const Manifest& m) {
   return j.dump(2) + "\n";
 }
 
+std::string meshSnowManifestToJson(const MeshSnowManifest& m) {
+  using nlohmann::ordered_json;
+  ordered_json j;
+  j["snowbake_manifest_version"] = 1;
+  j["program"] = {{"name", "snowbake"}, {"version", m.programVersion}};
+  j["scene"] = {{"source", m.sceneSource}, {"name", m.sceneName}, {"hash_fnv1a64", m.sceneHash}};
+  j["mesh"] = {{"source", m.meshSource},
+               {"hash_fnv1a64", m.meshHash},
+               {"triangles", m.triangles},
+               {"bounds_min_m", {m.boundsMin[0], m.boundsMin[1], m.boundsMin[2]}},
+               {"bounds_max_m", {m.boundsMax[0], m.boundsMax[1], m.boundsMax[2]}},
+               {"axes", "the input mesh's: x, y, z up, metres (glb, obj and fbx outputs are y-up, see README)"}};
+  const FallenSnowSettings& p = m.placement;
+  const FallenSnowStability& s = m.stability;
+  const FallenSnowStabilityReport& r = m.stabilityReport;
+  j["run"] = {{"mode", "mesh"},
+              {"seed", m.seed},
+              {"method", "Fearing 2000: flake placement with flutter and sky buckets (Ch. 7), angle-of-repose stability (Ch. 8)"},
+              {"placement",
+               {{"depth_m", p.depthM}, {"site_spacing_m", p.siteSpacingM}, {"sky_cell_sites", p.skyCellSites},
+                {"flakes_per_site", p.flakesPerSite}, {"flutter_mean_m", p.flutterMeanM}, {"flutter_sigma_m", p.flutterSigmaM},
+                {"swirl_height_m", p.swirlHeightM}, {"max_coverage_diff", p.maxCoverageDiff}, {"sites", m.sites}}},
+              {"stability",
+               {{"repose_angle_deg", s.reposeAngleDeg}, {"transition_width_deg", s.transitionWidthDeg}, {"deposit_rounds", s.depositRounds},
+                {"stop_fraction", s.stopFraction}, {"connect_angle_deg", s.connectAngleDeg}, {"passes", r.passes},
+                {"unconverged_rounds", r.unconvergedRounds}, {"wall_directions", r.wallDirections}, {"drop_directions", r.dropDirections},
+                {"buried_sites", r.buriedSites}}},
+              {"body", {{"voxel_size_m", m.voxelSizeM}, {"triangles", m.bodyTriangles}}}};
+  j["mass_balance_m3"] = {{"sky", m.skyM3}, {"placed", m.placedM3}, {"over_edges", r.overEdgesM3},
+                          {"left_the_world", r.leftTheWorldM3}, {"kept", r.finalM3}};
+  ordered_json files = ordered_json::array();
+  for (const auto& f : m.files) files.push_back({{"path", f.path}, {"content", f.content}, {"unit", f.unit}, {"format", f.format}});
+  j["files"] = files;
+  return j.dump(2) + "\n";
+}
+
 }  // namespace snow

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "precompute/fallen_snow.h"
 
 namespace snow {
 
@@ -98,5 +99,25 @@ struct Manifest {
 };
 
 std::string manifestToJson(const Manifest& manifest);
+
+// mode = "mesh": the snow on a mesh, its settings and what each stage did.
+struct MeshSnowFile {
+  std::string path, content, unit, format;
+};
+struct MeshSnowManifest {
+  std::string programVersion, sceneSource, sceneName, sceneHash, meshSource, meshHash;
+  size_t triangles = 0;
+  float boundsMin[3] = {0, 0, 0}, boundsMax[3] = {0, 0, 0};
+  unsigned long long seed = 0;
+  FallenSnowSettings placement;
+  FallenSnowStability stability;
+  size_t sites = 0;
+  double skyM3 = 0, placedM3 = 0;
+  FallenSnowStabilityReport stabilityReport;
+  double voxelSizeM = 0;
+  size_t bodyTriangles = 0;
+  std::vector<MeshSnowFile> files;
+};
+std::string meshSnowManifestToJson(const MeshSnowManifest& manifest);
 
 }  // namespace snow

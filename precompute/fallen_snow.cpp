@@ -366,6 +366,9 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
           forSitesNear(hx, hy, static_cast<int>(std::ceil(2.0 * sigma / s)) + 1, [&](uint32_t b) {
             const double ex = sites[b].position[0] - hx, ey = sites[b].position[1] - hy, r2 = ex * ex + ey * ey;
             if (r2 > 4.0 * sigma * sigma || buried[b]) return;
+            // Below where it fell from (a site near the edge it fell over must not catch it
+            // back: snow went round in that loop for ever).
+            if (!(sites[b].position[2] < std::min<double>(edgeZ, P[2]) - band)) return;
             if (std::abs(sites[b].position[2] - hz) > std::max(std::sqrt(r2), 0.5 * s) * tanConnect) return;
             if (r2 > 0.0) {  // and in sight of the landing point (not behind a wall)
               const float lift = static_cast<float>(0.5 * std::sqrt(r2));
@@ -410,14 +413,13 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
   const double loDeg = std::max(0.0, st.reposeAngleDeg - 0.5 * st.transitionWidthDeg);
   const double hiDeg = std::min(89.9, st.reposeAngleDeg + 0.5 * st.transitionWidthDeg);
   const RandomKey key{st.seed};
-  uint64_t passIndex = 0;
   std::vector<double> moved(n);
   for (int round = 0; round < st.depositRounds; ++round) {
     for (size_t i = 0; i < n; ++i) volume[i] += placed[i] / st.depositRounds;
     const double stop = st.stopFraction * rep.placedM3 / st.depositRounds / std::max(totalArea, 1e-300);
     ++rep.rounds;
     bool converged = false;
-    for (int pass = 0; pass < st.maxPassesPerRound; ++pass, ++passIndex) {
+    for (int pass = 0; pass < st.maxPassesPerRound; ++pass) {
       // Outflows from this pass's snow tops.
       tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
         for (size_t a = range.begin(); a < range.end(); ++a) {
@@ -429,7 +431,9 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
           const double top = base[a] + v / area[a];
           auto tanTheta = [&](uint32_t slot) {
             if (!(hiDeg > loDeg)) return std::tan(loDeg * kPi / 180.0);
-            const Philox4x32 r = key.draw(passIndex, slot, RngStream::FallenSnowStability);
+            // One draw per pair and round: a random threshold field the round settles into
+            // (a draw per pass kept moving snow at slopes inside the curve, pass after pass).
+            const Philox4x32 r = key.draw(static_cast<uint64_t>(round), slot, RngStream::FallenSnowStability);
             return std::tan((loDeg + (hiDeg - loDeg) * uniformOpenDouble(r.v[0], r.v[1])) * kPi / 180.0);
           };
           // Each unstable pair's share: the volume that brings it to theta*, over the number of
@@ -445,7 +449,15 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
             ++receivers;
           }
           for (uint32_t d = d0; d < d1; ++d) {
-            const double excess = top - drops[d].edgeZ - drops[d].distance * tanTheta(static_cast<uint32_t>(nbr.size()) + d);
+            // Over the edge, or onto the snow where it lands when that stands higher (an edge
+            // buried in the snow below is no edge: snow went round that loop for ever).
+            double floor = drops[d].edgeZ;
+            if (!drops[d].landing.empty()) {
+              double landingTop = 0.0;
+              for (const auto& [b, w] : drops[d].landing) landingTop += w * (base[b] + volume[b] / area[b]);
+              floor = std::max(floor, landingTop);
+            }
+            const double excess = top - floor - drops[d].distance * tanTheta(static_cast<uint32_t>(nbr.size()) + d);
             if (!(excess > 0.0)) continue;
             dropOut[d] = excess * area[a];
             ++receivers;
@@ -486,7 +498,6 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
       rep.lastMovedM = most;
       if (most < stop) {
         converged = true;
-        ++passIndex;
         break;
       }
     }

@@ -33,15 +33,18 @@
 //  - Each pass moves snow everywhere at once (the thesis's multi-pass "everything moves at once",
 //    as a Jacobi step: outflows from the pass's snow tops, then a gather): site s sheds toward a
 //    lower neighbour n the volume that brings their snow tops' slope down to an angle theta*
-//    drawn from the transition curve (uniform over [AOR - w/2, AOR + w/2], seeded per pass and
-//    pair: the thesis's stochastic stability; w = 0 is a sharp AOR), divided by its receivers + 1
+//    drawn from the transition curve (uniform over [AOR - w/2, AOR + w/2], seeded per round and
+//    pair: the thesis's stochastic stability as a random threshold field each round settles
+//    into; w = 0 is a sharp AOR), divided by its receivers + 1
 //    (they may fill from elsewhere in the same pass), all outflows scaled to the snow there. In
 //    double: the mass is kept to double rounding.
 //  - Lattice directions with no neighbour: a stab from the base rising at the connect angle to
 //    just past the footprint finds a wall (snow rests against it); otherwise an edge at the
 //    height z_e of the surface at the footprint's edge: snow standing above it by more than the
-//    repose slope goes over and falls straight down from just past the footprint; where it lands
-//    (a ray) it is spread over the sites near the landing point in sight of it (a Gaussian, not
+//    repose slope (and above the snow where it would land: an edge buried in the snow below is no
+//    edge) goes over and falls straight down from just past the footprint; where it lands
+//    (a ray) it is spread over the sites near the landing point, in sight of it and lower than the
+//    edge (a Gaussian, not
 //    snapped to one site: the thesis's stalagmites). A fall that meets nothing leaves the world
 //    (counted: placed = kept + left the world, to rounding).
 //  - A round ends when no site shed more than stopFraction of the round's mean deposit in a

@@ -13,6 +13,7 @@
 #include "core/default_terrain.h"
 #include "core/parameters.h"
 #include "core/weather.h"
+#include "fallen_snow.h"
 #include "raster_input.h"
 #include "terrain_source.h"
 
@@ -81,12 +82,26 @@ struct BedformScene {
   std::optional<RasterRef> mask;
 };
 
+// mode = "mesh": Fearing's snow on the mesh itself ([mesh_snow]; README "Snow on meshes").
+struct MeshSnowBodySettings {  // bakers/mesh_snow_body.h's options
+  double voxelSizeM = 0.0;     // 0: half the site spacing
+  int smoothingSteps = 2;
+  double adaptivity = 0.0;
+  double densityKgPerM3 = 150.0;
+};
+struct MeshSnowScene {
+  FallenSnowSettings placement;
+  FallenSnowStability stability;
+  MeshSnowBodySettings body;
+};
+
 struct Scene {
   std::string sourceName;   // the scene file path, or "preset:default"
   std::string baseDir;      // folder relative terrain paths are resolved against
   std::string name = "snowbake scene";
-  std::string mode = "season";  // season | occlusion
+  std::string mode = "season";  // season | occlusion | mesh
   OcclusionParameters occlusion;
+  MeshSnowScene meshSnow;
   TerrainSource terrain;
   std::vector<OccluderSource> occluders;
   std::optional<double> latitudeDeg;  // site latitude; defaults to the DEM's when it has one

@@ -61,7 +61,26 @@ const std::vector<std::string> kOcclusionLayers = {"ambient_occlusion", "sun_vis
 const std::vector<Rule>& sceneRules() {
   static const std::vector<Rule> rules = {
       {"name", Kind::String},
-      {"mode", Kind::String, -kInf, kInf, {"season", "occlusion"}},
+      {"mode", Kind::String, -kInf, kInf, {"season", "occlusion", "mesh"}},
+      {"mesh_snow", Kind::Table},
+      {"mesh_snow.depth_m", Kind::Number, 0, 100},
+      {"mesh_snow.site_spacing_m", Kind::Number, 1e-4, 100},
+      {"mesh_snow.sky_cell_sites", Kind::Integer, 1, 64},
+      {"mesh_snow.flakes_per_site", Kind::Integer, 1, 1024},
+      {"mesh_snow.flutter_mean_m", Kind::Number, 0, 10},
+      {"mesh_snow.flutter_sigma_m", Kind::Number, 0, 10},
+      {"mesh_snow.swirl_height_m", Kind::Number, 1e-4, 100},
+      {"mesh_snow.max_coverage_diff", Kind::Number, 0, 1},
+      {"mesh_snow.repose_angle_deg", Kind::Number, 0, 89},
+      {"mesh_snow.transition_width_deg", Kind::Number, 0, 90},
+      {"mesh_snow.deposit_rounds", Kind::Integer, 1, 100},
+      {"mesh_snow.stop_fraction", Kind::Number, 1e-7, 0.5},
+      {"mesh_snow.max_passes_per_round", Kind::Integer, 1, 10000000},
+      {"mesh_snow.connect_angle_deg", Kind::Number, 1, 89},
+      {"mesh_snow.voxel_size_m", Kind::Number, 0, 100},
+      {"mesh_snow.smoothing_steps", Kind::Integer, 0, 20},
+      {"mesh_snow.adaptivity", Kind::Number, 0, 1},
+      {"mesh_snow.density_kg_per_m3", Kind::Number, 1, 1000},
       {"occlusion", Kind::Table},
       {"occlusion.s_max_m", Kind::Number, 0, 1000},
       {"occlusion.tau_ambient", Kind::Number, 0, 10},
@@ -801,6 +820,42 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
       if (*o.day > scene.days) fail(source, *day, "occlusion.day", "day " + std::to_string(*o.day) + " is after the season's end");
     }
     o.turbidity = number(root["occlusion"]["turbidity"], o.turbidity);
+  }
+  {
+    MeshSnowScene& m = scene.meshSnow;
+    const auto t = root["mesh_snow"];
+    m.placement.depthM = number(t["depth_m"], m.placement.depthM);
+    m.placement.siteSpacingM = number(t["site_spacing_m"], m.placement.siteSpacingM);
+    m.placement.skyCellSites = static_cast<int>(t["sky_cell_sites"].value<int64_t>().value_or(m.placement.skyCellSites));
+    m.placement.flakesPerSite = static_cast<int>(t["flakes_per_site"].value<int64_t>().value_or(m.placement.flakesPerSite));
+    m.placement.flutterMeanM = number(t["flutter_mean_m"], m.placement.flutterMeanM);
+    m.placement.flutterSigmaM = number(t["flutter_sigma_m"], m.placement.flutterSigmaM);
+    m.placement.swirlHeightM = number(t["swirl_height_m"], m.placement.swirlHeightM);
+    m.placement.maxCoverageDiff = number(t["max_coverage_diff"], m.placement.maxCoverageDiff);
+    m.stability.reposeAngleDeg = number(t["repose_angle_deg"], m.stability.reposeAngleDeg);
+    m.stability.transitionWidthDeg = number(t["transition_width_deg"], m.stability.transitionWidthDeg);
+    m.stability.depositRounds = static_cast<int>(t["deposit_rounds"].value<int64_t>().value_or(m.stability.depositRounds));
+    m.stability.stopFraction = number(t["stop_fraction"], m.stability.stopFraction);
+    m.stability.maxPassesPerRound = static_cast<int>(t["max_passes_per_round"].value<int64_t>().value_or(m.stability.maxPassesPerRound));
+    m.stability.connectAngleDeg = number(t["connect_angle_deg"], m.stability.connectAngleDeg);
+    m.body.voxelSizeM = number(t["voxel_size_m"], m.body.voxelSizeM);
+    m.body.smoothingSteps = static_cast<int>(t["smoothing_steps"].value<int64_t>().value_or(m.body.smoothingSteps));
+    m.body.adaptivity = number(t["adaptivity"], m.body.adaptivity);
+    m.body.densityKgPerM3 = number(t["density_kg_per_m3"], m.body.densityKgPerM3);
+    if (root["mesh_snow"].node() && scene.mode != "mesh") throw InputError(source + ": mesh_snow: only mode = \"mesh\" uses it");
+  }
+  if (scene.mode == "mesh") {
+    // Snow on the mesh itself (Fearing): no grid, no season; the snow body is the output.
+    if (scene.terrain.builtin) throw InputError(source + ": mode = \"mesh\" needs terrain.file to name a mesh (.obj, .ply, .glb, .gltf, .fbx)");
+    if (root["outputs"]["layers"].node() || !scene.outputs.encodings.empty() || scene.outputs.multichannelExr ||
+        scene.outputs.displacementWidth > 0 || !scene.outputs.frameDays.empty() || scene.outputs.avalancheMaps)
+      throw InputError(source + ": outputs: mode = \"mesh\" writes the snow body only (outputs.meshes, outputs.vdb); grid layers, "
+                       "encodings, displacement maps and frames need a height field");
+    if (root["outputs"]["mesh_parts"].node()) throw InputError(source + ": outputs.mesh_parts: mode = \"mesh\" writes the snow body (snow_body.EXT)");
+    if (scene.outputs.meshes.empty() && !scene.outputs.vdb)
+      throw InputError(source + ": outputs: mode = \"mesh\" needs outputs.meshes or outputs.vdb = true");
+    if (!scene.userAvalanches.empty() || !scene.userSkiers.empty() || !scene.edits.empty() || scene.bedforms.enabled)
+      throw InputError(source + ": mode = \"mesh\" has no season: no events, edits or bedforms");
   }
   if (scene.mode == "occlusion") {
     // No season: the outputs that only a season makes are errors, not silently empty files.

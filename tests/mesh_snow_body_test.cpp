@@ -135,3 +135,55 @@ TEST(MeshSnowBody, TheVdbIsTheSameBytesTwice) {
 
 }  // namespace
 }  // namespace snow
+
+#include "core/errors.h"
+#include "tests/bake_support.h"
+#include <nlohmann/json.hpp>
+
+namespace snow {
+namespace {
+
+// A 2 m ground with a 0.5 m block on it, as OBJ (z up).
+std::string writeBlockObj() {
+  const auto dir = std::filesystem::temp_directory_path() / ("snowbake_mesh_mode_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "block.obj").string();
+  std::ofstream o(path);
+  o << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\n"                         // ground 1-4
+    << "v 0.7 0.7 0.5\nv 1.3 0.7 0.5\nv 1.3 1.3 0.5\nv 0.7 1.3 0.5\n"  // block top 5-8
+    << "v 0.7 0.7 0\nv 1.3 0.7 0\nv 1.3 1.3 0\nv 0.7 1.3 0\n"          // block bottom 9-12
+    << "f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n"
+    << "f 9 10 6\nf 9 6 5\nf 10 11 7\nf 10 7 6\nf 11 12 8\nf 11 8 7\nf 12 9 5\nf 12 5 8\n";
+  return path;
+}
+
+TEST(MeshSnowBake, ModeMeshWritesTheSnowBodyAndAManifest) {
+  const std::string obj = writeBlockObj();
+  const test::Bake b = test::bakeSceneText("mesh_mode", "mode = \"mesh\"\n[terrain]\nfile = \"" + obj +
+                                                            "\"\n[mesh_snow]\ndepth_m = 0.3\nsite_spacing_m = 0.05\nflutter_mean_m = 0.02\n"
+                                                            "flutter_sigma_m = 0.01\n[outputs]\nmeshes = [\"glb\", \"ply\"]\nvdb = true\n");
+  for (const char* f : {"snow_body.glb", "snow_body.ply", "snow.vdb", "manifest.json"})
+    EXPECT_GT(std::filesystem::file_size(b.out() / f), 1000u) << f;
+  const auto m = nlohmann::json::parse(std::ifstream(b.out() / "manifest.json"));
+  EXPECT_EQ(m["run"]["mode"], "mesh");
+  EXPECT_EQ(m["mesh"]["triangles"], 12);
+  const double placed = m["mass_balance_m3"]["placed"], kept = m["mass_balance_m3"]["kept"], lost = m["mass_balance_m3"]["left_the_world"];
+  EXPECT_NEAR(placed, 0.3 * 4.0, 1e-9);
+  EXPECT_NEAR(kept + lost, placed, 1e-9 * placed);
+  EXPECT_GT(m["run"]["stability"]["buried_sites"].get<int>(), 0);  // the ground under the block
+  EXPECT_EQ(m["files"].size(), 3u);
+}
+
+TEST(MeshSnowBake, ModeMeshRefusesWhatItCannotMake) {
+  const std::string obj = writeBlockObj();
+  auto bake = [&](const std::string& extra) {
+    return test::bakeSceneText("mesh_mode_bad", "mode = \"mesh\"\n[terrain]\nfile = \"" + obj + "\"\n" + extra);
+  };
+  EXPECT_THROW(bake("[outputs]\nmeshes = [\"glb\"]\nlayers = [\"depth\"]\n"), InputError);
+  EXPECT_THROW(bake("[outputs]\nformat = \"exr\"\n"), InputError);  // nothing to write
+  EXPECT_THROW(test::bakeSceneText("mesh_mode_bad", "[mesh_snow]\ndepth_m = 0.3\n[terrain]\nbuiltin = \"ridged\"\nsize = 64\n"), InputError);
+  EXPECT_THROW(test::bakeSceneText("mesh_mode_bad", "mode = \"mesh\"\n[terrain]\nbuiltin = \"ridged\"\n[outputs]\nvdb = true\n"), InputError);
+}
+
+}  // namespace
+}  // namespace snow

@@ -20,6 +20,7 @@
 #include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
 #include "bakers/manifest.h"
+#include "bakers/mesh_snow_body.h"
 #include "bakers/mesh_writer.h"
 #include "bakers/rtin.h"
 #include "bakers/vdb_writer.h"
@@ -31,6 +32,7 @@
 #include "precompute/mesh.h"
 #include "precompute/scene.h"
 #include "precompute/exposure.h"
+#include "precompute/fallen_snow.h"
 #include "precompute/occlusion.h"
 #include "precompute/ray_scene.h"
 #include "precompute/wind_timeline.h"
@@ -224,6 +226,89 @@ struct SinkScope {
   SinkScope& operator=(const SinkScope&) = delete;
 };
 
+namespace {
+
+// mode = "mesh": Fearing's snow on the mesh itself (README "Snow on meshes"): placement,
+// stability, the snow body as meshes and a VDB, and a manifest.
+BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, Clock::time_point tStart) {
+  BakeResult result;
+  result.backendName = "cpu (Embree ray queries, TBB)";
+  auto t0 = Clock::now();
+  const TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (const auto& p : mesh.positions)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  log << "mode: mesh (Fearing 2000: snow on the mesh itself; no grid, no season)\n";
+  log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
+      << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(since(t0), 2) << " s)\n";
+  t0 = Clock::now();
+  FallenSnowSettings placement = scene.meshSnow.placement;
+  placement.seed = scene.seed;
+  FallenSnow snow = placeFallenSnow(mesh, placement);
+  log << "placement: " << snow.sites.size() << " sites (" << snow.refinedCells << " cells refined), " << snow.flakes << " flakes ("
+      << snow.blocked << " blocked, " << snow.leftTheWorld << " left the world), sky " << fixed(snow.skyMassM3, 4) << " m^3, placed "
+      << fixed(snow.placedM3, 4) << " m^3 (" << fixed(since(t0), 2) << " s)\n";
+  t0 = Clock::now();
+  FallenSnowStability stability = scene.meshSnow.stability;
+  stability.seed = scene.seed;
+  const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, stability);
+  log << "stability: " << st.rounds << " rounds, " << st.passes << " passes" << (st.unconvergedRounds ? " (" + std::to_string(st.unconvergedRounds) + " rounds hit the pass limit)" : std::string())
+      << ", " << fixed(st.overEdgesM3, 4) << " m^3 over edges, " << fixed(st.leftTheWorldM3, 4) << " m^3 left the world, "
+      << fixed(st.finalM3, 4) << " m^3 kept (" << fixed(since(t0), 2) << " s)\n";
+  t0 = Clock::now();
+  std::error_code ec;
+  fs::create_directories(options.outDir, ec);
+  if (ec) throw InputError(options.outDir + ": cannot create the output folder: " + ec.message());
+  MeshSnowBodyOptions bo;
+  bo.voxelSizeM = scene.meshSnow.body.voxelSizeM;
+  bo.smoothingSteps = scene.meshSnow.body.smoothingSteps;
+  bo.adaptivity = scene.meshSnow.body.adaptivity;
+  bo.densityKgPerM3 = scene.meshSnow.body.densityKgPerM3;
+  const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / "snow.vdb").string() : std::string();
+  const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo, vdbPath);
+  log << "snow body: " << body.snowVoxels << " voxels of " << fixed(body.voxelSizeM, 4) << " m, " << body.mesh.triangles.size()
+      << " triangles (" << fixed(body.seconds, 2) << " s)\n";
+  MeshSnowManifest manifest;
+  manifest.programVersion = programVersion();
+  manifest.sceneSource = scene.sourceName;
+  manifest.sceneName = scene.name;
+  manifest.sceneHash = Fnv1a64().add(scene.canonicalToml).hex();
+  manifest.meshSource = mesh.source;
+  manifest.meshHash = hashFileFnv1a64(scene.terrain.file);
+  manifest.triangles = mesh.triangles.size();
+  for (int k = 0; k < 3; ++k) manifest.boundsMin[k] = lo[k], manifest.boundsMax[k] = hi[k];
+  manifest.seed = scene.seed;
+  manifest.placement = placement;
+  manifest.stability = stability;
+  manifest.sites = snow.sites.size();
+  manifest.skyM3 = snow.skyMassM3;
+  manifest.placedM3 = snow.placedM3;
+  manifest.stabilityReport = st;
+  manifest.voxelSizeM = body.voxelSizeM;
+  manifest.bodyTriangles = body.mesh.triangles.size();
+  if (!vdbPath.empty()) {
+    manifest.files.push_back({"snow.vdb", "the snow body: snow_sdf (level set, metres) and density (fog volume, kg/m^3 of " +
+                                              fixed(bo.densityKgPerM3, 0) + " inside)",
+                              "m; kg/m^3", "OpenVDB"});
+    result.files.push_back(vdbPath);
+  }
+  for (const std::string& format : scene.outputs.meshes) {
+    const std::string name = "snow_body." + format;
+    const std::string path = (fs::path(options.outDir) / name).string();
+    writeMesh(path, format, body.mesh);
+    manifest.files.push_back({name, "the snow body, closed, in the input mesh's frame", "m", meshFormatDescription(format)});
+    result.files.push_back(path);
+  }
+  const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
+  writeTextAtomically(manifestPath, meshSnowManifestToJson(manifest));
+  result.files.push_back(manifestPath);
+  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(since(t0), 2) << " s)\n";
+  log << "total: " << fixed(since(tStart), 2) << " s\n";
+  return result;
+}
+
+}  // namespace
+
 BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   const auto tStart = Clock::now();
   // 1. Scene
@@ -246,6 +331,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   log << "snowbake " << programVersion() << ": scene " << scene.sourceName << " (" << scene.name << "), seed " << scene.seed
       << ", " << threads << " thread" << (threads == 1 ? "" : "s") << "\n";
+  if (scene.mode == "mesh") return runMeshBake(scene, options, log, tStart);
 
   // 2. Terrain
   auto t0 = Clock::now();
