@@ -48,6 +48,7 @@ std::string agreementBench(const BenchOptions& o, std::ostream& log, int threads
 // Wind bedforms: time per round on 256²-1024² windows, and the exact references (tools/bench_bedforms.cpp).
 std::string bedformBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string skierBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string meshSnowBench(const BenchOptions& o, std::ostream& log, int threads);
 // The default scene at 1024² with every output, as `snowbake bake` runs it.
 std::string bakeBench(const BenchOptions& o, std::ostream& log, int threads);
 

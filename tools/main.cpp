@@ -3,7 +3,7 @@
 //                [--cache-dir DIR] [--no-cache] [--quiet]
 //   snowbake demo [--out DIR]
 //   snowbake info FILE [--json]
-//   snowbake bench [--stage sun|wind|season|avalanche|occlusion|mesh|bedforms|skiers|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
+//   snowbake bench [--stage sun|wind|season|avalanche|occlusion|mesh|bedforms|skiers|meshsnow|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
 //                  [--csv-dir DIR] [--data DIR]
 // Exit status: 0 success, 2 usage or input error (one line naming the file and the problem),
 // 1 any other failure.
@@ -65,8 +65,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   benchCmd->add_option("--threads", benchOptions.threads, "CPU threads, 0 = all cores");
   benchCmd->add_option("--sun-size", benchOptions.sunSize, "Grid size of the sun-exposure timing table")->capture_default_str();
-  benchCmd->add_option("--stage", benchOptions.stage, "sun, wind, season, avalanche, occlusion, mesh, bedforms, skiers, scaling, bandwidth, agreement, bake or all")
-      ->check(CLI::IsMember({"sun", "season", "wind", "avalanche", "occlusion", "mesh", "bedforms", "skiers", "scaling", "bandwidth", "agreement", "bake", "all", "scaling-child"}))
+  benchCmd->add_option("--stage", benchOptions.stage, "sun, wind, season, avalanche, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all")
+      ->check(CLI::IsMember({"sun", "season", "wind", "avalanche", "occlusion", "mesh", "bedforms", "skiers", "meshsnow", "scaling", "bandwidth", "agreement", "bake", "all", "scaling-child"}))
       ->capture_default_str();
   benchCmd->add_option("--csv-dir", benchOptions.csvDir, "Folder for the CSV files (empty: none)")->capture_default_str();
   benchCmd->add_option("--data", benchOptions.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();
