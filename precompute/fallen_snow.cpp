@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "core/errors.h"
 #include "core/rng.h"
@@ -15,6 +16,11 @@ namespace snow {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+
+// Just above a surface point at height z: 0.1 mm, or 8 float steps where those are larger (a
+// mesh at 4000 m has 0.24 mm steps: a 0.1 mm lift rounded back onto the face, and every flake
+// hit its own site's face).
+float lifted(float z) { return z + std::max(1e-4f, 8.f * std::abs(z) * std::numeric_limits<float>::epsilon()); }
 
 // Edge function of the directed edge P -> Q at (x, y): positive to its left. Evaluated on the
 // edge's endpoints in a fixed order, so the two triangles sharing an edge get the same number
@@ -111,7 +117,7 @@ FallenSnow placeFallenSnow(const TriangleMesh& mesh, const FallenSnowSettings& s
       for (size_t si = range.begin(); si < range.end(); ++si) {
         const SnowSite& site = sites[si];
         for (int f = 0; f < flakes; ++f) {
-          std::array<float, 3> p{site.position[0], site.position[1], site.position[2] + 1e-4f};
+          std::array<float, 3> p{site.position[0], site.position[1], lifted(site.position[2])};
           int result = -1;
           for (uint32_t step = 0;; ++step) {
             double r = 0.0, phi = 0.0;
@@ -269,7 +275,7 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
       float t = 0.f;
       int meshIndex = -1;
       unsigned tri = 0;
-      if (!rays.intersectPrimitive({P[0], P[1], P[2] + 1e-4f}, {0.f, 0.f, 1.f}, INFINITY, t, meshIndex, tri) || meshIndex != 0) continue;
+      if (!rays.intersectPrimitive({P[0], P[1], lifted(P[2])}, {0.f, 0.f, 1.f}, INFINITY, t, meshIndex, tri) || meshIndex != 0) continue;
       const auto& T = mesh.triangles[tri];
       const auto &A = mesh.positions[T[0]], &B = mesh.positions[T[1]], &C = mesh.positions[T[2]];
       const double nz = (static_cast<double>(B[0]) - A[0]) * (static_cast<double>(C[1]) - A[1]) -
@@ -496,7 +502,7 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
       volume.swap(next);
       ++rep.passes;
       rep.lastMovedM = most;
-      if (most < stop) {
+      if (most < stop || most == 0.0) {
         converged = true;
         break;
       }

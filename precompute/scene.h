@@ -90,6 +90,7 @@ struct MeshSnowBodySettings {  // bakers/mesh_snow_body.h's options
   double densityKgPerM3 = 150.0;
 };
 struct MeshSnowScene {
+  bool onOccluders = false;  // season mode with [mesh_snow]: snow on the [[occluders]] meshes too
   FallenSnowSettings placement;
   FallenSnowStability stability;
   MeshSnowBodySettings body;

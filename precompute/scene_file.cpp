@@ -842,7 +842,13 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
     m.body.smoothingSteps = static_cast<int>(t["smoothing_steps"].value<int64_t>().value_or(m.body.smoothingSteps));
     m.body.adaptivity = number(t["adaptivity"], m.body.adaptivity);
     m.body.densityKgPerM3 = number(t["density_kg_per_m3"], m.body.densityKgPerM3);
-    if (root["mesh_snow"].node() && scene.mode != "mesh") throw InputError(source + ": mesh_snow: only mode = \"mesh\" uses it");
+    m.onOccluders = root["mesh_snow"].node() != nullptr && scene.mode == "season";
+    if (root["mesh_snow"].node() && scene.mode == "occlusion")
+      throw InputError(source + ": mesh_snow: mode = \"occlusion\" does not use it (mode = \"mesh\", or a season with [[occluders]])");
+    if (m.onOccluders && scene.occluders.empty())
+      throw InputError(source + ": mesh_snow: in a season it puts snow on the [[occluders]] meshes, and the scene has none");
+    if (m.onOccluders && scene.outputs.meshes.empty())
+      throw InputError(source + ": mesh_snow: the occluders' snow bodies need outputs.meshes (the formats to write them in)");
   }
   if (scene.mode == "mesh") {
     // Snow on the mesh itself (Fearing): no grid, no season; the snow body is the output.

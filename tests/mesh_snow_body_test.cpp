@@ -187,3 +187,49 @@ TEST(MeshSnowBake, ModeMeshRefusesWhatItCannotMake) {
 
 }  // namespace
 }  // namespace snow
+
+namespace snow {
+namespace {
+
+// Snow on a season's [[occluders]]: a 20 m box held high over the builtin range gets a snow body
+// whose top stands the terrain's snow depth round it above the box (the same snowfall).
+TEST(MeshSnowBake, OccludersOnATerrainGetSnowAsDeepAsTheTerrainRoundThem) {
+  const auto dir = std::filesystem::temp_directory_path() / ("snowbake_occluder_snow_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string obj = (dir / "box.obj").string();
+  {
+    TriangleMesh m;
+    std::ofstream o(obj);
+    const float x0 = 300, y0 = 300, x1 = 320, y1 = 320, z0 = 3990, z1 = 4000;
+    for (float z : {z0, z1})
+      for (const auto& [x, y] : {std::pair{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}) o << "v " << x << " " << y << " " << z << "\n";
+    o << "f 1 4 3\nf 1 3 2\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n";
+  }
+  const test::Bake b = test::bakeSceneText(
+      "occluder_snow", "[terrain]\nbuiltin = \"ridged\"\nsize = 64\ncell_size_m = 10\n[season]\ndays = 10\n"
+                       "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = -5\n[[weather.snowfall]]\nstart_day = 0\nend_day = 4\n"
+                       "[[occluders]]\nfile = \"" + obj + "\"\n[mesh_snow]\nsite_spacing_m = 0.5\nvoxel_size_m = 0.05\n[precompute]\nsun = false\n"
+                       "[outputs]\nlayers = [\"depth\"]\nmeshes = [\"obj\"]\n");
+  const auto m = nlohmann::json::parse(std::ifstream(b.out() / "manifest.json"));
+  std::string content;
+  for (const auto& f : m["files"])
+    if (f["path"] == "occluder_0_snow.obj") content = f["content"];
+  ASSERT_FALSE(content.empty());
+  const double depth = std::stod(content.substr(content.find(", ") + 2));
+  // The body's highest point (OBJ is y-up: y is the altitude).
+  double top = -1e9;
+  std::ifstream in(b.out() / "occluder_0_snow.obj");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("v ", 0) == 0) {
+      std::istringstream l(line.substr(2));
+      double x, y, z;
+      l >> x >> y >> z;
+      top = std::max(top, y);
+    }
+  std::printf("[ measure ] terrain snow round the box %.3f m; the snow body's top %.3f m above the box\n", depth, top - 4000.0);
+  EXPECT_GT(depth, 0.05);
+  EXPECT_NEAR(top - 4000.0, depth, 0.05 * depth + 0.05);  // a voxel is 0.05 m
+}
+
+}  // namespace
+}  // namespace snow

@@ -476,6 +476,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
              img.minValue, img.maxValue);
   };
   const std::string rgbPngFormat = "PNG, 3 channels uint8, sRGB";
+  std::string occluderNotes;  // snow on the occluders, logged once the output writers are done
   auto writeLayers = [&](const SnowState& s, double day) {
     OutputSink& parent = *tlSink;
     const bool frame = day >= 0.0;
@@ -501,6 +502,66 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                     fixed(vo.compactedKgPerM3, 0) + "/" + fixed(vo.stableKgPerM3, 0) + "/" + fixed(vo.unstableKgPerM3, 0) + "/" +
                     fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude",
                  "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", day, 0.f, 0.f);
+      }
+      if (scene.meshSnow.onOccluders && !frame) {
+        // Snow on the [[occluders]] (Fearing, as mode = "mesh"), as deep on open flat ground as
+        // the terrain's snow around each mesh: the mean depth of the valid cells in a ring two
+        // cells wide round its footprint. Sites below the terrain's snow surface are buried in
+        // it (their snow is the terrain's) and left bare.
+        for (size_t k = 0; k < occluders.size(); ++k) {
+          const TriangleMesh& mesh = occluders[k];
+          float lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+          for (const auto& p : mesh.positions)
+            for (int a = 0; a < 2; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+          const double dx = s.spec.cellSizeXM, dy = s.spec.cellSizeYM, H = s.spec.height;
+          double sum = 0;
+          long ring = 0;
+          for (int row = 0; row < s.spec.height; ++row)
+            for (int col = 0; col < s.spec.width; ++col) {
+              const double x = (col + 0.5) * dx, y = (H - row - 0.5) * dy;
+              const bool near = x > lo[0] - 2 * dx && x < hi[0] + 2 * dx && y > lo[1] - 2 * dy && y < hi[1] + 2 * dy;
+              const bool under = x >= lo[0] && x <= hi[0] && y >= lo[1] && y <= hi[1];
+              if (near && !under && s.validCell(col, row)) sum += s.depthM(col, row), ++ring;
+            }
+          FallenSnowSettings ps = scene.meshSnow.placement;
+          ps.seed = scene.seed + k;
+          ps.depthM = ring > 0 ? sum / ring : 0.0;
+          const std::string name = "occluder_" + std::to_string(k) + "_snow";
+          if (!(ps.depthM > 0.0)) {
+            occluderNotes += "  " + name + ": no snow on the terrain round " + mesh.source + ": no snow body written\n";
+            continue;
+          }
+          auto tm = Clock::now();
+          FallenSnow snow = placeFallenSnow(mesh, ps);
+          double buriedM3 = 0;
+          for (SnowSite& site : snow.sites) {
+            const int col = std::clamp(static_cast<int>(site.position[0] / dx), 0, s.spec.width - 1);
+            const int row = std::clamp(static_cast<int>(H - 1 - site.position[1] / dy), 0, s.spec.height - 1);
+            if (site.position[2] < s.bedrockM(col, row) + s.depthM(col, row)) buriedM3 += site.depthM * site.footprintM2, site.depthM = 0.f;
+          }
+          FallenSnowStability ss = scene.meshSnow.stability;
+          ss.seed = scene.seed + k;
+          const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, ss);
+          MeshSnowBodyOptions bo;
+          bo.voxelSizeM = scene.meshSnow.body.voxelSizeM;
+          bo.smoothingSteps = scene.meshSnow.body.smoothingSteps;
+          bo.adaptivity = scene.meshSnow.body.adaptivity;
+          bo.densityKgPerM3 = scene.meshSnow.body.densityKgPerM3;
+          const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo);
+          addSeconds("snow on the occluders", since(tm));
+          // (Logged after the writers join: this runs beside the layers' thread.)
+          occluderNotes += "  " + name + ": " + mesh.source + ", " + fixed(ps.depthM, 3) + " m as on the terrain round it (" +
+                           std::to_string(ring) + " cells), " + std::to_string(snow.sites.size()) + " sites, " + fixed(snow.placedM3, 3) +
+                           " m^3 placed (" + fixed(buriedM3, 3) + " in the terrain's snow), " + fixed(st.finalM3, 3) + " m^3 kept, " +
+                           std::to_string(body.mesh.triangles.size()) + " triangles\n";
+          for (const std::string& format : scene.outputs.meshes) {
+            const std::string path = outputBase(name) + "." + format;
+            writeMesh(path, format, body.mesh);
+            listFile(path, "snow body on the occluder " + mesh.source + " (Fearing: placement and stability, " + fixed(ps.depthM, 3) +
+                               " m as on the terrain round it; the terrain's frame)",
+                     "m", meshFormatDescription(format), day, 0.f, 0.f);
+          }
+        }
       }
       if (!scene.outputs.meshes.empty()) {
         // One adaptive triangulation for every part asked (rtin.h), within the vertical error bound
@@ -958,6 +1019,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, manifestToJson(manifest));
   result.files.push_back(manifestPath);
+  log << occluderNotes;
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(since(t0), 2) << " s)\n";
   for (const auto& [kind, seconds] : outputs.seconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";
   log << "total: " << fixed(since(tStart), 2) << " s\n";
