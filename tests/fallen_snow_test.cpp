@@ -288,7 +288,7 @@ TEST(FallenSnow, SteepFacesShedEdgesTaperAndWallsHold) {
   const double foot = mean(f, 1.8f, 2.0f, 0.5f, 2.5f, -1.f, 2.f), footBefore = mean(before, 1.8f, 2.0f, 0.5f, 2.5f, -1.f, 2.f);
   const double beside = mean(f, 0.7f, 0.8f, 1.35f, 1.65f, -1.f, 0.01f), open = mean(f, 0.7f, 0.8f, 0.5f, 1.0f, -1.f, 0.01f);
   const double under = mean(f, 0.8f, 1.0f, 1.3f, 1.7f, -1.f, 0.01f);
-  std::printf("[ measure ] 60 deg face (its top 40 %, 1.04-1.73 m up) %.4f m; plateau edge %.3f m, inside %.3f m; foot %.3f m (placed %.3f); "
+  std::printf("[ measure ] 60 deg face (its top 40 %%, 1.04-1.73 m up) %.4f m; plateau edge %.3f m, inside %.3f m; foot %.3f m (placed %.3f); "
               "beside the block %.3f m (open ground %.3f m), under it %.4f m; %lld walls, %.3f m^3 over edges, %.3f m^3 left the "
               "world, %d passes, %.2f s\n",
               upperFace, plateauEdge, plateauInner, foot, footBefore, beside, open, under, r.wallDirections, r.overEdgesM3,
