@@ -132,18 +132,10 @@ void RayScene::occluded16(const bool valid[16], const std::array<float, 3> o[16]
 }
 
 float RayScene::intersect(const std::array<float, 3>& o, const std::array<float, 3>& d, float tfar) const {
-  setFlushToZero();
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit rh{};
-  rh.ray.org_x = o[0], rh.ray.org_y = o[1], rh.ray.org_z = o[2];
-  rh.ray.dir_x = d[0], rh.ray.dir_y = d[1], rh.ray.dir_z = d[2];
-  rh.ray.tnear = 0.f;
-  rh.ray.tfar = tfar;
-  rh.ray.mask = 0xffffffffu;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->scene, &context, &rh);
-  return rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? std::numeric_limits<float>::infinity() : rh.ray.tfar;
+  float t = 0.f;
+  int mesh = 0;
+  unsigned triangle = 0;
+  return intersectPrimitive(o, d, tfar, t, mesh, triangle) ? t : std::numeric_limits<float>::infinity();
 }
 
 bool RayScene::intersectPrimitive(const std::array<float, 3>& o, const std::array<float, 3>& d, float tfar, float& t, int& mesh,
