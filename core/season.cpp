@@ -163,6 +163,9 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
   // Wind bedforms (kernels/bedform.h), hourly steps of rounds_per_hour polling rounds each, only
   // while some domain cell has wind above the threshold (else only the cohesion grows).
   const bool bedformsMasked = state.bedformMask.size() == state.spec.cellCount() && state.bedformMask.size() > 0;
+  // The domain's strongest wind (squared), scanned again only after the daily static-field
+  // refresh changed the wind (-1: to scan), not at every hourly step.
+  double bedformWindiest = -1.0;
   if (cfg.bedforms) {
     const BedformParameters bp = *cfg.bedforms;
     auto carry = std::make_shared<double>(0.0);
@@ -170,14 +173,17 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
     addContinuous("wind bedforms", 24.0, [&, bp, carry, roundBase](int slot, double day, double dt) {
       if (!(dt > 0.0)) return;
       timed(slot, [&] {
-        double maxSpeed = 0.0;
-        const bool masked = bedformsMasked;
-        for (size_t i = 0; i < state.windXMps.size(); ++i) {
-          if (!state.validCell.values()[i] || (masked && !state.bedformMask.values()[i])) continue;
-          const double wx = state.windXMps.values()[i], wy = state.windYMps.values()[i];
-          maxSpeed = std::max(maxSpeed, wx * wx + wy * wy);
+        if (bedformWindiest < 0.0) {
+          double maxSpeed = 0.0;
+          const bool masked = bedformsMasked;
+          for (size_t i = 0; i < state.windXMps.size(); ++i) {
+            if (!state.validCell.values()[i] || (masked && !state.bedformMask.values()[i])) continue;
+            const double wx = state.windXMps.values()[i], wy = state.windYMps.values()[i];
+            maxSpeed = std::max(maxSpeed, wx * wx + wy * wy);
+          }
+          bedformWindiest = maxSpeed;
         }
-        const bool windy = cfg.windTransport && std::sqrt(maxSpeed) >= bp.thresholdWindMps;
+        const bool windy = cfg.windTransport && std::sqrt(bedformWindiest) >= bp.thresholdWindMps;
         int rounds = 0;
         if (windy) {
           const double want = *carry + dt * 24.0 * bp.roundsPerHour;
@@ -383,6 +389,7 @@ SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfi
       scheduler.addAction(day, [&, day](double) {
         cfg.updateStaticFields(day, state);
         backend.uploadStaticFields(state);
+        bedformWindiest = -1.0;  // the wind changed: the bedforms scan it again
         maxTemperatureBase = backend.maxTemperatureBaseC();
       });
   }
