@@ -420,8 +420,22 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
   const double hiDeg = std::min(89.9, st.reposeAngleDeg + 0.5 * st.transitionWidthDeg);
   const RandomKey key{st.seed};
   std::vector<double> moved(n);
+  // Per link (neighbours, then drops) the rise its snow tops may keep: distance x tan(theta*),
+  // theta* drawn once per pair and round: a random threshold field the round settles into (a
+  // draw per pass kept moving snow at slopes inside the curve, pass after pass).
+  std::vector<double> allowedRise(nbr.size() + drops.size());
   for (int round = 0; round < st.depositRounds; ++round) {
     for (size_t i = 0; i < n; ++i) volume[i] += placed[i] / st.depositRounds;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, allowedRise.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t slot = range.begin(); slot < range.end(); ++slot) {
+        double tanTheta = std::tan(loDeg * kPi / 180.0);
+        if (hiDeg > loDeg) {
+          const Philox4x32 r = key.draw(static_cast<uint64_t>(round), static_cast<uint32_t>(slot), RngStream::FallenSnowStability);
+          tanTheta = std::tan((loDeg + (hiDeg - loDeg) * uniformOpenDouble(r.v[0], r.v[1])) * kPi / 180.0);
+        }
+        allowedRise[slot] = (slot < nbr.size() ? dist[slot] : drops[slot - nbr.size()].distance) * tanTheta;
+      }
+    });
     const double stop = st.stopFraction * rep.placedM3 / st.depositRounds / std::max(totalArea, 1e-300);
     ++rep.rounds;
     bool converged = false;
@@ -435,13 +449,6 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
           for (uint32_t d = d0; d < d1; ++d) dropOut[d] = 0.0;
           if (!(v > 0.0)) continue;
           const double top = base[a] + v / area[a];
-          auto tanTheta = [&](uint32_t slot) {
-            if (!(hiDeg > loDeg)) return std::tan(loDeg * kPi / 180.0);
-            // One draw per pair and round: a random threshold field the round settles into
-            // (a draw per pass kept moving snow at slopes inside the curve, pass after pass).
-            const Philox4x32 r = key.draw(static_cast<uint64_t>(round), slot, RngStream::FallenSnowStability);
-            return std::tan((loDeg + (hiDeg - loDeg) * uniformOpenDouble(r.v[0], r.v[1])) * kPi / 180.0);
-          };
           // Each unstable pair's share: the volume that brings it to theta*, over the number of
           // receivers + 1 (the receivers may take snow from other sites in the same pass).
           int receivers = 0;
@@ -449,7 +456,7 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
             const uint32_t b = nbr[k];
             const double drop = top - (base[b] + volume[b] / area[b]);
             if (!(drop > 0.0)) continue;
-            const double excess = drop - dist[k] * tanTheta(k);
+            const double excess = drop - allowedRise[k];
             if (!(excess > 0.0)) continue;
             out[k] = excess / (1.0 / area[a] + 1.0 / area[b]);
             ++receivers;
@@ -463,7 +470,7 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
               for (const auto& [b, w] : drops[d].landing) landingTop += w * (base[b] + volume[b] / area[b]);
               floor = std::max(floor, landingTop);
             }
-            const double excess = top - floor - drops[d].distance * tanTheta(static_cast<uint32_t>(nbr.size()) + d);
+            const double excess = top - floor - allowedRise[nbr.size() + d];
             if (!(excess > 0.0)) continue;
             dropOut[d] = excess * area[a];
             ++receivers;
