@@ -283,7 +283,7 @@ std::vector<SkierRecord> SkiRun::descendTogether(const std::vector<SkierStart>& 
   backend_.skierBatch(args(seed), agents, paths);
 
   const double dx = spec_.cellSizeXM, dy = spec_.cellSizeYM;
-  std::vector<float> depth, unstable;
+  std::vector<float> box, depth, unstable;  // the path's surroundings; one cell outside them
   for (size_t k = 0; k < agents.size(); ++k) {
     const SkierAgent& s = agents[k];
     SkierRecord& r = records[k];
@@ -301,8 +301,7 @@ std::vector<SkierRecord> SkiRun::descendTogether(const std::vector<SkierStart>& 
       x0 = std::min(x0, qx), x1 = std::max(x1, qx), y0 = std::min(y0, qy), y1 = std::max(y1, qy);
     }
     x0 = std::max(0, x0 - 2), y0 = std::max(0, y0 - 2), x1 = std::min(w - 1, x1 + 2), y1 = std::min(h - 1, y1 + 2);
-    backend_.readCells(x0, y0, x1 - x0 + 1, y1 - y0 + 1, depth, unstable);
-    const std::vector<float> box = depth;
+    backend_.readCells(x0, y0, x1 - x0 + 1, y1 - y0 + 1, box, unstable);
     auto surfaceOf = [&](int cell) -> float {
       const int cx = cell % w, cy = cell / w;
       if (cx >= x0 && cx <= x1 && cy >= y0 && cy <= y1)
