@@ -516,8 +516,12 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           const double dx = s.spec.cellSizeXM, dy = s.spec.cellSizeYM, H = s.spec.height;
           double sum = 0;
           long ring = 0;
-          for (int row = 0; row < s.spec.height; ++row)
-            for (int col = 0; col < s.spec.width; ++col) {
+          // Only the rows and columns near the footprint (a cell's centre is at ((col + 1/2) dx,
+          // (H - row - 1/2) dy)).
+          const int col0 = std::max(0, static_cast<int>(std::floor(lo[0] / dx)) - 3), col1 = std::min(s.spec.width - 1, static_cast<int>(hi[0] / dx) + 3);
+          const int row0 = std::max(0, static_cast<int>(std::floor(H - hi[1] / dy)) - 3), row1 = std::min(s.spec.height - 1, static_cast<int>(H - lo[1] / dy) + 3);
+          for (int row = row0; row <= row1; ++row)
+            for (int col = col0; col <= col1; ++col) {
               const double x = (col + 0.5) * dx, y = (H - row - 0.5) * dy;
               const bool near = x > lo[0] - 2 * dx && x < hi[0] + 2 * dx && y > lo[1] - 2 * dy && y < hi[1] + 2 * dy;
               const bool under = x >= lo[0] && x <= hi[0] && y >= lo[1] && y <= hi[1];
