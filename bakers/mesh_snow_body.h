@@ -16,12 +16,7 @@
 
 namespace snow {
 
-struct MeshSnowBodyOptions {
-  double voxelSizeM = 0.0;     // 0: half the site spacing
-  double adaptivity = 0.0;     // OpenVDB volume-to-mesh adaptivity in [0, 1] (0: uniform)
-  int smoothingSteps = 2;      // mean-curvature smoothing passes of the level set
-  double densityKgPerM3 = 150.0;  // for the fog volume (fresh snow on props)
-};
+// MeshSnowBodyOptions: precompute/fallen_snow.h (the scene file sets them too).
 
 struct MeshSnowBody {
   MeshData mesh;               // closed, outward-facing triangles

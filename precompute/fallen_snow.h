@@ -134,4 +134,12 @@ struct FallenSnowStabilityReport {
 // Relaxes `snow` (from placeFallenSnow on `mesh`) to its angle of repose; sites' depthM updated.
 FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSnow& snow, const FallenSnowStability& settings);
 
+// The snow body's settings (built by bakers/mesh_snow_body.h).
+struct MeshSnowBodyOptions {
+  double voxelSizeM = 0.0;     // 0: half the site spacing
+  double adaptivity = 0.0;     // OpenVDB volume-to-mesh adaptivity in [0, 1] (0: uniform)
+  int smoothingSteps = 2;      // mean-curvature smoothing passes of the level set
+  double densityKgPerM3 = 150.0;  // for the fog volume (fresh snow on props)
+};
+
 }  // namespace snow

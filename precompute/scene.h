@@ -83,17 +83,11 @@ struct BedformScene {
 };
 
 // mode = "mesh": Fearing's snow on the mesh itself ([mesh_snow]; README "Snow on meshes").
-struct MeshSnowBodySettings {  // bakers/mesh_snow_body.h's options
-  double voxelSizeM = 0.0;     // 0: half the site spacing
-  int smoothingSteps = 2;
-  double adaptivity = 0.0;
-  double densityKgPerM3 = 150.0;
-};
 struct MeshSnowScene {
   bool onOccluders = false;  // season mode with [mesh_snow]: snow on the [[occluders]] meshes too
   FallenSnowSettings placement;
   FallenSnowStability stability;
-  MeshSnowBodySettings body;
+  MeshSnowBodyOptions body;
 };
 
 struct Scene {

@@ -259,11 +259,7 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   std::error_code ec;
   fs::create_directories(options.outDir, ec);
   if (ec) throw InputError(options.outDir + ": cannot create the output folder: " + ec.message());
-  MeshSnowBodyOptions bo;
-  bo.voxelSizeM = scene.meshSnow.body.voxelSizeM;
-  bo.smoothingSteps = scene.meshSnow.body.smoothingSteps;
-  bo.adaptivity = scene.meshSnow.body.adaptivity;
-  bo.densityKgPerM3 = scene.meshSnow.body.densityKgPerM3;
+  const MeshSnowBodyOptions& bo = scene.meshSnow.body;
   const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / "snow.vdb").string() : std::string();
   const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo, vdbPath);
   log << "snow body: " << body.snowVoxels << " voxels of " << fixed(body.voxelSizeM, 4) << " m, " << body.mesh.triangles.size()
@@ -546,12 +542,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           FallenSnowStability ss = scene.meshSnow.stability;
           ss.seed = scene.seed + k;
           const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, ss);
-          MeshSnowBodyOptions bo;
-          bo.voxelSizeM = scene.meshSnow.body.voxelSizeM;
-          bo.smoothingSteps = scene.meshSnow.body.smoothingSteps;
-          bo.adaptivity = scene.meshSnow.body.adaptivity;
-          bo.densityKgPerM3 = scene.meshSnow.body.densityKgPerM3;
-          const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo);
+          const MeshSnowBody body = buildMeshSnowBody(snow, mesh, scene.meshSnow.body);
           addSeconds("snow on the occluders", since(tm));
           // (Logged after the writers join: this runs beside the layers' thread.)
           occluderNotes += "  " + name + ": " + mesh.source + ", " + fixed(ps.depthM, 3) + " m as on the terrain round it (" +
