@@ -1,14 +1,12 @@
 #include "mesh_writer.h"
 
-#include <assimp/Exporter.hpp>
-#include <assimp/material.h>
-#include <assimp/scene.h>
-
+#include <bit>
 #include <cmath>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <map>
+#include <string_view>
 #include <unordered_map>
 #include <stdexcept>
 
@@ -105,34 +103,107 @@ std::string glbBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
   return out;
 }
 
+// Text written through a cursor into a string sized for the worst case and trimmed when taken:
+// no capacity test or reallocation per character (a 4-million-triangle body is a 450 MB OBJ).
+class TextBuffer {
+ public:
+  explicit TextBuffer(size_t bound) : text_(bound, '\0'), at_(text_.data()) {}
+  TextBuffer& operator<<(std::string_view s) {
+    std::memcpy(at_, s.data(), s.size());
+    at_ += s.size();
+    return *this;
+  }
+  TextBuffer& operator<<(char c) {
+    *at_++ = c;
+    return *this;
+  }
+  // Shortest round-trip decimal: at most kFloatChars characters.
+  TextBuffer& operator<<(float v) {
+    at_ = std::to_chars(at_, at_ + kFloatChars, v).ptr;
+    return *this;
+  }
+  TextBuffer& operator<<(long long v) {
+    at_ = std::to_chars(at_, at_ + kIntegerChars, v).ptr;
+    return *this;
+  }
+  char* cursor() { return at_; }
+  void advanceTo(char* p) { at_ = p; }
+  std::string take() {
+    text_.resize(static_cast<size_t>(at_ - text_.data()));
+    return std::move(text_);
+  }
+  static constexpr size_t kFloatChars = 16, kIntegerChars = 20;
+
+ private:
+  std::string text_;
+  char* at_;
+};
+
 // Wavefront OBJ written directly (shortest round-trip decimal of each float), y up.
 std::string objBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
-  std::string out = "# snowbake snow mesh: metres, y up (x east, y altitude, z south)\no snow\n";
-  out.reserve(m.positions.size() * 100 + m.triangles.size() * 40);
-  char buf[48];
-  auto line = [&](const char* tag, const float* v, int count) {
-    out += tag;
-    for (int c = 0; c < count; ++c) {
-      out += ' ';
-      const auto r = std::to_chars(buf, buf + sizeof buf, v[c]);
-      out.append(buf, r.ptr);
-    }
-    out += '\n';
-  };
-  for (const auto& p : m.positions) line("v", yUp(p).data(), 3);
   const bool uv = m.uvs.size() == m.positions.size();
+  const size_t n = m.positions.size(), f = TextBuffer::kFloatChars;
+  TextBuffer out(128 + n * (4 + 3 * (f + 1)) * 2 + (uv ? n * (4 + 2 * (f + 1)) : 0) + m.triangles.size() * (3 + 3 * (1 + 3 * 11 + 2)));
+  out << "# snowbake snow mesh: metres, y up (x east, y altitude, z south)\no snow\n";
+  for (const auto& p : m.positions) {
+    const auto q = yUp(p);
+    out << "v " << q[0] << ' ' << q[1] << ' ' << q[2] << '\n';
+  }
   if (uv)
-    for (const auto& u : m.uvs) line("vt", u.data(), 2);
-  for (const auto& v : normals) line("vn", yUp(v).data(), 3);
+    for (const auto& u : m.uvs) out << "vt " << u[0] << ' ' << u[1] << '\n';
+  for (const auto& v : normals) {
+    const auto q = yUp(v);
+    out << "vn " << q[0] << ' ' << q[1] << ' ' << q[2] << '\n';
+  }
   for (const auto& tri : m.triangles) {
-    out += 'f';
+    // "f a/a/a b/b/b c/c/c" (or "a//a" without UVs): each index formatted once and copied.
+    char* q = out.cursor();
+    *q++ = 'f';
     for (uint32_t v : tri) {
-      const std::string k = std::to_string(v + 1);
-      out += ' ';
-      out += k;
-      out += uv ? "/" + k + "/" + k : "//" + k;
+      *q++ = ' ';
+      char* const start = q;
+      q = std::to_chars(q, q + 11, v + 1).ptr;
+      const size_t digits = static_cast<size_t>(q - start);
+      *q++ = '/';
+      if (uv) {
+        std::memcpy(q, start, digits);
+        q += digits;
+      }
+      *q++ = '/';
+      std::memcpy(q, start, digits);
+      q += digits;
     }
-    out += '\n';
+    *q++ = '\n';
+    out.advanceTo(q);
+  }
+  return out.take();
+}
+
+// Binary PLY (little endian, z up) written directly (assimp's exporter took over a second a
+// million triangles): x y z, nx ny nz and s t per vertex, faces as uchar-counted int lists, the
+// header assimp writes and Blender, Houdini, MeshLab and assimp read.
+std::string plyBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+  const bool uv = m.uvs.size() == m.positions.size();
+  std::string out = "ply\nformat binary_little_endian 1.0\ncomment snowbake snow mesh: metres, z up (x east, y north)\nelement vertex " +
+                    std::to_string(m.positions.size()) +
+                    "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n";
+  if (uv) out += "property float s\nproperty float t\n";
+  out += "element face " + std::to_string(m.triangles.size()) + "\nproperty list uchar int vertex_index\nend_header\n";
+  const size_t header = out.size(), vertexBytes = uv ? 32 : 24;
+  out.resize(header + m.positions.size() * vertexBytes + m.triangles.size() * 13);
+  char* q = out.data() + header;
+  // The floats' and ints' bytes are copied as they are: little-endian hosts only (x86-64, ARM64).
+  static_assert(std::endian::native == std::endian::little, "the PLY writer copies little-endian bytes");
+  for (size_t k = 0; k < m.positions.size(); ++k) {
+    std::memcpy(q, m.positions[k].data(), 12);
+    std::memcpy(q + 12, normals[k].data(), 12);
+    if (uv) std::memcpy(q + 24, m.uvs[k].data(), 8);
+    q += vertexBytes;
+  }
+  for (const auto& tri : m.triangles) {
+    *q = 3;
+    std::memcpy(q + 1, tri.data(), 12);
+    q += 13;
   }
   return out;
 }
@@ -141,18 +212,11 @@ std::string objBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
 // one writes unreadable files): one mesh geometry with per-vertex normals and UVs, one model, one
 // material; y up, metres (UnitScaleFactor 100: FBX counts in centimetres).
 std::string fbxBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
-  std::string out;
-  out.reserve(m.positions.size() * 80 + m.triangles.size() * 30 + 4096);
-  char buf[48];
-  auto num = [&](double v) {
-    const auto r = std::to_chars(buf, buf + sizeof buf, static_cast<float>(v));
-    out.append(buf, r.ptr);
-  };
-  auto integer = [&](long long v) {
-    const auto r = std::to_chars(buf, buf + sizeof buf, v);
-    out.append(buf, r.ptr);
-  };
-  out += "; FBX 7.4.0 project file\n; snowbake snow mesh: metres, y up (x east, y altitude, z south)\n"
+  const size_t n = m.positions.size(), f = TextBuffer::kFloatChars + 1, i = TextBuffer::kIntegerChars + 1;
+  TextBuffer out(8192 + n * 3 * f * 2 + n * 2 * f + m.triangles.size() * 3 * i);
+  auto num = [&](float v) { out << v; };
+  auto integer = [&](long long v) { out << v; };
+  out << "; FBX 7.4.0 project file\n; snowbake snow mesh: metres, y up (x east, y altitude, z south)\n"
          "FBXHeaderExtension:  {\n\tFBXHeaderVersion: 1003\n\tFBXVersion: 7400\n\tCreator: \"snowbake\"\n}\n"
          "GlobalSettings:  {\n\tVersion: 1000\n\tProperties70:  {\n"
          "\t\tP: \"UpAxis\", \"int\", \"Integer\", \"\",1\n\t\tP: \"UpAxisSign\", \"int\", \"Integer\", \"\",1\n"
@@ -164,63 +228,63 @@ std::string fbxBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
          "\tObjectType: \"Geometry\" {\n\t\tCount: 1\n\t}\n\tObjectType: \"Material\" {\n\t\tCount: 1\n\t}\n}\n"
          "Objects:  {\n\tGeometry: 1000, \"Geometry::snow\", \"Mesh\" {\n\t\tVertices: *";
   integer(static_cast<long long>(3 * m.positions.size()));
-  out += " {\n\t\t\ta: ";
+  out << " {\n\t\t\ta: ";
   bool first = true;
   for (const auto& p : m.positions)
     for (float c : yUp(p)) {
-      if (!first) out += ',';
+      if (!first) out << ',';
       first = false;
       num(c);
     }
-  out += "\n\t\t}\n\t\tPolygonVertexIndex: *";
+  out << "\n\t\t}\n\t\tPolygonVertexIndex: *";
   integer(static_cast<long long>(3 * m.triangles.size()));
-  out += " {\n\t\t\ta: ";
+  out << " {\n\t\t\ta: ";
   first = true;
   for (const auto& t : m.triangles) {
-    if (!first) out += ',';
+    if (!first) out << ',';
     first = false;
     integer(t[0]);
-    out += ',';
+    out << ',';
     integer(t[1]);
-    out += ',';
+    out << ',';
     integer(-static_cast<long long>(t[2]) - 1);  // the last index of a polygon, negated minus one
   }
-  out += "\n\t\t}\n\t\tGeometryVersion: 124\n\t\tLayerElementNormal: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"\"\n"
+  out << "\n\t\t}\n\t\tGeometryVersion: 124\n\t\tLayerElementNormal: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"\"\n"
          "\t\t\tMappingInformationType: \"ByVertice\"\n\t\t\tReferenceInformationType: \"Direct\"\n\t\t\tNormals: *";
   integer(static_cast<long long>(3 * normals.size()));
-  out += " {\n\t\t\t\ta: ";
+  out << " {\n\t\t\t\ta: ";
   first = true;
   for (const auto& n : normals)
     for (float c : yUp(n)) {
-      if (!first) out += ',';
+      if (!first) out << ',';
       first = false;
       num(c);
     }
-  out += "\n\t\t\t}\n\t\t}\n";
+  out << "\n\t\t\t}\n\t\t}\n";
   const bool uv = m.uvs.size() == m.positions.size();
   if (uv) {
-    out += "\t\tLayerElementUV: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"UVMap\"\n\t\t\tMappingInformationType: \"ByVertice\"\n"
+    out << "\t\tLayerElementUV: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"UVMap\"\n\t\t\tMappingInformationType: \"ByVertice\"\n"
            "\t\t\tReferenceInformationType: \"Direct\"\n\t\t\tUV: *";
     integer(static_cast<long long>(2 * m.uvs.size()));
-    out += " {\n\t\t\t\ta: ";
+    out << " {\n\t\t\t\ta: ";
     first = true;
     for (const auto& u : m.uvs)
       for (float c : u) {
-        if (!first) out += ',';
+        if (!first) out << ',';
         first = false;
         num(c);
       }
-    out += "\n\t\t\t}\n\t\t}\n";
+    out << "\n\t\t\t}\n\t\t}\n";
   }
-  out += "\t\tLayer: 0 {\n\t\t\tVersion: 100\n\t\t\tLayerElement:  {\n\t\t\t\tType: \"LayerElementNormal\"\n\t\t\t\tTypedIndex: 0\n\t\t\t}\n";
-  if (uv) out += "\t\t\tLayerElement:  {\n\t\t\t\tType: \"LayerElementUV\"\n\t\t\t\tTypedIndex: 0\n\t\t\t}\n";
-  out += "\t\t}\n\t}\n"
+  out << "\t\tLayer: 0 {\n\t\t\tVersion: 100\n\t\t\tLayerElement:  {\n\t\t\t\tType: \"LayerElementNormal\"\n\t\t\t\tTypedIndex: 0\n\t\t\t}\n";
+  if (uv) out << "\t\t\tLayerElement:  {\n\t\t\t\tType: \"LayerElementUV\"\n\t\t\t\tTypedIndex: 0\n\t\t\t}\n";
+  out << "\t\t}\n\t}\n"
          "\tModel: 2000, \"Model::snow\", \"Mesh\" {\n\t\tVersion: 232\n\t\tProperties70:  {\n\t\t}\n\t\tShading: T\n"
          "\t\tCulling: \"CullingOff\"\n\t}\n"
          "\tMaterial: 3000, \"Material::snow\", \"\" {\n\t\tVersion: 102\n\t\tShadingModel: \"lambert\"\n\t\tMultiLayer: 0\n"
          "\t\tProperties70:  {\n\t\t\tP: \"DiffuseColor\", \"Color\", \"\", \"A\",0.95,0.96,0.98\n\t\t}\n\t}\n}\n"
          "Connections:  {\n\tC: \"OO\",2000,0\n\tC: \"OO\",1000,2000\n\tC: \"OO\",3000,2000\n}\n";
-  return out;
+  return out.take();
 }
 
 }  // namespace
@@ -233,48 +297,7 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
   if (format == "glb") return writeTextAtomically(path, glbBytes(m, normals));
   if (format == "obj") return writeTextAtomically(path, objBytes(m, normals));
   if (format == "fbx") return writeTextAtomically(path, fbxBytes(m, normals));
-  // PLY through assimp's exporter (binary, z up).
-  const char* id = "plyb";
-  auto axes = [&](const std::array<float, 3>& p) { return aiVector3D(p[0], p[1], p[2]); };
-
-  aiScene scene;  // owns everything below; freed by its destructor
-  scene.mRootNode = new aiNode();
-  scene.mRootNode->mName = aiString("snow");
-  scene.mMaterials = new aiMaterial*[1]{new aiMaterial()};
-  scene.mNumMaterials = 1;
-  aiString materialName("snow");
-  scene.mMaterials[0]->AddProperty(&materialName, AI_MATKEY_NAME);
-  auto* mesh = new aiMesh();
-  scene.mMeshes = new aiMesh*[1]{mesh};
-  scene.mNumMeshes = 1;
-  scene.mRootNode->mMeshes = new unsigned[1]{0};
-  scene.mRootNode->mNumMeshes = 1;
-  mesh->mName = aiString("snow");
-  mesh->mMaterialIndex = 0;
-  mesh->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
-  mesh->mNumVertices = static_cast<unsigned>(m.positions.size());
-  mesh->mVertices = new aiVector3D[m.positions.size()];
-  mesh->mNormals = new aiVector3D[m.positions.size()];
-  for (size_t k = 0; k < m.positions.size(); ++k) {
-    mesh->mVertices[k] = axes(m.positions[k]);
-    mesh->mNormals[k] = axes(normals[k]);
-  }
-  if (m.uvs.size() == m.positions.size()) {
-    mesh->mNumUVComponents[0] = 2;
-    mesh->mTextureCoords[0] = new aiVector3D[m.positions.size()];
-    for (size_t k = 0; k < m.uvs.size(); ++k) mesh->mTextureCoords[0][k] = aiVector3D(m.uvs[k][0], m.uvs[k][1], 0.f);
-  }
-  mesh->mNumFaces = static_cast<unsigned>(m.triangles.size());
-  mesh->mFaces = new aiFace[m.triangles.size()];
-  for (size_t k = 0; k < m.triangles.size(); ++k) {
-    aiFace& f = mesh->mFaces[k];
-    f.mNumIndices = 3;
-    f.mIndices = new unsigned[3]{m.triangles[k][0], m.triangles[k][1], m.triangles[k][2]};
-  }
-  Assimp::Exporter exporter;
-  const aiExportDataBlob* blob = exporter.ExportToBlob(&scene, id, 0u);
-  if (!blob) throw std::runtime_error(path + ": assimp could not export " + format + ": " + exporter.GetErrorString());
-  writeTextAtomically(path, std::string(static_cast<const char*>(blob->data), blob->size));
+  writeTextAtomically(path, plyBytes(m, normals));
 }
 
 namespace {

@@ -1,4 +1,5 @@
-// Triangle meshes out through assimp's exporters: the snow surface of a height field and the snow
+// Triangle meshes written by our own code (fast and byte-reproducible; assimp reads every format
+// back in the tests): the snow surface of a height field and the snow
 // body alone (closed), both from an adaptive triangulation with a vertical error bound (rtin.h),
 // or a displaced input mesh. Formats and their axes:
 //   "ply"  binary little-endian PLY, z up (as the simulation: x east, y north, z altitude; what
@@ -9,7 +10,7 @@
 //   "fbx"  ASCII FBX 7.4, y up ((x, y, z) -> (x, z, -y)), metres (UnitScaleFactor 100). ASCII
 //          because the binary FBX writer of Debian's assimp 5.2 writes files no reader opens
 //          (assimp issue #4686); the FBX SDK (Unreal, Unity, Maya) reads ASCII FBX, Blender's
-//          importer does not (use glb). glb, obj and fbx are written by our own code, PLY by assimp.
+//          importer does not (use glb).
 // Positions in metres; per-vertex normals; UVs (when given) in the maps' frame: u east, v north,
 // (0, 0) at the grid's south-west corner, texel centres at ((i + 0.5) / W, 1 - (j + 0.5) / H).
 // Written atomically.
