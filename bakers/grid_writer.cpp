@@ -11,8 +11,11 @@
 
 namespace snow {
 
+// OpenEXR's zip with a level ("zip:N", honoured since OpenEXR 3.1.3), or none at level 0.
+std::string exrCompressionName(int level) { return level <= 0 ? "none" : "zip:" + std::to_string(level > 9 ? 9 : level); }
+
 WrittenImage writeFloatImage(const std::string& base, const std::string& format, const Grid<float>& grid,
-                             const std::string& layerName) {
+                             const std::string& layerName, int compressionLevel) {
   if (format != "exr" && format != "tiff") throw std::invalid_argument("unknown image format '" + format + "'");
   WrittenImage result;
   result.path = base + (format == "exr" ? ".exr" : ".tif");
@@ -32,7 +35,7 @@ WrittenImage writeFloatImage(const std::string& base, const std::string& format,
     spec.attribute("snowbake:layer", layerName);
     spec.attribute("ImageDescription", "snowbake layer: " + layerName);
     spec.attribute("oiio:ColorSpace", "Linear");
-    spec.attribute("compression", format == "exr" ? "zip" : "zip");
+    spec.attribute("compression", format == "exr" ? exrCompressionName(compressionLevel) : "zip");
     // Fixed metadata only: no time stamps, so the same bake gives the same bytes.
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");  // OIIO would stamp the current time (EXR capDate, TIFF DateTime)
@@ -42,7 +45,7 @@ WrittenImage writeFloatImage(const std::string& base, const std::string& format,
   return result;
 }
 
-WrittenImage writeNormalised(const std::string& base, const std::string& encoding, const Grid<float>& grid) {
+WrittenImage writeNormalised(const std::string& base, const std::string& encoding, const Grid<float>& grid, int compressionLevel) {
   if (encoding != "png16" && encoding != "png8" && encoding != "r16") throw std::invalid_argument("unknown encoding '" + encoding + "'");
   WrittenImage result;
   result.path = base + (encoding == "png16" ? ".16.png" : encoding == "png8" ? ".8.png" : ".r16");
@@ -74,6 +77,7 @@ WrittenImage writeNormalised(const std::string& base, const std::string& encodin
     const bool eight = encoding == "png8";
     OIIO::ImageSpec spec(grid.width(), grid.height(), 1, eight ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
     spec.attribute("oiio:ColorSpace", "Linear");
+    spec.attribute("png:compressionLevel", compressionLevel);
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
     std::vector<uint16_t> wide(eight ? 0 : grid.size());
@@ -107,7 +111,8 @@ Grid<float> resampleBilinear(const Grid<float>& g, int width, int height) {
   return out;
 }
 
-void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids) {
+void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids,
+                          int compressionLevel) {
   if (grids.empty()) return;
   const int w = grids[0]->width(), h = grids[0]->height(), n = static_cast<int>(grids.size());
   std::vector<float> interleaved(static_cast<size_t>(w) * h * n);
@@ -124,7 +129,7 @@ void writeMultiChannelExr(const std::string& path, const std::vector<std::string
     for (const auto& n : names) spec.channelnames.push_back(n + ".Y");
     spec.alpha_channel = -1;
     spec.attribute("oiio:ColorSpace", "Linear");
-    spec.attribute("compression", "zip");
+    spec.attribute("compression", exrCompressionName(compressionLevel));
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
     if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) || !out->close())
@@ -132,11 +137,12 @@ void writeMultiChannelExr(const std::string& path, const std::vector<std::string
   });
 }
 
-void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb) {
+void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, int compressionLevel) {
   writeAtomically(path, [&](const std::string& temp) {
     auto out = OIIO::ImageOutput::create("png");
     if (!out) throw std::runtime_error("cannot create a PNG writer for " + path + ": " + OIIO::geterror());
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    spec.attribute("png:compressionLevel", compressionLevel);
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
     if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close())

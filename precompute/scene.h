@@ -33,6 +33,7 @@ struct OutputRequest {
   double meshMaxErrorM = 0.1;          // the adaptive triangulation's vertical error bound
   double meshTileSizeM = 0.0;          // split the surface mesh into square tiles of this size (0: one file)
   double vdbVoxelSizeM = 0.0;          // 0: the grid's smaller cell size
+  int compressionLevel = 1;            // PNG zlib and EXR zip level, 0 (none) to 9 (bakers/grid_writer.h)
   bool avalancheMaps = false;      // each avalanche's release zone, scour and deposit
   double avalancheFrameIntervalS = 0.0;  // frames of each avalanche's motion (0: none)
 };

@@ -202,6 +202,7 @@ const std::vector<Rule>& sceneRules() {
       {"outputs.mesh_max_error_m", Kind::Number, 0, 10000},
       {"outputs.mesh_tile_size_m", Kind::Number, 0, 1e7},
       {"outputs.vdb_voxel_size_m", Kind::Number, 0.01, 1000},
+      {"outputs.compression_level", Kind::Integer, 0, 9},
       {"outputs.displacement_size", Kind::NumberArray, 1, 65536},
       {"outputs.avalanche_maps", Kind::Bool},
       {"outputs.avalanche_frame_interval_s", Kind::Number, 0.01, 3600},
@@ -763,6 +764,7 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   scene.outputs.meshMaxErrorM = number(root["outputs"]["mesh_max_error_m"], scene.outputs.meshMaxErrorM);
   scene.outputs.meshTileSizeM = number(root["outputs"]["mesh_tile_size_m"], scene.outputs.meshTileSizeM);
   if (auto v = root["outputs"]["vdb_voxel_size_m"].value<double>()) scene.outputs.vdbVoxelSizeM = *v;
+  if (auto v = root["outputs"]["compression_level"].value<int64_t>()) scene.outputs.compressionLevel = static_cast<int>(*v);
   if (const toml::node* size = root["outputs"]["displacement_size"].node()) {
     const toml::array& a = *size->as_array();
     if (a.size() != 2 || a[0].value<double>().value() != std::floor(a[0].value<double>().value()) ||

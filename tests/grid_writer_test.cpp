@@ -3,6 +3,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -49,6 +50,39 @@ TEST(GridWriter, FloatImagesReadBackExactly) {
     EXPECT_FLOAT_EQ(img.minValue, 0.f);
     EXPECT_FLOAT_EQ(img.maxValue, 1234.5678f + 0.001f * 3 * 22);
   }
+  fs::remove_all(dir);
+}
+
+// outputs.compression_level: every level reads back the same values; level 0 writes EXR
+// uncompressed and PNG stored, higher levels write smaller files of a compressible grid.
+TEST(GridWriter, CompressionLevelsKeepTheValuesAndChangeTheSize) {
+  const fs::path dir = tempDir();
+  Grid<float> g(256, 128);
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 256; ++x) g(x, y) = static_cast<float>((x / 16) * 0.25 + (y / 32));  // plateaus: compressible
+  std::map<int, uintmax_t> exrSize, pngSize;
+  for (int level : {0, 1, 9}) {
+    const std::string base = (dir / ("l" + std::to_string(level))).string();
+    const WrittenImage exr = writeFloatImage(base, "exr", g, "depth", level);
+    EXPECT_EQ(readFloatImage(exr.path).values(), g.values()) << level;
+    auto in = OIIO::ImageInput::open(exr.path);
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->spec().get_string_attribute("compression"), level == 0 ? "none" : "zip") << level;
+    exrSize[level] = fs::file_size(exr.path);
+    const WrittenImage png = writeNormalised(base, "png16", g, level);
+    const Grid<float> back = readFloatImage(png.path);
+    for (size_t i = 0; i < g.size(); ++i)
+      ASSERT_NEAR(back.values()[i] * (png.maxValue - png.minValue) + png.minValue, g.values()[i], (png.maxValue - png.minValue) / 65535.0);
+    pngSize[level] = fs::file_size(png.path);
+  }
+  EXPECT_GT(exrSize[0], 256u * 128u * 4u);  // raw floats
+  EXPECT_LT(exrSize[1], exrSize[0] / 4);
+  EXPECT_LE(exrSize[9], exrSize[1]);
+  EXPECT_GT(pngSize[0], 256u * 128u * 2u);
+  EXPECT_LT(pngSize[1], pngSize[0] / 4);
+  EXPECT_LE(pngSize[9], pngSize[1]);
+  EXPECT_EQ(exrCompressionName(0), "none");
+  EXPECT_EQ(exrCompressionName(4), "zip:4");
   fs::remove_all(dir);
 }
 

@@ -468,7 +468,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   // A written float image (EXR or TIFF, as the scene asks).
   auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
     listFile(img.path, content, unit,
-             scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (zip), linear" : "TIFF, 1 channel float32 (zip), linear", day,
+             scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (" + exrCompressionName(scene.outputs.compressionLevel) + "), linear"
+                                          : std::string("TIFF, 1 channel float32 (zip), linear"), day,
              img.minValue, img.maxValue);
   };
   const std::string rgbPngFormat = "PNG, 3 channels uint8, sRGB";
@@ -642,7 +643,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
           const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
           const std::string path = base + ".png";
-          writeRgbPng(path, s.spec.width, s.spec.height, rgb);
+          writeRgbPng(path, s.spec.width, s.spec.height, rgb, scene.outputs.compressionLevel);
           listFile(path,
                    "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, "
                    "unstable pale blue, stable cream, compacted grey)",
@@ -662,7 +663,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           const Grid<float> surface = layerGrid(s, "surface");
           const std::string path = base + ".png";
           writeRgbPng(path, s.spec.width, s.spec.height,
-                      avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM));
+                      avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM),
+                      scene.outputs.compressionLevel);
           listFile(path, "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)", "sRGB", rgbPngFormat,
                    day, 0.f, 255.f);
           continue;
@@ -696,10 +698,10 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         auto sized = [&] {
           if (ownSize) tlSink->files.back().width = grid.width(), tlSink->files.back().height = grid.height();
         };
-        listImage(writeFloatImage(base, scene.outputs.format, grid, layer), content, layerUnit(layer), day);
+        listImage(writeFloatImage(base, scene.outputs.format, grid, layer, scene.outputs.compressionLevel), content, layerUnit(layer), day);
         sized();
         for (const std::string& encoding : scene.outputs.encodings) {
-          const WrittenImage img = writeNormalised(base, encoding, grid);
+          const WrittenImage img = writeNormalised(base, encoding, grid, scene.outputs.compressionLevel);
           listFile(img.path, content, layerUnit(layer), normalisedFormat(encoding, grid.width(), grid.height()), day, img.minValue,
                    img.maxValue);
           sized();
@@ -714,7 +716,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         // the terrain) and the snow surface's height, bilinear from the grid.
         for (const std::string what : {"depth", "surface"}) {
           const Grid<float> g = resampleBilinear(layerGrid(s, what), scene.outputs.displacementWidth, scene.outputs.displacementHeight);
-          listImage(writeFloatImage(outputBase(std::string("displacement_") + what), scene.outputs.format, g, what),
+          listImage(writeFloatImage(outputBase(std::string("displacement_") + what), scene.outputs.format, g, what, scene.outputs.compressionLevel),
                     layerContent(what) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
                         " over the same extent",
                     "m", day);
@@ -724,11 +726,11 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         const std::string path = outputBase("layers") + ".exr";
         std::vector<const Grid<float>*> grids;
         for (const auto& g : channels) grids.push_back(&g);
-        writeMultiChannelExr(path, channelNames, grids);
+        writeMultiChannelExr(path, channelNames, grids, scene.outputs.compressionLevel);
         std::string names;
         for (const auto& n : channelNames) names += (names.empty() ? "" : ", ") + n;
         listFile(path, "all layers as named channels: " + names, "per channel, as the single-layer files",
-                 "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (zip), linear", day, 0.f, 0.f);
+                 "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompressionName(scene.outputs.compressionLevel) + "), linear", day, 0.f, 0.f);
       }
     } catch (...) {
       layerError = std::current_exception();
@@ -934,7 +936,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(previews.size()))));
     const std::vector<uint8_t> sheet = contactSheetRgb(previews, previewWidth, previewHeight, columns, sw, sh);
     const std::string path = (fs::path(options.outDir) / "contact_sheet.png").string();
-    writeRgbPng(path, sw, sh, sheet);
+    writeRgbPng(path, sw, sh, sheet, scene.outputs.compressionLevel);
     listFile(path,
              "contact sheet of the season: the previews of the frame days in order, then the season's end, " + std::to_string(columns) +
                  " to a row",
@@ -954,7 +956,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       for (int y = 0; y < c.grid.height(); ++y)
         for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
       fs::create_directories((fs::path(options.outDir) / rel).parent_path());
-      listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, full, "value"), content, unit, day);
+      listImage(writeFloatImage((fs::path(options.outDir) / rel).string(), scene.outputs.format, full, "value", scene.outputs.compressionLevel), content, unit,
+                day);
     };
     const Grid<float> zero(state.spec.width, state.spec.height, 0.f);
     const std::string which = "avalanche " + std::to_string(avalancheNumber) + " (day " + fixed(a.day, 2) + ")";
