@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "exec_backend.h"
+#include "kernels/powder_diffusion_rows.h"
 #include "serial_exec.h"
 
 namespace snow {
@@ -19,11 +20,15 @@ class TbbExec : public HostStorage {
  public:
   std::string name() const { return "cpu"; }
 
+  // A kernel with a row fast path (rowSpan, found by argument-dependent lookup) runs it per row.
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {
     tbb::parallel_for(tbb::blocked_range<int>(0, height, kRowGrain), [&](const tbb::blocked_range<int>& rows) {
-      for (int y = rows.begin(); y < rows.end(); ++y)
-        for (int x = 0; x < width; ++x) kernel(x, y);
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        if constexpr (HasRowSpan<K>) rowSpan(kernel, y, 0, width);
+        else
+          for (int x = 0; x < width; ++x) kernel(x, y);
+      }
     });
   }
   // kernel(i) for i in [0, n) (agents, not cells): a few per task, they are few and costly.

@@ -45,9 +45,11 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(scratchSurface_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(scratchPowder_, std::vector<float>(s.spec.cellCount(), 0.f));
+    exec_.upload(powderFlow_, std::vector<float>(4 * s.spec.cellCount(), 0.f));
     const size_t tiles = static_cast<size_t>(view().tilesX()) * view().tilesY();
     exec_.upload(tileActive_, std::vector<uint8_t>(tiles, 0));
-    exec_.upload(tileNeeded_, std::vector<uint8_t>(tiles, 0));
+    // One byte a cell (counted in whole tiles), written by each substep before it is read.
+    exec_.upload(powderMoves_, std::vector<uint8_t>(tiles * SnowFieldsView::kTileSize * SnowFieldsView::kTileSize, 0));
     uploadStaticFields(s);
   }
 
@@ -402,6 +404,8 @@ class ExecBackend final : public SnowBackend {
     v.surfaceSlope = surfaceSlope_.data();
     v.scratchSurface = scratchSurface_.data();
     v.scratchPowder = scratchPowder_.data();
+    v.powderFlow = powderFlow_.data();
+    v.powderMoves = powderMoves_.data();
     v.flows = flows_.data();
     v.avalancheBefore = avalancheBefore_.data();
     v.avalancheU = avalancheU_.data();
@@ -409,16 +413,15 @@ class ExecBackend final : public SnowBackend {
     v.avalancheDeposit = avalancheDeposit_.data();
     v.rowStats = rowStats_.data();
     v.tileActive = tileActive_.data();
-    v.tileNeeded = tileNeeded_.data();
     return v;
   }
 
   Exec exec_;
   GridSpec spec_;
   typename Exec::template Buffer<float> bedrock_, compacted_, stable_, unstable_, powder_;
-  typename Exec::template Buffer<uint8_t> moving_, valid_, tileActive_, tileNeeded_;
+  typename Exec::template Buffer<uint8_t> moving_, valid_, tileActive_, powderMoves_;
   typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
-  typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_;
+  typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_, powderFlow_;
   typename Exec::template Buffer<float> flows_, avalancheBefore_, avalancheScour_, avalancheDeposit_, rowStats_;
   typename Exec::template Buffer<double> avalancheU_;
   typename Exec::template Buffer<float> snowfallFactor_, meltFactor_, windErosionFactor_, editWeight_;

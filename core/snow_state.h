@@ -139,8 +139,11 @@ struct SnowFieldsView {
   // Per-cell scratch for transport snapshots (powder diffusion: A and P at the substep's start).
   float* scratchSurface = nullptr;
   float* scratchPowder = nullptr;
+  // Powder diffusion's outflows of a substep: four per cell (+x, -x, +y, -y), and which are set.
+  float* powderFlow = nullptr;
+  uint8_t* powderMoves = nullptr;
   // Per-tile scratch (kTileSize² cells a tile, tilesX() by tilesY()): which tiles a transport
-  // substep has work in, and which need its snapshot (the active ones and their neighbours).
+  // substep has work in.
   // Avalanches: four signed pipe flows per cell (m^3/s), U + P at release, the records, and four
   // floats per row of statistics for the host.
   float* flows = nullptr;
@@ -150,7 +153,6 @@ struct SnowFieldsView {
   float* avalancheDeposit = nullptr;
   float* rowStats = nullptr;
   uint8_t* tileActive = nullptr;
-  uint8_t* tileNeeded = nullptr;
 
   static constexpr int kTileShift = 5;
   static constexpr int kTileSize = 1 << kTileShift;

@@ -64,22 +64,14 @@ void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusi
   PowderDiffusionArgs sub = a;
   sub.dtDays = a.dtDays / static_cast<float>(substeps);
   // With tile masks, each substep first finds the tiles where some cell holds powder above its
-  // rest slope; the snapshot and the colour passes then skip the rest of the grid. Skipped cells
+  // rest slope; the flows and the colour passes then skip the rest of the grid. Skipped cells
   // are exactly those that would not move snow, so the result is the same bytes either way.
-  const bool gated = v.tileActive != nullptr && v.tileNeeded != nullptr;
-  const uint8_t* active = gated ? v.tileActive : nullptr;
-  const uint8_t* needed = gated ? v.tileNeeded : nullptr;
+  const uint8_t* active = v.tileActive;
   for (int s = 0; s < substeps; ++s) {
-    if (gated) {
-      exec.forEachCell(v.tilesX(), v.tilesY(), PowderActivityKernel{v, a.restSlope, a.minDepthM});
-      exec.forEachCell(v.tilesX(), v.tilesY(), TileDilateKernel{v});
-    }
-    exec.forEachCell(v.width, v.height, TileGated<PowderSnapshotKernel>{PowderSnapshotKernel{v}, needed, v.tilesX()});
-    for (int colour = 0; colour < 5; ++colour) {
-      sub.colour = colour;
-      exec.forEachCellOfColour(v.width, v.height, colour,
-                               TileGated<PowderDiffusionKernel>{PowderDiffusionKernel{v, sub}, active, v.tilesX()});
-    }
+    if (active) exec.forEachCell(v.tilesX(), v.tilesY(), PowderActivityKernel{v, a.restSlope, a.minDepthM});
+    exec.forEachCell(v.width, v.height, TileGated<PowderFlowKernel>{PowderFlowKernel{v, sub}, active, v.tilesX()});
+    for (int colour = 0; colour < 5; ++colour)
+      exec.forEachCellOfColour(v.width, v.height, colour, TileGated<PowderGiveKernel>{PowderGiveKernel{v}, active, v.tilesX()});
   }
 }
 

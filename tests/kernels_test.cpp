@@ -17,13 +17,13 @@ SnowState plane(int w, int h, double cell, float slopeX, float base, float tempe
 }
 
 SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
-  // One buffer holds the four scratch fields (delta, slope, surface and powder snapshots) and,
-  // behind them, the two per-tile masks as bytes.
+  // One buffer holds the four scratch fields (delta, slope, surface and powder snapshots), the
+  // four powder outflows per cell and, behind them, the two per-tile masks and the outflow bits as bytes.
   SnowFieldsView v;
   v.width = s.spec.width;
   v.height = s.spec.height;
   const size_t tiles = static_cast<size_t>(v.tilesX()) * v.tilesY();
-  delta.assign(4 * s.spec.cellCount() + 2 * (tiles / sizeof(float) + 1), 0.f);
+  delta.assign(8 * s.spec.cellCount() + (2 * tiles + s.spec.cellCount()) / sizeof(float) + 1, 0.f);
   v.width = s.spec.width;
   v.height = s.spec.height;
   v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM);
@@ -48,8 +48,9 @@ SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   v.surfaceSlope = delta.data() + s.spec.cellCount();
   v.scratchSurface = delta.data() + 2 * s.spec.cellCount();
   v.scratchPowder = delta.data() + 3 * s.spec.cellCount();
-  v.tileActive = reinterpret_cast<uint8_t*>(delta.data() + 4 * s.spec.cellCount());
-  v.tileNeeded = v.tileActive + tiles;
+  v.powderFlow = delta.data() + 4 * s.spec.cellCount();
+  v.tileActive = reinterpret_cast<uint8_t*>(delta.data() + 8 * s.spec.cellCount());
+  v.powderMoves = v.tileActive + 2 * tiles;
   return v;
 }
 
@@ -270,7 +271,7 @@ TEST(PowderDiffusion, TileGatingGivesTheSameBytes) {
   SnowState plain = gated;
   std::vector<float> d1, d2;
   SnowFieldsView vg = viewOf(gated, d1), vp = viewOf(plain, d2);
-  vp.tileActive = vp.tileNeeded = nullptr;
+  vp.tileActive = nullptr;
   SerialExec exec;
   PowderDiffusionArgs a;
   a.dtDays = 2.f;

@@ -3,10 +3,11 @@
 // (itself and its four neighbours), and crosses of one colour never overlap, so no two threads
 // write the same cell and no atomics are needed.
 //
-// Each substep first snapshots the surface A and the powder P (PowderSnapshotKernel). Every
-// cell's outflows are computed from the snapshot alone, so the result does not depend on the
-// order of the colour passes: without it, snow moved right in pass c could move right again in
-// pass c + 1 of the same substep, a directional bias that draws streaks.
+// Each substep first computes every cell's outflows from the state at the substep's start
+// (PowderFlowKernel, per cell, writing only its own cell), then gives them in the five colour
+// passes (PowderGiveKernel). The outflows never see snow moved in the same substep, so the
+// result does not depend on the order of the colour passes: otherwise snow moved right in pass c
+// could move right again in pass c + 1, a directional bias that draws streaks.
 //
 // The paper shifts toward each 4-neighbour n the share m_d = dt * k_m * max(0, s_d - s_d0),
 // s_d = (A(p) - A(n)) / |p - n|. Read literally, that threshold is anisotropic: a slope of 0.7
@@ -43,7 +44,6 @@ struct PowderDiffusionArgs {
   float restSlope = 0.5f;
   float diffusionLengthM = 400.f;  // L_d: creep speed k_m * L_d per unit of excess slope
   float minDepthM = 1e-3f;         // a powder film thinner than this does not slide
-  int colour = 0;                // which of the five colour passes
 };
 
 // Moves `amount` of snow from a source holding `remaining` into `receiver`, and returns what the
@@ -80,9 +80,11 @@ SNOW_HD SNOW_INLINE PowderSlopes powderSlopes(const SnowFieldsView& v, int x, in
     const int dx = d == 0 ? 1 : (d == 1 ? -1 : 0), dy = d == 2 ? 1 : (d == 3 ? -1 : 0);
     const int nx = x + dx, ny = y + dy;
     if (!v.isValid(nx, ny)) continue;
-    const float dist = dx != 0 ? v.cellSizeXM : v.cellSizeYM;
+    // Times the reciprocal of the cell size (one division a grid, not four a cell: the flow
+    // kernel is bound by its divisions).
+    const float perMetre = dx != 0 ? 1.f / v.cellSizeXM : 1.f / v.cellSizeYM;
     r.drop[d] = maxf(0.f, ap - surfaceAt(v.index(nx, ny)));
-    r.slope[d] = r.drop[d] / dist;
+    r.slope[d] = r.drop[d] * perMetre;
   }
   // Steepest descent, one component per axis: an isotropic measure of the slope that also
   // sees a lone peak (where central differences would read zero).
@@ -91,8 +93,8 @@ SNOW_HD SNOW_INLINE PowderSlopes powderSlopes(const SnowFieldsView& v, int x, in
   return r;
 }
 
-// One thread per tile: is there a cell with powder above its rest slope? Reads the live state,
-// which equals the snapshot the substep is about to take.
+// One thread per tile: is there a cell with powder above its rest slope? Reads the state the
+// substep starts from, as the flow kernel does.
 struct PowderActivityKernel {
   SnowFieldsView v;
   float restSlope;
@@ -115,21 +117,6 @@ struct PowderActivityKernel {
   }
 };
 
-// A tile needs the snapshot when it or one of its eight neighbours is active: an active cell
-// reads the snapshot surface of its neighbours, which may lie in the next tile.
-struct TileDilateKernel {
-  SnowFieldsView v;
-  SNOW_HD void operator()(int tx, int ty) const {
-    uint8_t needed = 0;
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int nx = tx + dx, ny = ty + dy;
-        if (nx >= 0 && ny >= 0 && nx < v.tilesX() && ny < v.tilesY()) needed |= v.tileActive[ny * v.tilesX() + nx];
-      }
-    v.tileNeeded[ty * v.tilesX() + tx] = needed;
-  }
-};
-
 // Runs `kernel` only on cells whose tile is flagged in `mask` (all cells when mask is null).
 template <class K>
 struct TileGated {
@@ -142,7 +129,7 @@ struct TileGated {
   }
 };
 
-// Copies A and P before the colour passes of a substep (per cell, no neighbour reads).
+// Copies A and P before the colour passes of a wind-transport step (per cell, no neighbour reads).
 struct PowderSnapshotKernel {
   SnowFieldsView v;
   SNOW_HD void operator()(int x, int y) const {
@@ -152,27 +139,35 @@ struct PowderSnapshotKernel {
   }
 };
 
-struct PowderDiffusionKernel {
+// Pass 1 of a substep, per cell (writes only its own cell): the outflows toward the four
+// neighbours, from the state before any colour pass. Bit d of powderMoves[i] says whether
+// powderFlow[4i + d] holds a share to give. Splitting the step this way lets the arithmetic run
+// over contiguous rows (four cells at a time on the CPU, powder_diffusion_rows.h), and leaves
+// the colour passes only the giving, which is what must follow the cross order.
+struct PowderFlowKernel {
   SnowFieldsView v;
   PowderDiffusionArgs a;
 
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
+    v.powderMoves[i] = 0;
     if (!v.valid[i]) return;
     if (v.bedformActive && v.bedformActive[i]) return;  // the bedform model's repose relaxation holds it
-    const float powder = v.scratchPowder[i];
+    const float powder = v.powder[i];
     if (!(powder > a.minDepthM)) return;
-    const float* snapshot = v.scratchSurface;
-    const PowderSlopes s = powderSlopes(v, x, y, a.restSlope, [snapshot](int j) { return snapshot[j]; });
+    const SnowFieldsView& view = v;
+    const PowderSlopes s = powderSlopes(v, x, y, a.restSlope, [&view](int j) { return view.surface(j); });
     const float weightSum = s.slope[0] + s.slope[1] + s.slope[2] + s.slope[3];
     if (!(s.excess > 0.f) || !(weightSum > 0.f)) return;
     const float minCell = minf(v.cellSizeXM, v.cellSizeYM);
     const float shareTotal = a.dtDays * a.diffusionRatePerDay * (a.diffusionLengthM / minCell) * s.excess;
+    // The share leaving toward d is (shareTotal * powder) * s_d / sum(s): one division a cell.
+    const float perWeight = shareTotal * powder / weightSum;
     float out[4] = {0.f, 0.f, 0.f, 0.f};
     float total = 0.f;
     for (int d = 0; d < 4; ++d) {
       if (!(s.slope[d] > 0.f)) continue;
-      out[d] = minf(shareTotal * powder * (s.slope[d] / weightSum), 0.2f * s.drop[d]);
+      out[d] = minf(perWeight * s.slope[d], 0.2f * s.drop[d]);
       total += out[d];
     }
     if (!(total > 0.f)) return;
@@ -182,11 +177,30 @@ struct PowderDiffusionKernel {
     // bias that adds up over a season).
     const bool empties = total >= powder;
     const float scale = empties ? powder / total * (1.f - 1e-6f) : 1.f;
-    float remaining = v.powder[i];
+    uint8_t moves = 0;
     for (int d = 0; d < 4; ++d) {
       if (!(out[d] > 0.f)) continue;
+      v.powderFlow[4 * i + d] = out[d] * scale;
+      moves = static_cast<uint8_t>(moves | (1u << d));
+    }
+    v.powderMoves[i] = moves;
+  }
+};
+
+// Pass 2, one colour at a time: a cell of the colour gives its shares to its cross. The source
+// gives from what it holds now (its own gains from earlier colours included), through giveTo.
+struct PowderGiveKernel {
+  SnowFieldsView v;
+
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    const unsigned moves = v.powderMoves[i];
+    if (!moves) return;
+    float remaining = v.powder[i];
+    for (int d = 0; d < 4; ++d) {
+      if (!(moves & (1u << d))) continue;
       const int nx = x + (d == 0 ? 1 : (d == 1 ? -1 : 0)), ny = y + (d == 2 ? 1 : (d == 3 ? -1 : 0));
-      remaining = giveTo(v.powder[v.index(nx, ny)], out[d] * scale, remaining, nullptr);
+      remaining = giveTo(v.powder[v.index(nx, ny)], v.powderFlow[4 * i + d], remaining, nullptr);
     }
     v.powder[i] = remaining;
   }
