@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "bakers/grid_writer.h"
+#include "tools/pipeline.h"
 
 using namespace std::string_literals;
 namespace fs = std::filesystem;
@@ -77,6 +78,38 @@ TEST(Cli, SameSeedSameBytesAndThreadCountDoesNotMatter) {
   }
   EXPECT_FALSE(a.at("powder.exr") == c.at("powder.exr")) << "another seed should give another season";
   if (!HasFailure()) fs::remove_all(dir);  // kept for inspection when it fails
+}
+
+// Frame days are written on their own thread from a copy of the state (and of the ski-track
+// texture, which the season goes on stamping) while the season continues: the same files and
+// manifest as writing them in place, with three frames (one in flight at a time) and skiers.
+TEST(Cli, FramesWrittenBesideTheSeasonEqualFramesWrittenInPlace) {
+  const fs::path dir = workDir();
+  std::map<std::string, std::string> files[2];
+  for (int beside = 0; beside < 2; ++beside) {
+    snow::BakeOptions o;
+    o.scene = "preset:default";
+    o.outDir = (dir / (beside ? "beside" : "inplace")).string();
+    o.backend = "cpu";
+    o.useCache = false;
+    o.progress = false;
+    o.framesBesideSeason = beside == 1;
+    o.sets = {"terrain.size=96", "terrain.cell_size_m=20", "season.days=40", "outputs.frames_days=[10,20,30]", "parameters.skiers_per_hour=5",
+              "outputs.layers=[\"powder\",\"depth\",\"ski_tracks\",\"preview\"]", "outputs.meshes=[\"glb\"]"};
+    std::ostringstream log;
+    snow::runBake(o, log);
+    files[beside] = filesIn(o.outDir);
+  }
+  EXPECT_TRUE(files[1].count("frames/ski_tracks.0020.exr"));
+  EXPECT_TRUE(files[1].count("frames/snow_surface.0030.glb"));
+  EXPECT_TRUE(files[1].count("contact_sheet.png"));
+  EXPECT_FALSE(files[1].at("frames/ski_tracks.0010.exr") == files[1].at("ski_tracks.exr")) << "no skiing after day 10?";
+  ASSERT_EQ(files[0].size(), files[1].size());
+  for (const auto& [name, bytes] : files[0]) {
+    ASSERT_TRUE(files[1].count(name)) << name;
+    EXPECT_TRUE(bytes == files[1].at(name)) << name << " differs when frames are written beside the season";
+  }
+  if (!HasFailure()) fs::remove_all(dir);
 }
 
 TEST(Cli, ManifestListsEveryFileWritten) {

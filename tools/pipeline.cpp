@@ -2,6 +2,7 @@
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <optional>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
@@ -474,7 +476,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   };
   const std::string rgbPngFormat = "PNG, 3 channels uint8, sRGB";
   std::string occluderNotes;  // snow on the occluders, logged once the output writers are done
-  auto writeLayers = [&](const SnowState& s, double day) {
+  // `skiDepth`: the ski-track texture of that day (the season goes on stamping the live one while
+  // a frame is written); null: the live texture.
+  auto writeLayers = [&](const SnowState& s, double day, const Grid<float>* skiDepth) {
     OutputSink& parent = *tlSink;
     const bool frame = day >= 0.0;
     if (frame) fs::create_directories(fs::path(options.outDir) / "frames");
@@ -674,7 +678,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         if (layer == "ski_tracks") {
           // The finer texture: its own size, listed with each file.
           content += " (" + std::to_string(skiTracks->factor()) + " x " + std::to_string(skiTracks->factor()) + " texels per cell)";
-          grid = skiTracks->depth();
+          grid = skiDepth ? *skiDepth : skiTracks->depth();
         } else if (layer == "ski_route_map") {
           grid = routeMapGrid.empty() ? Grid<float>(s.spec.width, s.spec.height, 0.f) : routeMapGrid;
         } else if (occlusionLayers.count(layer)) {
@@ -879,8 +883,45 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         if (windChanges) windForDay(day, s);
       };
     ProgressBar bar(log, "season", stderrIsTerminal() && &log == &std::cerr, options.progress);
-    SeasonReport seasonReport = runSeason(
-        *backend, state, config, [&](double f) { bar.update(f); }, [&](double day, const SnowState& s) { writeLayers(s, day); });
+    // A frame day's outputs are written on a thread of their own from a copy of the state while
+    // the season goes on (one frame in flight; the next frame, or the season's end, waits for
+    // it), in a task arena of their own so that the season's parallel loops never run a writer's
+    // task. Each frame lists its files into its own sink, merged in frame order: the same files
+    // and manifest as writing them in place.
+    tbb::task_arena writerArena(std::max(1, threads));  // outlives the writer (declared first)
+    struct FrameWriter {
+      std::thread thread;
+      SnowState state;
+      Grid<float> skiDepth;
+      OutputSink sink;
+      std::exception_ptr error;
+      ~FrameWriter() {
+        if (thread.joinable()) thread.join();  // the season threw: let the writer finish first
+      }
+    } frameWriter;
+    auto joinFrame = [&] {
+      if (!frameWriter.thread.joinable()) return;
+      frameWriter.thread.join();
+      if (frameWriter.error) std::rethrow_exception(frameWriter.error);
+      mergeInto(*tlSink, frameWriter.sink);
+      frameWriter.sink = OutputSink();
+    };
+    auto writeFrame = [&](double day, const SnowState& s) {
+      if (!options.framesBesideSeason) return writeLayers(s, day, nullptr);
+      joinFrame();
+      frameWriter.state = s;
+      if (skiTracks) frameWriter.skiDepth = skiTracks->depth();
+      frameWriter.thread = std::thread([&, day] {
+        try {
+          SinkScope scope(frameWriter.sink);
+          writerArena.execute([&] { writeLayers(frameWriter.state, day, skiTracks ? &frameWriter.skiDepth : nullptr); });
+        } catch (...) {
+          frameWriter.error = std::current_exception();
+        }
+      });
+    };
+    SeasonReport seasonReport = runSeason(*backend, state, config, [&](double f) { bar.update(f); }, writeFrame);
+    joinFrame();
     bar.finish();
     report = std::move(seasonReport);
     log << "season: " << fixed(scene.days, 0) << " days, " << report.events << " events on " << backend->name() << " ("
@@ -930,7 +971,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
 
   // 5. Outputs
   t0 = Clock::now();
-  writeLayers(state, -1.0);
+  writeLayers(state, -1.0, nullptr);
   if (previews.size() > 1) {
     int sw = 0, sh = 0;
     const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(previews.size()))));

@@ -24,6 +24,9 @@ struct BakeOptions {
   bool progress = true;
   std::optional<std::string> cacheDir;     // precompute cache folder (default: PrecomputeCache::defaultDirectory())
   bool useCache = true;                    // --no-cache: neither read nor write it
+  // Frame days' outputs written on their own thread while the season goes on (false: in place,
+  // the season waiting; the same files, for tests and timing comparisons).
+  bool framesBesideSeason = true;
 };
 
 struct BakeResult {
