@@ -166,6 +166,20 @@ Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& height
   std::vector<std::array<float, 3>> normals;
   terrainNormals(heights, valid, spec, normals);
   const double dr = radiusM / rings;
+  // The sample pattern is the same round every cell: its offsets and areas once, not a sine
+  // and cosine per cell and sample.
+  struct Sample {
+    double dx, dy, area;
+  };
+  std::vector<Sample> pattern;
+  for (int ring = 0; ring < rings; ++ring) {
+    const double rIn = ring * dr, rOut = (ring + 1) * dr, rMid = 0.5 * (rIn + rOut);
+    const double area = kPi * (rOut * rOut - rIn * rIn) / directions;  // A_ij
+    for (int k = 0; k < directions; ++k) {
+      const double az = (k + (ring % 2 ? 0.5 : 0.0)) * 2.0 * kPi / directions + 0.1;
+      pattern.push_back({rMid * std::sin(az), rMid * std::cos(az), area});
+    }
+  }
   tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 0, w), [&](const tbb::blocked_range2d<int>& r) {
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
@@ -173,23 +187,18 @@ Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& height
         const auto& nr = normals[static_cast<size_t>(j) * w + i];
         const double px = (i + 0.5) * spec.cellSizeXM, py = (h - j - 0.5) * spec.cellSizeYM, pz = heights(i, j);
         double sum = 0.0;
-        for (int ring = 0; ring < rings; ++ring) {
-          const double rIn = ring * dr, rOut = (ring + 1) * dr, rMid = 0.5 * (rIn + rOut);
-          const double area = kPi * (rOut * rOut - rIn * rIn) / directions;  // A_ij
-          for (int k = 0; k < directions; ++k) {
-            const double az = (k + (ring % 2 ? 0.5 : 0.0)) * 2.0 * kPi / directions + 0.1;
-            const double sx = px + rMid * std::sin(az), sy = py + rMid * std::cos(az);
-            const int si = static_cast<int>(std::floor(sx / spec.cellSizeXM));
-            const int sj = h - 1 - static_cast<int>(std::floor(sy / spec.cellSizeYM));
-            if (si < 0 || sj < 0 || si >= w || sj >= h || !valid(si, sj) || (si == i && sj == j)) continue;
-            const double vx = (si + 0.5) * spec.cellSizeXM - px, vy = (h - sj - 0.5) * spec.cellSizeYM - py, vz = heights(si, sj) - pz;
-            const double d2 = vx * vx + vy * vy + vz * vz, d = std::sqrt(d2);
-            const double cosR = (nr[0] * vx + nr[1] * vy + nr[2] * vz) / d;
-            const auto& ns = normals[static_cast<size_t>(sj) * w + si];
-            const double cosS = -(ns[0] * vx + ns[1] * vy + ns[2] * vz) / d;
-            if (cosR <= 0.0 || cosS <= 0.0) continue;
-            sum += area * sun(si, sj) * cosS * cosR / (kPi * d2);
-          }
+        for (const Sample& sample : pattern) {
+          const double sx = px + sample.dx, sy = py + sample.dy;
+          const int si = static_cast<int>(std::floor(sx / spec.cellSizeXM));
+          const int sj = h - 1 - static_cast<int>(std::floor(sy / spec.cellSizeYM));
+          if (si < 0 || sj < 0 || si >= w || sj >= h || !valid(si, sj) || (si == i && sj == j)) continue;
+          const double vx = (si + 0.5) * spec.cellSizeXM - px, vy = (h - sj - 0.5) * spec.cellSizeYM - py, vz = heights(si, sj) - pz;
+          const double d2 = vx * vx + vy * vy + vz * vz, d = std::sqrt(d2);
+          const double cosR = (nr[0] * vx + nr[1] * vy + nr[2] * vz) / d;
+          const auto& ns = normals[static_cast<size_t>(sj) * w + si];
+          const double cosS = -(ns[0] * vx + ns[1] * vy + ns[2] * vz) / d;
+          if (cosR <= 0.0 || cosS <= 0.0) continue;
+          sum += sample.area * sun(si, sj) * cosS * cosR / (kPi * d2);
         }
         ind(i, j) = static_cast<float>(kIndOverKSun * sum);
       }
