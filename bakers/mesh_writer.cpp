@@ -5,6 +5,8 @@
 #include <charconv>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <functional>
 #include <map>
 #include <string_view>
 #include <unordered_map>
@@ -103,47 +105,72 @@ std::string glbBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
   return out;
 }
 
-// Text written through a cursor into a string sized for the worst case and trimmed when taken:
-// no capacity test or reallocation per character (a 4-million-triangle body is a 450 MB OBJ).
-class TextBuffer {
+// Text formatted through a cursor into a fixed chunk that is written out whenever the next item
+// might not fit: no capacity test per character, and no buffer the size of the file (a
+// 4-million-triangle body is a 450 MB OBJ).
+class TextStream {
  public:
-  explicit TextBuffer(size_t bound) : text_(bound, '\0'), at_(text_.data()) {}
-  TextBuffer& operator<<(std::string_view s) {
-    std::memcpy(at_, s.data(), s.size());
+  explicit TextStream(std::ostream& out) : out_(out), chunk_(kChunk), at_(chunk_.data()) {}
+  // Makes room for `bytes` more characters (at most kRoom) before the cursor is used directly.
+  char* room(size_t bytes) {
+    if (static_cast<size_t>(chunk_.data() + chunk_.size() - at_) < bytes) flush();
+    return at_;
+  }
+  void advanceTo(char* p) { at_ = p; }
+  TextStream& operator<<(std::string_view s) {
+    if (s.size() > kRoom) {
+      flush();
+      out_.write(s.data(), static_cast<std::streamsize>(s.size()));
+      return *this;
+    }
+    std::memcpy(room(s.size()), s.data(), s.size());
     at_ += s.size();
     return *this;
   }
-  TextBuffer& operator<<(char c) {
-    *at_++ = c;
+  TextStream& operator<<(char c) {
+    *room(1) = c;
+    ++at_;
     return *this;
   }
-  // Shortest round-trip decimal: at most kFloatChars characters.
-  TextBuffer& operator<<(float v) {
-    at_ = std::to_chars(at_, at_ + kFloatChars, v).ptr;
+  // Shortest round-trip decimal.
+  TextStream& operator<<(float v) {
+    char* p = room(kNumberChars);
+    at_ = std::to_chars(p, p + kNumberChars, v).ptr;
     return *this;
   }
-  TextBuffer& operator<<(long long v) {
-    at_ = std::to_chars(at_, at_ + kIntegerChars, v).ptr;
+  TextStream& operator<<(long long v) {
+    char* p = room(kNumberChars);
+    at_ = std::to_chars(p, p + kNumberChars, v).ptr;
     return *this;
   }
-  char* cursor() { return at_; }
-  void advanceTo(char* p) { at_ = p; }
-  std::string take() {
-    text_.resize(static_cast<size_t>(at_ - text_.data()));
-    return std::move(text_);
+  void flush() {
+    out_.write(chunk_.data(), at_ - chunk_.data());
+    at_ = chunk_.data();
   }
-  static constexpr size_t kFloatChars = 16, kIntegerChars = 20;
+  static constexpr size_t kNumberChars = 24, kRoom = 4096, kChunk = 1 << 20;
 
  private:
-  std::string text_;
+  std::ostream& out_;
+  std::vector<char> chunk_;
   char* at_;
 };
 
+// Writes `path` atomically through a TextStream.
+void writeTextFile(const std::string& path, const std::function<void(TextStream&)>& body) {
+  writeAtomically(path, [&](const std::string& temp) {
+    std::ofstream file(temp, std::ios::binary | std::ios::trunc);
+    if (!file) throw std::runtime_error("cannot write " + temp);
+    TextStream out(file);
+    body(out);
+    out.flush();
+    file.flush();
+    if (!file) throw std::runtime_error("write failed: " + temp);
+  });
+}
+
 // Wavefront OBJ written directly (shortest round-trip decimal of each float), y up.
-std::string objBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+void writeObj(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   const bool uv = m.uvs.size() == m.positions.size();
-  const size_t n = m.positions.size(), f = TextBuffer::kFloatChars;
-  TextBuffer out(128 + n * (4 + 3 * (f + 1)) * 2 + (uv ? n * (4 + 2 * (f + 1)) : 0) + m.triangles.size() * (3 + 3 * (1 + 3 * 11 + 2)));
   out << "# snowbake snow mesh: metres, y up (x east, y altitude, z south)\no snow\n";
   for (const auto& p : m.positions) {
     const auto q = yUp(p);
@@ -157,7 +184,7 @@ std::string objBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
   }
   for (const auto& tri : m.triangles) {
     // "f a/a/a b/b/b c/c/c" (or "a//a" without UVs): each index formatted once and copied.
-    char* q = out.cursor();
+    char* q = out.room(3 * (1 + 3 * 11 + 2) + 2);
     *q++ = 'f';
     for (uint32_t v : tri) {
       *q++ = ' ';
@@ -176,7 +203,6 @@ std::string objBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
     *q++ = '\n';
     out.advanceTo(q);
   }
-  return out.take();
 }
 
 // Binary PLY (little endian, z up) written directly (assimp's exporter took over a second a
@@ -211,9 +237,7 @@ std::string plyBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
 // ASCII FBX 7.4 written directly (assimp's writer took 25 s a million triangles and its binary
 // one writes unreadable files): one mesh geometry with per-vertex normals and UVs, one model, one
 // material; y up, metres (UnitScaleFactor 100: FBX counts in centimetres).
-std::string fbxBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
-  const size_t n = m.positions.size(), f = TextBuffer::kFloatChars + 1, i = TextBuffer::kIntegerChars + 1;
-  TextBuffer out(8192 + n * 3 * f * 2 + n * 2 * f + m.triangles.size() * 3 * i);
+void writeFbx(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   auto num = [&](float v) { out << v; };
   auto integer = [&](long long v) { out << v; };
   out << "; FBX 7.4.0 project file\n; snowbake snow mesh: metres, y up (x east, y altitude, z south)\n"
@@ -284,7 +308,6 @@ std::string fbxBytes(const MeshData& m, const std::vector<std::array<float, 3>>&
          "\tMaterial: 3000, \"Material::snow\", \"\" {\n\t\tVersion: 102\n\t\tShadingModel: \"lambert\"\n\t\tMultiLayer: 0\n"
          "\t\tProperties70:  {\n\t\t\tP: \"DiffuseColor\", \"Color\", \"\", \"A\",0.95,0.96,0.98\n\t\t}\n\t}\n}\n"
          "Connections:  {\n\tC: \"OO\",2000,0\n\tC: \"OO\",1000,2000\n\tC: \"OO\",3000,2000\n}\n";
-  return out.take();
 }
 
 }  // namespace
@@ -295,8 +318,8 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
   const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m.positions, m.triangles);
   if (format == "glb") return writeTextAtomically(path, glbBytes(m, normals));
-  if (format == "obj") return writeTextAtomically(path, objBytes(m, normals));
-  if (format == "fbx") return writeTextAtomically(path, fbxBytes(m, normals));
+  if (format == "obj") return writeTextFile(path, [&](TextStream& out) { writeObj(out, m, normals); });
+  if (format == "fbx") return writeTextFile(path, [&](TextStream& out) { writeFbx(out, m, normals); });
   writeTextAtomically(path, plyBytes(m, normals));
 }
 
