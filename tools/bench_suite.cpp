@@ -613,7 +613,7 @@ std::string bakeBench(const BenchOptions& o, std::ostream& log, int threads) {
            "VDB, surface and body meshes in glb/obj/ply/fbx, previews; "
         << benchMachineDescription() << ", " << threads << " threads, backend " << r.backendName << ": **" << fmt("%.1f", total) << " s**, "
         << r.files.size() << " files, " << fmt("%.2f", bytes / 1e9) << " GB. The season's simulation took " << fmt("%.1f", r.season.seconds)
-        << " s of it (the frame day's outputs are written inside it). The bake's own log:\n\n```\n";
+        << " s of it (the frame day's outputs are written beside it, on their own thread). The bake's own log:\n\n```\n";
   std::istringstream in(bakeLog.str());
   for (std::string line; std::getline(in, line);)
     if (line.rfind("precompute:", 0) == 0 || line.rfind("season:", 0) == 0 || line.rfind("  powder diffusion", 0) == 0 ||

@@ -59,6 +59,13 @@ inline void rowSpan(const PowderFlowKernel& k, int y, int x0, int x1) {
     };
     for (; x + 4 <= end; x += 4) {
       const int i = v.index(x, y);
+      // Four cells without a powder film to move (most of a season's grid): nothing else to do.
+      const __m128 powder = _mm_loadu_ps(v.powder + i);
+      __m128 active = _mm_and_ps(byteMask(v.valid + i), _mm_cmpgt_ps(powder, minDepth));
+      if (_mm_movemask_ps(active) == 0) {
+        std::memset(v.powderMoves + i, 0, 4);
+        continue;
+      }
       const __m128 ap = surfaceAt(i);
       const __m128 an[4] = {surfaceAt(i + 1), surfaceAt(i - 1), surfaceAt(i + w), surfaceAt(i - w)};
       const __m128 okN[4] = {byteMask(v.valid + i + 1), byteMask(v.valid + i - 1), byteMask(v.valid + i + w), byteMask(v.valid + i - w)};
@@ -70,8 +77,6 @@ inline void rowSpan(const PowderFlowKernel& k, int y, int x0, int x1) {
       const __m128 sx = _mm_max_ps(slope[0], slope[1]), sy = _mm_max_ps(slope[2], slope[3]);
       const __m128 excess = _mm_sub_ps(_mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(sx, sx), _mm_mul_ps(sy, sy))), rest);
       const __m128 weightSum = _mm_add_ps(_mm_add_ps(_mm_add_ps(slope[0], slope[1]), slope[2]), slope[3]);
-      const __m128 powder = _mm_loadu_ps(v.powder + i);
-      __m128 active = _mm_and_ps(byteMask(v.valid + i), _mm_cmpgt_ps(powder, minDepth));
       if (v.bedformActive) active = _mm_andnot_ps(byteMask(v.bedformActive + i), active);
       active = _mm_and_ps(active, _mm_and_ps(_mm_cmpgt_ps(excess, zero), _mm_cmpgt_ps(weightSum, zero)));
       const __m128 perWeight = _mm_div_ps(_mm_mul_ps(_mm_mul_ps(rate, excess), powder), weightSum);
