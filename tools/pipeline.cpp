@@ -491,9 +491,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       dayTag = o.str();
     }
     auto outputBase = [&](const std::string& stem) { return (fs::path(options.outDir) / (frame ? "frames" : "") / (stem + dayTag)).string(); };
-    // The VDB and the meshes (the larger writers) run beside the layers on another thread; each
-    // group lists its files into its own sink, merged below in a fixed order.
-    auto vdbAndMeshes = [&] {
+    auto writeVdb = [&] {
       if (scene.outputs.vdb) {
         VdbOptions vo;
         vo.voxelSizeM = scene.outputs.vdbVoxelSizeM > 0.0 ? scene.outputs.vdbVoxelSizeM : std::min(s.spec.cellSizeXM, s.spec.cellSizeYM);
@@ -504,6 +502,8 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                     fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) + " snow voxels; x east, y north from the south-west corner, z altitude",
                  "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", day, 0.f, 0.f);
       }
+    };
+    auto writeMeshes = [&] {
       if (scene.meshSnow.onOccluders && !frame) {
         // Snow on the [[occluders]] (Fearing, as mode = "mesh"), as deep on open flat ground as
         // the terrain's snow around each mesh: the mean depth of the valid cells in a ring two
@@ -585,7 +585,9 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
                      "m", meshFormatDescription(format), day, 0.f, 0.f);
           }
         };
-        for (const std::string& part : parts) {
+        // Each part (the surface, the body) on its own task into its own sink, merged in the
+        // parts' order.
+        auto writePart = [&](const std::string& part) {
           if (part == "surface") {
             auto tm = Clock::now();
             const MeshData mesh = surfaceMesh(triangulation, surface, s.spec);
@@ -608,11 +610,20 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
             addSeconds("mesh building", since(tm));
             if (mesh.triangles.empty()) {
               log << "  snow_body" << dayTag << ": no snow, no mesh written\n";
-              continue;
+              return;
             }
             writeAll("snow_body", mesh, "the snow body alone, closed (top on the snow surface, bottom on the bedrock, walls at the grid's edge)");
           }
-        }
+        };
+        std::vector<OutputSink> partSinks(parts.size());
+        tbb::task_group partGroup;
+        for (size_t k = 0; k < parts.size(); ++k)
+          partGroup.run([&, k] {
+            SinkScope scope(partSinks[k]);
+            writePart(parts[k]);
+          });
+        partGroup.wait();
+        for (const OutputSink& partSink : partSinks) mergeInto(*tlSink, partSink);
         if (snowMesh && !frame)
           for (const std::string& format : scene.outputs.meshes) {
             const std::string meshPath = (fs::path(options.outDir) / ("snow_mesh." + format)).string();
@@ -625,11 +636,17 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
           }
       }
     };
-    OutputSink layerSink, meshSink;
+    // The VDB and the meshes (the larger writers) run beside the layers as tasks of their own;
+    // each group lists its files into its own sink, merged below in a fixed order.
+    OutputSink layerSink, vdbSink, meshSink;
     tbb::task_group group;
     group.run([&] {
+      SinkScope scope(vdbSink);
+      writeVdb();
+    });
+    group.run([&] {
       SinkScope scope(meshSink);
-      vdbAndMeshes();
+      writeMeshes();
     });
     std::exception_ptr layerError;
     try {
@@ -742,6 +759,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     group.wait();  // rethrows the VDB and mesh writers' error
     if (layerError) std::rethrow_exception(layerError);
     mergeInto(parent, layerSink);
+    mergeInto(parent, vdbSink);
     mergeInto(parent, meshSink);
   };
 
