@@ -158,11 +158,13 @@ Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights
 // sun map at the nearest cell. Senders are not tested for visibility: the two cosines already
 // drop those behind the receiver's horizon plane or facing away; a ridge between two facing
 // slopes is not seen (documented in README).
-Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
-                               int directions, int rings, double radiusM, double kIndOverKSun) {
+std::vector<Grid<float>> computeIndirectSunForDays(const std::vector<const Grid<float>*>& suns, const Grid<float>& heights,
+                                                   const Grid<uint8_t>& valid, const GridSpec& spec, int directions, int rings,
+                                                   double radiusM, double kIndOverKSun) {
   const int w = spec.width, h = spec.height;
-  Grid<float> ind(w, h, 0.f);
-  if (directions <= 0 || rings <= 0 || kIndOverKSun == 0.0) return ind;
+  const size_t n = suns.size();
+  std::vector<Grid<float>> ind(n, Grid<float>(w, h, 0.f));
+  if (n == 0 || directions <= 0 || rings <= 0 || kIndOverKSun == 0.0) return ind;
   std::vector<std::array<float, 3>> normals;
   terrainNormals(heights, valid, spec, normals);
   const double dr = radiusM / rings;
@@ -180,13 +182,16 @@ Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& height
       pattern.push_back({rMid * std::sin(az), rMid * std::cos(az), area});
     }
   }
+  // Every sample day at once: the geometry of a receiver and a sender (their cosines and
+  // distance) does not depend on the day, only the sender's sun does.
   tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 0, w), [&](const tbb::blocked_range2d<int>& r) {
+    std::vector<double> sum(n);
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
         if (!valid(i, j)) continue;
         const auto& nr = normals[static_cast<size_t>(j) * w + i];
         const double px = (i + 0.5) * spec.cellSizeXM, py = (h - j - 0.5) * spec.cellSizeYM, pz = heights(i, j);
-        double sum = 0.0;
+        std::fill(sum.begin(), sum.end(), 0.0);
         for (const Sample& sample : pattern) {
           const double sx = px + sample.dx, sy = py + sample.dy;
           const int si = static_cast<int>(std::floor(sx / spec.cellSizeXM));
@@ -198,12 +203,18 @@ Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& height
           const auto& ns = normals[static_cast<size_t>(sj) * w + si];
           const double cosS = -(ns[0] * vx + ns[1] * vy + ns[2] * vz) / d;
           if (cosR <= 0.0 || cosS <= 0.0) continue;
-          sum += sample.area * sun(si, sj) * cosS * cosR / (kPi * d2);
+          const size_t sender = static_cast<size_t>(sj) * w + si;
+          for (size_t k = 0; k < n; ++k) sum[k] += sample.area * suns[k]->values()[sender] * cosS * cosR / (kPi * d2);
         }
-        ind(i, j) = static_cast<float>(kIndOverKSun * sum);
+        for (size_t k = 0; k < n; ++k) ind[k](i, j) = static_cast<float>(kIndOverKSun * sum[k]);
       }
   });
   return ind;
+}
+
+Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                               int directions, int rings, double radiusM, double kIndOverKSun) {
+  return std::move(computeIndirectSunForDays({&sun}, heights, valid, spec, directions, rings, radiusM, kIndOverKSun)[0]);
 }
 
 Grid<float> Exposure::totalAt(double seasonDay) const {
@@ -259,12 +270,15 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
                                   : computeDirectSun(*scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
                                                      p.directSunWeightHours, &e.timings.sunRays);
     e.timings.sunSeconds += since(t0);
-    t0 = Clock::now();
-    day.indirectHours = computeIndirectSun(day.sunHours, heights, valid, spec, s.quality.indirectDirections, s.quality.indirectRings,
-                                           s.quality.indirectRadiusM, kIndOverKSun);
-    e.timings.indirectSeconds += since(t0);
     e.days.push_back(std::move(day));
   }
+  t0 = Clock::now();
+  std::vector<const Grid<float>*> suns;
+  for (const DailyExposure& day : e.days) suns.push_back(&day.sunHours);
+  std::vector<Grid<float>> indirect = computeIndirectSunForDays(suns, heights, valid, spec, s.quality.indirectDirections,
+                                                                s.quality.indirectRings, s.quality.indirectRadiusM, kIndOverKSun);
+  for (size_t k = 0; k < e.days.size(); ++k) e.days[k].indirectHours = std::move(indirect[k]);
+  e.timings.indirectSeconds = since(t0);
   return e;
 }
 

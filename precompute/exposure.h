@@ -81,5 +81,9 @@ Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights
                                std::vector<Grid<float>>* horizonAnglesDeg = nullptr);
 Grid<float> computeIndirectSun(const Grid<float>& sunHours, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                                int directions, int rings, double radiusM, double kIndOverKSun);
+// The same for several days' direct sun at once (the geometry computed once): the same bytes.
+std::vector<Grid<float>> computeIndirectSunForDays(const std::vector<const Grid<float>*>& sunHours, const Grid<float>& heights,
+                                                   const Grid<uint8_t>& valid, const GridSpec& spec, int directions, int rings,
+                                                   double radiusM, double kIndOverKSun);
 
 }  // namespace snow
