@@ -414,31 +414,38 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
     const uint32_t k = g.index[static_cast<size_t>(p[1]) * w + p[0]];
     return which == 0 ? top[k] : bottom[k];
   };
-  // Undirected edges of the kept triangles, sorted: a rim edge appears once.
+  // Undirected edges of the kept triangles (grid point keys, with the triangle's edge number),
+  // sorted: a rim edge is one whose key pair appears once.
   auto key = [&](const std::array<int, 2>& p) { return static_cast<uint64_t>(p[1]) * w + p[0]; };
-  std::vector<std::pair<uint64_t, uint64_t>> edges;
+  struct Edge {
+    uint64_t a, b;
+    size_t id;  // 3 * kept triangle + edge
+  };
+  std::vector<Edge> edges;
   edges.reserve(kept.size() * 3);
-  for (const auto* tri : kept) {
-    const auto& q = *tri;
+  for (size_t t = 0; t < kept.size(); ++t) {
+    const auto& q = *kept[t];
     m.triangles.push_back({vid(q[0], 0), vid(q[1], 0), vid(q[2], 0)});  // top, facing up
     m.triangles.push_back({vid(q[0], 1), vid(q[2], 1), vid(q[1], 1)});  // bottom, facing down
     for (int k = 0; k < 3; ++k) {
       const uint64_t a = key(q[k]), b = key(q[(k + 1) % 3]);
-      edges.push_back({std::min(a, b), std::max(a, b)});
+      edges.push_back({std::min(a, b), std::max(a, b), 3 * t + k});
     }
   }
-  std::sort(edges.begin(), edges.end());
-  auto once = [&](uint64_t a, uint64_t b) {
-    const std::pair<uint64_t, uint64_t> e{std::min(a, b), std::max(a, b)};
-    const auto range = std::equal_range(edges.begin(), edges.end(), e);
-    return range.second - range.first == 1;
-  };
+  std::sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) { return x.a != y.a ? x.a < y.a : x.b < y.b; });
+  std::vector<uint8_t> rim(edges.size(), 0);
+  for (size_t e = 0; e < edges.size();) {
+    size_t end = e + 1;
+    while (end < edges.size() && edges[end].a == edges[e].a && edges[end].b == edges[e].b) ++end;
+    if (end - e == 1) rim[edges[e].id] = 1;
+    e = end;
+  }
   // Walls along rim edges where the snow has depth: (a_top, a_bottom, b_bottom), (a_top, b_bottom, b_top).
-  for (const auto* tri : kept) {
-    const auto& q = *tri;
+  for (size_t t = 0; t < kept.size(); ++t) {
+    const auto& q = *kept[t];
     for (int k = 0; k < 3; ++k) {
       const auto &pa = q[k], &pb = q[(k + 1) % 3];
-      if (!once(key(pa), key(pb))) continue;
+      if (!rim[3 * t + k]) continue;
       const uint32_t at = vid(pa, 0), ab = vid(pa, 1), bt = vid(pb, 0), bb = vid(pb, 1);
       if (at != ab) m.triangles.push_back({at, ab, bb});
       if (bt != bb) m.triangles.push_back({at, bb, bt});
