@@ -80,8 +80,8 @@ SNOW_HD SNOW_INLINE PowderSlopes powderSlopes(const SnowFieldsView& v, int x, in
     const int dx = d == 0 ? 1 : (d == 1 ? -1 : 0), dy = d == 2 ? 1 : (d == 3 ? -1 : 0);
     const int nx = x + dx, ny = y + dy;
     if (!v.isValid(nx, ny)) continue;
-    // Times the reciprocal of the cell size (one division a grid, not four a cell: the flow
-    // kernel is bound by its divisions).
+    // Times the reciprocal of the cell size, which the CPU's four-lane rows compute once a row
+    // (powder_diffusion_rows.h) with the same result.
     const float perMetre = dx != 0 ? 1.f / v.cellSizeXM : 1.f / v.cellSizeYM;
     r.drop[d] = maxf(0.f, ap - surfaceAt(v.index(nx, ny)));
     r.slope[d] = r.drop[d] * perMetre;
