@@ -1,6 +1,7 @@
 #include "bench_suite.h"
 
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -597,9 +598,17 @@ std::string bakeBench(const BenchOptions& o, std::ostream& log, int threads) {
             "outputs.encodings=[\"png16\",\"png8\",\"r16\"]", "outputs.multichannel_exr=true", "outputs.displacement_size=[2048,2048]",
             "outputs.vdb=true", "outputs.meshes=[\"glb\",\"obj\",\"ply\",\"fbx\"]", "outputs.mesh_parts=[\"surface\",\"body\"]"};
   std::ostringstream bakeLog;
+  // The process's CPU time (user + system, every thread) over the bake: how busy the cores were.
+  auto cpuSeconds = [] {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_utime.tv_sec + u.ru_utime.tv_usec * 1e-6 + u.ru_stime.tv_sec + u.ru_stime.tv_usec * 1e-6;
+  };
+  const double cpu0 = cpuSeconds();
   const auto t0 = Clock::now();
   const BakeResult r = runBake(b, bakeLog);
   const double total = since(t0);
+  const double cpu = cpuSeconds() - cpu0;
   uintmax_t bytes = 0;
   for (const auto& f : r.files) {
     std::error_code ec;
@@ -612,7 +621,8 @@ std::string bakeBench(const BenchOptions& o, std::ostream& log, int threads) {
            "16-bit PNG, 8-bit PNG and .r16 (among them the 8192² ski-track texture), the multi-channel EXR, 2048² displacement maps, the "
            "VDB, surface and body meshes in glb/obj/ply/fbx, previews; "
         << benchMachineDescription() << ", " << threads << " threads, backend " << r.backendName << ": **" << fmt("%.1f", total) << " s**, "
-        << r.files.size() << " files, " << fmt("%.2f", bytes / 1e9) << " GB. The season's simulation took " << fmt("%.1f", r.season.seconds)
+        << r.files.size() << " files, " << fmt("%.2f", bytes / 1e9) << " GB; CPU time " << fmt("%.1f", cpu) << " s (user + system), "
+        << fmt("%.2f", cpu / total) << " cores busy on average. The season's simulation took " << fmt("%.1f", r.season.seconds)
         << " s of it (the frame day's outputs are written beside it, on their own thread). The bake's own log:\n\n```\n";
   std::istringstream in(bakeLog.str());
   for (std::string line; std::getline(in, line);)
