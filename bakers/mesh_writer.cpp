@@ -32,79 +32,6 @@ namespace {
 // (x, y, z) z up -> (x, z, -y) y up.
 std::array<float, 3> yUp(const std::array<float, 3>& p) { return {p[0], p[2], -p[1]}; }
 
-// Binary glTF 2.0 written directly (assimp's exporter took seconds a million triangles): one
-// mesh, one primitive, POSITION / NORMAL / TEXCOORD_0 (glTF's v runs down the image) and uint32
-// indices, a plain snow material.
-std::string glbBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
-  const size_t n = m.positions.size(), t = m.triangles.size();
-  const bool uv = m.uvs.size() == n;
-  std::string bin;
-  auto put = [&](const void* p, size_t bytes) { bin.append(static_cast<const char*>(p), bytes); };
-  std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-  for (const auto& p : m.positions) {
-    const auto q = yUp(p);
-    put(q.data(), 12);
-    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], q[c]), hi[c] = std::max(hi[c], q[c]);
-  }
-  const size_t normalOffset = bin.size();
-  for (const auto& v : normals) put(yUp(v).data(), 12);
-  const size_t uvOffset = bin.size();
-  if (uv)
-    for (const auto& u : m.uvs) {
-      const float q[2] = {u[0], 1.f - u[1]};
-      put(q, 8);
-    }
-  const size_t indexOffset = bin.size();
-  for (const auto& tri : m.triangles) put(tri.data(), 12);
-  const size_t binLength = bin.size();
-  while (bin.size() % 4) bin.push_back('\0');
-  auto num = [](double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
-    return std::string(buf);
-  };
-  std::string json = "{\"asset\":{\"version\":\"2.0\",\"generator\":\"snowbake\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
-                     "\"nodes\":[{\"mesh\":0,\"name\":\"snow\"}],\"meshes\":[{\"name\":\"snow\",\"primitives\":[{\"attributes\":{"
-                     "\"POSITION\":0,\"NORMAL\":1" + std::string(uv ? ",\"TEXCOORD_0\":2" : "") + "},\"indices\":" + (uv ? "3" : "2") +
-                     ",\"mode\":4,\"material\":0}]}],\"materials\":[{\"name\":\"snow\",\"pbrMetallicRoughness\":{\"baseColorFactor\":"
-                     "[0.95,0.96,0.98,1],\"metallicFactor\":0,\"roughnessFactor\":0.8}}],\"buffers\":[{\"byteLength\":" +
-                     std::to_string(binLength) + "}],\"bufferViews\":[";
-  auto view = [&](size_t offset, size_t length, int target) {
-    return "{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) + ",\"byteLength\":" + std::to_string(length) + ",\"target\":" +
-           std::to_string(target) + "}";
-  };
-  // Appended piece by piece (GCC 12 warns falsely, -Wrestrict, on "," + std::string&&).
-  json += view(0, n * 12, 34962);
-  json += ',';
-  json += view(normalOffset, n * 12, 34962);
-  if (uv) {
-    json += ',';
-    json += view(uvOffset, n * 8, 34962);
-  }
-  json += ',';
-  json += view(indexOffset, t * 12, 34963);
-  json += "],\"accessors\":[";
-  json += "{\"bufferView\":0,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\",\"min\":[" + num(lo[0]) + "," +
-          num(lo[1]) + "," + num(lo[2]) + "],\"max\":[" + num(hi[0]) + "," + num(hi[1]) + "," + num(hi[2]) + "]},";
-  json += "{\"bufferView\":1,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\"},";
-  if (uv) json += "{\"bufferView\":2,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC2\"},";
-  json += "{\"bufferView\":" + std::string(uv ? "3" : "2") + ",\"componentType\":5125,\"count\":" + std::to_string(3 * t) +
-          ",\"type\":\"SCALAR\"}]}";
-  while (json.size() % 4) json.push_back(' ');
-  std::string out;
-  auto u32 = [&](uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); };
-  u32(0x46546C67u);  // "glTF"
-  u32(2);
-  u32(static_cast<uint32_t>(12 + 8 + json.size() + 8 + bin.size()));
-  u32(static_cast<uint32_t>(json.size()));
-  u32(0x4E4F534Au);  // "JSON"
-  out += json;
-  u32(static_cast<uint32_t>(bin.size()));
-  u32(0x004E4942u);  // "BIN"
-  out += bin;
-  return out;
-}
-
 // Text formatted through a cursor into a fixed chunk that is written out whenever the next item
 // might not fit: no capacity test per character, and no buffer the size of the file (a
 // 4-million-triangle body is a 450 MB OBJ).
@@ -168,6 +95,73 @@ void writeTextFile(const std::string& path, const std::function<void(TextStream&
   });
 }
 
+// Binary glTF 2.0 written directly (assimp's exporter took seconds a million triangles): one
+// mesh, one primitive, POSITION / NORMAL / TEXCOORD_0 (glTF's v runs down the image) and uint32
+// indices, a plain snow material. Streamed: the buffer's layout is known before it is written.
+void writeGlb(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+  const size_t n = m.positions.size(), t = m.triangles.size();
+  const bool uv = m.uvs.size() == n;
+  std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  for (const auto& p : m.positions) {
+    const auto q = yUp(p);
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], q[c]), hi[c] = std::max(hi[c], q[c]);
+  }
+  // Positions, normals, UVs, indices: every piece a multiple of 4 bytes, so no padding between.
+  const size_t normalOffset = n * 12, uvOffset = 2 * n * 12, indexOffset = uvOffset + (uv ? n * 8 : 0);
+  const size_t binLength = indexOffset + t * 12;
+  auto num = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return std::string(buf);
+  };
+  std::string json = "{\"asset\":{\"version\":\"2.0\",\"generator\":\"snowbake\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+                     "\"nodes\":[{\"mesh\":0,\"name\":\"snow\"}],\"meshes\":[{\"name\":\"snow\",\"primitives\":[{\"attributes\":{"
+                     "\"POSITION\":0,\"NORMAL\":1" + std::string(uv ? ",\"TEXCOORD_0\":2" : "") + "},\"indices\":" + (uv ? "3" : "2") +
+                     ",\"mode\":4,\"material\":0}]}],\"materials\":[{\"name\":\"snow\",\"pbrMetallicRoughness\":{\"baseColorFactor\":"
+                     "[0.95,0.96,0.98,1],\"metallicFactor\":0,\"roughnessFactor\":0.8}}],\"buffers\":[{\"byteLength\":" +
+                     std::to_string(binLength) + "}],\"bufferViews\":[";
+  auto view = [&](size_t offset, size_t length, int target) {
+    return "{\"buffer\":0,\"byteOffset\":" + std::to_string(offset) + ",\"byteLength\":" + std::to_string(length) + ",\"target\":" +
+           std::to_string(target) + "}";
+  };
+  // Appended piece by piece (GCC 12 warns falsely, -Wrestrict, on "," + std::string&&).
+  json += view(0, n * 12, 34962);
+  json += ',';
+  json += view(normalOffset, n * 12, 34962);
+  if (uv) {
+    json += ',';
+    json += view(uvOffset, n * 8, 34962);
+  }
+  json += ',';
+  json += view(indexOffset, t * 12, 34963);
+  json += "],\"accessors\":[";
+  json += "{\"bufferView\":0,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\",\"min\":[" + num(lo[0]) + "," +
+          num(lo[1]) + "," + num(lo[2]) + "],\"max\":[" + num(hi[0]) + "," + num(hi[1]) + "," + num(hi[2]) + "]},";
+  json += "{\"bufferView\":1,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC3\"},";
+  if (uv) json += "{\"bufferView\":2,\"componentType\":5126,\"count\":" + std::to_string(n) + ",\"type\":\"VEC2\"},";
+  json += "{\"bufferView\":" + std::string(uv ? "3" : "2") + ",\"componentType\":5125,\"count\":" + std::to_string(3 * t) +
+          ",\"type\":\"SCALAR\"}]}";
+  while (json.size() % 4) json.push_back(' ');
+  auto u32 = [&](uint32_t v) { out << std::string_view(reinterpret_cast<const char*>(&v), 4); };
+  auto bytes = [&](const void* p, size_t size) { out << std::string_view(static_cast<const char*>(p), size); };
+  u32(0x46546C67u);  // "glTF"
+  u32(2);
+  u32(static_cast<uint32_t>(12 + 8 + json.size() + 8 + binLength));
+  u32(static_cast<uint32_t>(json.size()));
+  u32(0x4E4F534Au);  // "JSON"
+  out << json;
+  u32(static_cast<uint32_t>(binLength));
+  u32(0x004E4942u);  // "BIN"
+  for (const auto& p : m.positions) bytes(yUp(p).data(), 12);
+  for (const auto& v : normals) bytes(yUp(v).data(), 12);
+  if (uv)
+    for (const auto& u : m.uvs) {
+      const float q[2] = {u[0], 1.f - u[1]};
+      bytes(q, 8);
+    }
+  for (const auto& tri : m.triangles) bytes(tri.data(), 12);
+}
+
 // Wavefront OBJ written directly (shortest round-trip decimal of each float), y up.
 void writeObj(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   const bool uv = m.uvs.size() == m.positions.size();
@@ -208,30 +202,29 @@ void writeObj(TextStream& out, const MeshData& m, const std::vector<std::array<f
 // Binary PLY (little endian, z up) written directly (assimp's exporter took over a second a
 // million triangles): x y z, nx ny nz and s t per vertex, faces as uchar-counted int lists, the
 // header assimp writes and Blender, Houdini, MeshLab and assimp read.
-std::string plyBytes(const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+void writePly(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   const bool uv = m.uvs.size() == m.positions.size();
-  std::string out = "ply\nformat binary_little_endian 1.0\ncomment snowbake snow mesh: metres, z up (x east, y north)\nelement vertex " +
-                    std::to_string(m.positions.size()) +
-                    "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n";
-  if (uv) out += "property float s\nproperty float t\n";
-  out += "element face " + std::to_string(m.triangles.size()) + "\nproperty list uchar int vertex_index\nend_header\n";
-  const size_t header = out.size(), vertexBytes = uv ? 32 : 24;
-  out.resize(header + m.positions.size() * vertexBytes + m.triangles.size() * 13);
-  char* q = out.data() + header;
+  out << "ply\nformat binary_little_endian 1.0\ncomment snowbake snow mesh: metres, z up (x east, y north)\nelement vertex "
+      << static_cast<long long>(m.positions.size())
+      << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n";
+  if (uv) out << "property float s\nproperty float t\n";
+  out << "element face " << static_cast<long long>(m.triangles.size()) << "\nproperty list uchar int vertex_index\nend_header\n";
   // The floats' and ints' bytes are copied as they are: little-endian hosts only (x86-64, ARM64).
   static_assert(std::endian::native == std::endian::little, "the PLY writer copies little-endian bytes");
+  const size_t vertexBytes = uv ? 32 : 24;
   for (size_t k = 0; k < m.positions.size(); ++k) {
+    char* q = out.room(vertexBytes);
     std::memcpy(q, m.positions[k].data(), 12);
     std::memcpy(q + 12, normals[k].data(), 12);
     if (uv) std::memcpy(q + 24, m.uvs[k].data(), 8);
-    q += vertexBytes;
+    out.advanceTo(q + vertexBytes);
   }
   for (const auto& tri : m.triangles) {
+    char* q = out.room(13);
     *q = 3;
     std::memcpy(q + 1, tri.data(), 12);
-    q += 13;
+    out.advanceTo(q + 13);
   }
-  return out;
 }
 
 // ASCII FBX 7.4 written directly (assimp's writer took 25 s a million triangles and its binary
@@ -317,10 +310,10 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
     throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
   const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m.positions, m.triangles);
-  if (format == "glb") return writeTextAtomically(path, glbBytes(m, normals));
+  if (format == "glb") return writeTextFile(path, [&](TextStream& out) { writeGlb(out, m, normals); });
   if (format == "obj") return writeTextFile(path, [&](TextStream& out) { writeObj(out, m, normals); });
   if (format == "fbx") return writeTextFile(path, [&](TextStream& out) { writeFbx(out, m, normals); });
-  writeTextAtomically(path, plyBytes(m, normals));
+  writeTextFile(path, [&](TextStream& out) { writePly(out, m, normals); });
 }
 
 namespace {
