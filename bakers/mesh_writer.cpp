@@ -5,9 +5,9 @@
 #include <charconv>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <functional>
 #include <map>
+#include <ostream>
 #include <string_view>
 #include <unordered_map>
 #include <stdexcept>
@@ -32,19 +32,19 @@ namespace {
 // (x, y, z) z up -> (x, z, -y) y up.
 std::array<float, 3> yUp(const std::array<float, 3>& p) { return {p[0], p[2], -p[1]}; }
 
-// Text formatted through a cursor into a fixed chunk that is written out whenever the next item
-// might not fit: no capacity test per character, and no buffer the size of the file (a
-// 4-million-triangle body is a 450 MB OBJ).
-class TextStream {
+// A file's bytes (formatted text or binary records) put through a cursor into a fixed chunk
+// that is written out whenever the next item might not fit: no capacity test per character, and
+// no buffer the size of the file (a 4-million-triangle body is a 450 MB OBJ).
+class ChunkStream {
  public:
-  explicit TextStream(std::ostream& out) : out_(out), chunk_(kChunk), at_(chunk_.data()) {}
+  explicit ChunkStream(std::ostream& out) : out_(out), chunk_(kChunk), at_(chunk_.data()) {}
   // Makes room for `bytes` more characters (at most kRoom) before the cursor is used directly.
   char* room(size_t bytes) {
     if (static_cast<size_t>(chunk_.data() + chunk_.size() - at_) < bytes) flush();
     return at_;
   }
   void advanceTo(char* p) { at_ = p; }
-  TextStream& operator<<(std::string_view s) {
+  ChunkStream& operator<<(std::string_view s) {
     if (s.size() > kRoom) {
       flush();
       out_.write(s.data(), static_cast<std::streamsize>(s.size()));
@@ -54,18 +54,18 @@ class TextStream {
     at_ += s.size();
     return *this;
   }
-  TextStream& operator<<(char c) {
+  ChunkStream& operator<<(char c) {
     *room(1) = c;
     ++at_;
     return *this;
   }
   // Shortest round-trip decimal.
-  TextStream& operator<<(float v) {
+  ChunkStream& operator<<(float v) {
     char* p = room(kNumberChars);
     at_ = std::to_chars(p, p + kNumberChars, v).ptr;
     return *this;
   }
-  TextStream& operator<<(long long v) {
+  ChunkStream& operator<<(long long v) {
     char* p = room(kNumberChars);
     at_ = std::to_chars(p, p + kNumberChars, v).ptr;
     return *this;
@@ -82,23 +82,19 @@ class TextStream {
   char* at_;
 };
 
-// Writes `path` atomically through a TextStream.
-void writeTextFile(const std::string& path, const std::function<void(TextStream&)>& body) {
-  writeAtomically(path, [&](const std::string& temp) {
-    std::ofstream file(temp, std::ios::binary | std::ios::trunc);
-    if (!file) throw std::runtime_error("cannot write " + temp);
-    TextStream out(file);
+// Writes `path` atomically through a ChunkStream.
+void writeChunked(const std::string& path, const std::function<void(ChunkStream&)>& body) {
+  writeStreamAtomically(path, [&](std::ostream& file) {
+    ChunkStream out(file);
     body(out);
     out.flush();
-    file.flush();
-    if (!file) throw std::runtime_error("write failed: " + temp);
   });
 }
 
 // Binary glTF 2.0 written directly (assimp's exporter took seconds a million triangles): one
 // mesh, one primitive, POSITION / NORMAL / TEXCOORD_0 (glTF's v runs down the image) and uint32
 // indices, a plain snow material. Streamed: the buffer's layout is known before it is written.
-void writeGlb(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+void writeGlb(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   const size_t n = m.positions.size(), t = m.triangles.size();
   const bool uv = m.uvs.size() == n;
   std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
@@ -163,7 +159,7 @@ void writeGlb(TextStream& out, const MeshData& m, const std::vector<std::array<f
 }
 
 // Wavefront OBJ written directly (shortest round-trip decimal of each float), y up.
-void writeObj(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+void writeObj(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   const bool uv = m.uvs.size() == m.positions.size();
   out << "# snowbake snow mesh: metres, y up (x east, y altitude, z south)\no snow\n";
   for (const auto& p : m.positions) {
@@ -202,7 +198,7 @@ void writeObj(TextStream& out, const MeshData& m, const std::vector<std::array<f
 // Binary PLY (little endian, z up) written directly (assimp's exporter took over a second a
 // million triangles): x y z, nx ny nz and s t per vertex, faces as uchar-counted int lists, the
 // header assimp writes and Blender, Houdini, MeshLab and assimp read.
-void writePly(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+void writePly(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   const bool uv = m.uvs.size() == m.positions.size();
   out << "ply\nformat binary_little_endian 1.0\ncomment snowbake snow mesh: metres, z up (x east, y north)\nelement vertex "
       << static_cast<long long>(m.positions.size())
@@ -230,7 +226,7 @@ void writePly(TextStream& out, const MeshData& m, const std::vector<std::array<f
 // ASCII FBX 7.4 written directly (assimp's writer took 25 s a million triangles and its binary
 // one writes unreadable files): one mesh geometry with per-vertex normals and UVs, one model, one
 // material; y up, metres (UnitScaleFactor 100: FBX counts in centimetres).
-void writeFbx(TextStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+void writeFbx(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
   auto num = [&](float v) { out << v; };
   auto integer = [&](long long v) { out << v; };
   out << "; FBX 7.4.0 project file\n; snowbake snow mesh: metres, y up (x east, y altitude, z south)\n"
@@ -310,10 +306,10 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
     throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
   const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m.positions, m.triangles);
-  if (format == "glb") return writeTextFile(path, [&](TextStream& out) { writeGlb(out, m, normals); });
-  if (format == "obj") return writeTextFile(path, [&](TextStream& out) { writeObj(out, m, normals); });
-  if (format == "fbx") return writeTextFile(path, [&](TextStream& out) { writeFbx(out, m, normals); });
-  writeTextFile(path, [&](TextStream& out) { writePly(out, m, normals); });
+  if (format == "glb") return writeChunked(path, [&](ChunkStream& out) { writeGlb(out, m, normals); });
+  if (format == "obj") return writeChunked(path, [&](ChunkStream& out) { writeObj(out, m, normals); });
+  if (format == "fbx") return writeChunked(path, [&](ChunkStream& out) { writeFbx(out, m, normals); });
+  writeChunked(path, [&](ChunkStream& out) { writePly(out, m, normals); });
 }
 
 namespace {

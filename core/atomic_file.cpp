@@ -35,14 +35,18 @@ void writeAtomically(const std::string& finalPath, const std::function<void(cons
   }
 }
 
-void writeTextAtomically(const std::string& finalPath, const std::string& bytes) {
+void writeStreamAtomically(const std::string& finalPath, const std::function<void(std::ostream& out)>& write) {
   writeAtomically(finalPath, [&](const std::string& temp) {
     std::ofstream out(temp, std::ios::binary | std::ios::trunc);
     if (!out) throw std::runtime_error("cannot write " + temp);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    write(out);
     out.flush();
     if (!out) throw std::runtime_error("write failed: " + temp);
   });
+}
+
+void writeTextAtomically(const std::string& finalPath, const std::string& bytes) {
+  writeStreamAtomically(finalPath, [&](std::ostream& out) { out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())); });
 }
 
 }  // namespace snow
