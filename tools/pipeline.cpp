@@ -468,16 +468,16 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
     into.last = Clock::now();
   };
   // A written float image (EXR or TIFF, as the scene asks).
+  const std::string exrCompression = exrCompressionName(scene.outputs.compressionLevel);
+  const std::string floatImageFormat = scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (" + exrCompression + "), linear"
+                                                                      : "TIFF, 1 channel float32 (zip), linear";
   auto listImage = [&](const WrittenImage& img, const std::string& content, const std::string& unit, double day) {
-    listFile(img.path, content, unit,
-             scene.outputs.format == "exr" ? "OpenEXR, 1 channel float32 (" + exrCompressionName(scene.outputs.compressionLevel) + "), linear"
-                                          : std::string("TIFF, 1 channel float32 (zip), linear"), day,
-             img.minValue, img.maxValue);
+    listFile(img.path, content, unit, floatImageFormat, day, img.minValue, img.maxValue);
   };
   const std::string rgbPngFormat = "PNG, 3 channels uint8, sRGB";
   std::string occluderNotes;  // snow on the occluders, logged once the output writers are done
-  // `skiDepth`: the ski-track texture of that day (the season goes on stamping the live one while
-  // a frame is written); null: the live texture.
+  // `skiDepth`: the ski-track texture to write for that day (a frame written beside the season
+  // gets a copy: the season goes on stamping the live one); null when there is none.
   auto writeLayers = [&](const SnowState& s, double day, const Grid<float>* skiDepth) {
     OutputSink& parent = *tlSink;
     const bool frame = day >= 0.0;
@@ -695,7 +695,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         if (layer == "ski_tracks") {
           // The finer texture: its own size, listed with each file.
           content += " (" + std::to_string(skiTracks->factor()) + " x " + std::to_string(skiTracks->factor()) + " texels per cell)";
-          grid = skiDepth ? *skiDepth : skiTracks->depth();
+          grid = *skiDepth;
         } else if (layer == "ski_route_map") {
           grid = routeMapGrid.empty() ? Grid<float>(s.spec.width, s.spec.height, 0.f) : routeMapGrid;
         } else if (occlusionLayers.count(layer)) {
@@ -751,7 +751,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
         std::string names;
         for (const auto& n : channelNames) names += (names.empty() ? "" : ", ") + n;
         listFile(path, "all layers as named channels: " + names, "per channel, as the single-layer files",
-                 "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompressionName(scene.outputs.compressionLevel) + "), linear", day, 0.f, 0.f);
+                 "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression + "), linear", day, 0.f, 0.f);
       }
     } catch (...) {
       layerError = std::current_exception();
@@ -925,7 +925,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
       frameWriter.sink = OutputSink();
     };
     auto writeFrame = [&](double day, const SnowState& s) {
-      if (!options.framesBesideSeason) return writeLayers(s, day, nullptr);
+      if (!options.framesBesideSeason) return writeLayers(s, day, skiTracks ? &skiTracks->depth() : nullptr);
       joinFrame();
       frameWriter.state = s;
       if (skiTracks) frameWriter.skiDepth = skiTracks->depth();
@@ -989,7 +989,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
 
   // 5. Outputs
   t0 = Clock::now();
-  writeLayers(state, -1.0, nullptr);
+  writeLayers(state, -1.0, skiTracks ? &skiTracks->depth() : nullptr);
   if (previews.size() > 1) {
     int sw = 0, sh = 0;
     const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(previews.size()))));
