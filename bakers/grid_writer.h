@@ -44,8 +44,8 @@ std::string normalisedFormat(const std::string& encoding, int width, int height)
 // displacement maps at a requested resolution). Edge cells clamp. Exact for linear fields.
 Grid<float> resampleBilinear(const Grid<float>& grid, int width, int height);
 
-// Several grids of one size in one 32-bit float EXR (zip), channel "<name>.Y" per grid (an EXR
-// layer per grid). Written atomically.
+// Several grids of one size in one 32-bit float EXR (zip at `compressionLevel`), channel
+// "<name>.Y" per grid (an EXR layer per grid). Written atomically.
 void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids,
                           int compressionLevel = kDefaultCompressionLevel);
 

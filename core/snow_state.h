@@ -136,7 +136,8 @@ struct SnowFieldsView {
   // Per-cell scratch: |grad A| of the snow surface, taken before a per-cell pass that changes A,
   // so the pass never reads a neighbour that another thread is writing.
   float* surfaceSlope = nullptr;
-  // Per-cell scratch for transport snapshots (powder diffusion: A and P at the substep's start).
+  // Per-cell scratch for transport snapshots (wind transport: A and P before its colour passes;
+  // the avalanche's scratchPowder holds its outflow scales).
   float* scratchSurface = nullptr;
   float* scratchPowder = nullptr;
   // Powder diffusion's outflows of a substep: four per cell (+x, -x, +y, -y), and which are set.

@@ -18,12 +18,12 @@ SnowState plane(int w, int h, double cell, float slopeX, float base, float tempe
 
 SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   // One buffer holds the four scratch fields (delta, slope, surface and powder snapshots), the
-  // four powder outflows per cell and, behind them, the two per-tile masks and the outflow bits as bytes.
+  // four powder outflows per cell and, behind them as bytes, the per-tile mask and the outflow bits.
   SnowFieldsView v;
   v.width = s.spec.width;
   v.height = s.spec.height;
   const size_t tiles = static_cast<size_t>(v.tilesX()) * v.tilesY();
-  delta.assign(8 * s.spec.cellCount() + (2 * tiles + s.spec.cellCount()) / sizeof(float) + 1, 0.f);
+  delta.assign(8 * s.spec.cellCount() + (tiles + s.spec.cellCount()) / sizeof(float) + 1, 0.f);
   v.width = s.spec.width;
   v.height = s.spec.height;
   v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM);
@@ -50,7 +50,7 @@ SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   v.scratchPowder = delta.data() + 3 * s.spec.cellCount();
   v.powderFlow = delta.data() + 4 * s.spec.cellCount();
   v.tileActive = reinterpret_cast<uint8_t*>(delta.data() + 8 * s.spec.cellCount());
-  v.powderMoves = v.tileActive + 2 * tiles;
+  v.powderMoves = v.tileActive + tiles;
   return v;
 }
 
