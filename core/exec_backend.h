@@ -45,11 +45,11 @@ class ExecBackend final : public SnowBackend {
     exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(scratchSurface_, std::vector<float>(s.spec.cellCount(), 0.f));
     exec_.upload(scratchPowder_, std::vector<float>(s.spec.cellCount(), 0.f));
-    exec_.upload(powderFlow_, std::vector<float>(4 * s.spec.cellCount(), 0.f));
-    const size_t tiles = static_cast<size_t>(view().tilesX()) * view().tilesY();
-    exec_.upload(tileActive_, std::vector<uint8_t>(tiles, 0));
-    // One byte a cell (counted in whole tiles), written by each substep before it is read.
-    exec_.upload(powderMoves_, std::vector<uint8_t>(tiles * SnowFieldsView::kTileSize * SnowFieldsView::kTileSize, 0));
+    // Five shares a cell, unless the executor keeps them in row buffers (the TBB one).
+    if constexpr (Exec::kPowderSharesInRows)
+      exec_.upload(powderFlow_, std::vector<float>());
+    else
+      exec_.upload(powderFlow_, std::vector<float>(5 * s.spec.cellCount(), 0.f));
     uploadStaticFields(s);
   }
 
@@ -405,21 +405,19 @@ class ExecBackend final : public SnowBackend {
     v.scratchSurface = scratchSurface_.data();
     v.scratchPowder = scratchPowder_.data();
     v.powderFlow = powderFlow_.data();
-    v.powderMoves = powderMoves_.data();
     v.flows = flows_.data();
     v.avalancheBefore = avalancheBefore_.data();
     v.avalancheU = avalancheU_.data();
     v.avalancheScour = avalancheScour_.data();
     v.avalancheDeposit = avalancheDeposit_.data();
     v.rowStats = rowStats_.data();
-    v.tileActive = tileActive_.data();
     return v;
   }
 
   Exec exec_;
   GridSpec spec_;
   typename Exec::template Buffer<float> bedrock_, compacted_, stable_, unstable_, powder_;
-  typename Exec::template Buffer<uint8_t> moving_, valid_, tileActive_, powderMoves_;
+  typename Exec::template Buffer<uint8_t> moving_, valid_;
   typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
   typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_, powderFlow_;
   typename Exec::template Buffer<float> flows_, avalancheBefore_, avalancheScour_, avalancheDeposit_, rowStats_;

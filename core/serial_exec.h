@@ -43,6 +43,7 @@ inline float rowMax(const float* values, const uint8_t* valid, int width, int y)
 // Storage for the executors that run on the host: buffers are vectors, "upload" is a copy.
 struct HostStorage {
   static constexpr bool kDevice = false;  // buffers live in host memory
+  static constexpr bool kPowderSharesInRows = false;  // powder diffusion's shares in powderFlow
   template <class T>
   using Buffer = HostBuffer<T>;
   template <class T>
@@ -68,6 +69,14 @@ class SerialExec : public HostStorage {
   void forEachCell(int width, int height, const K& kernel) {
     for (int y = 0; y < height; ++y)
       for (int x = 0; x < width; ++x) kernel(x, y);
+  }
+  // `first` on every cell, then `second` on every cell. `second` may read what `first` wrote
+  // within one cell of it; `first` may read, within one cell, the fields `second` writes (as
+  // they were before). The TBB executor interleaves the passes by rows where it can.
+  template <class F, class G>
+  void forEachCellThen(int width, int height, const F& first, const G& second) {
+    forEachCell(width, height, first);
+    forEachCell(width, height, second);
   }
   // kernel(i) for i in [0, n) (agents, not cells).
   template <class K>

@@ -140,11 +140,9 @@ struct SnowFieldsView {
   // the avalanche's scratchPowder holds its outflow scales).
   float* scratchSurface = nullptr;
   float* scratchPowder = nullptr;
-  // Powder diffusion's outflows of a substep: four per cell (+x, -x, +y, -y), and which are set.
+  // Powder diffusion's shares of a substep: five per cell (toward +x, -x, +y, -y, and what the
+  // cell keeps; powder_diffusion.h).
   float* powderFlow = nullptr;
-  uint8_t* powderMoves = nullptr;
-  // Per-tile scratch (kTileSize² cells a tile, tilesX() by tilesY()): which tiles a transport
-  // substep has work in.
   // Avalanches: four signed pipe flows per cell (m^3/s), U + P at release, the records, and four
   // floats per row of statistics for the host.
   float* flows = nullptr;
@@ -153,13 +151,6 @@ struct SnowFieldsView {
   float* avalancheScour = nullptr;
   float* avalancheDeposit = nullptr;
   float* rowStats = nullptr;
-  uint8_t* tileActive = nullptr;
-
-  static constexpr int kTileShift = 5;
-  static constexpr int kTileSize = 1 << kTileShift;
-  SNOW_HD SNOW_INLINE int tilesX() const { return (width + kTileSize - 1) >> kTileShift; }
-  SNOW_HD SNOW_INLINE int tilesY() const { return (height + kTileSize - 1) >> kTileShift; }
-  SNOW_HD SNOW_INLINE int tileOf(int x, int y) const { return (y >> kTileShift) * tilesX() + (x >> kTileShift); }
 
   SNOW_HD SNOW_INLINE bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
   SNOW_HD SNOW_INLINE int index(int x, int y) const { return y * width + x; }

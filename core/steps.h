@@ -63,16 +63,10 @@ void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusi
   const int substeps = powderDiffusionSubsteps(a.dtDays, a.diffusionRatePerDay, a.diffusionLengthM, minCell);
   PowderDiffusionArgs sub = a;
   sub.dtDays = a.dtDays / static_cast<float>(substeps);
-  // With tile masks, each substep first finds the tiles where some cell holds powder above its
-  // rest slope; the flows and the colour passes then skip the rest of the grid. Skipped cells
-  // are exactly those that would not move snow, so the result is the same bytes either way.
-  const uint8_t* active = v.tileActive;
-  for (int s = 0; s < substeps; ++s) {
-    if (active) exec.forEachCell(v.tilesX(), v.tilesY(), PowderActivityKernel{v, a.restSlope, a.minDepthM});
-    exec.forEachCell(v.width, v.height, TileGated<PowderFlowKernel>{PowderFlowKernel{v, sub}, active, v.tilesX()});
-    for (int colour = 0; colour < 5; ++colour)
-      exec.forEachCellOfColour(v.width, v.height, colour, TileGated<PowderGiveKernel>{PowderGiveKernel{v}, active, v.tilesX()});
-  }
+  // Each substep: every cell's shares from the state at the substep's start, then every cell
+  // gathers what it keeps and what its neighbours give it. The TBB executor interleaves the two
+  // passes row by row (powder_diffusion_rows.h); the others run them one after the other.
+  for (int s = 0; s < substeps; ++s) exec.forEachCellThen(v.width, v.height, PowderFlowKernel{v, sub}, PowderGatherKernel{v});
 }
 
 // Avalanche substeps over a box that grows by one cell per substep (snow moves at most one cell

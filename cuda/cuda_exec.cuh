@@ -88,6 +88,7 @@ __global__ inline void rowMaxKernel(const float* values, const uint8_t* valid, i
 class CudaExec {
  public:
   static constexpr bool kDevice = true;  // buffers live on the GPU
+  static constexpr bool kPowderSharesInRows = false;  // powder diffusion's shares in powderFlow
   template <class T>
   using Buffer = DeviceBuffer<T>;
 
@@ -126,6 +127,12 @@ class CudaExec {
     const dim3 grid((width + block.x - 1) / block.x, (height + block.y - 1) / block.y);
     forEachCellKernel<<<grid, block>>>(kernel, width, height);
     check(cudaGetLastError(), "forEachCell launch");
+  }
+  // `first` on every cell, then `second` (SerialExec::forEachCellThen): two launches.
+  template <class F, class G>
+  void forEachCellThen(int width, int height, const F& first, const G& second) {
+    forEachCell(width, height, first);
+    forEachCell(width, height, second);
   }
   template <class K>
   void forEachIndex(int n, const K& kernel) {

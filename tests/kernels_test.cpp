@@ -17,13 +17,10 @@ SnowState plane(int w, int h, double cell, float slopeX, float base, float tempe
 }
 
 SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
-  // One buffer holds the four scratch fields (delta, slope, surface and powder snapshots), the
-  // four powder outflows per cell and, behind them as bytes, the per-tile mask and the outflow bits.
+  // One buffer holds the four scratch fields (delta, slope, surface and powder snapshots) and
+  // powder diffusion's five shares per cell.
   SnowFieldsView v;
-  v.width = s.spec.width;
-  v.height = s.spec.height;
-  const size_t tiles = static_cast<size_t>(v.tilesX()) * v.tilesY();
-  delta.assign(8 * s.spec.cellCount() + (tiles + s.spec.cellCount()) / sizeof(float) + 1, 0.f);
+  delta.assign(9 * s.spec.cellCount(), 0.f);
   v.width = s.spec.width;
   v.height = s.spec.height;
   v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM);
@@ -49,8 +46,6 @@ SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   v.scratchSurface = delta.data() + 2 * s.spec.cellCount();
   v.scratchPowder = delta.data() + 3 * s.spec.cellCount();
   v.powderFlow = delta.data() + 4 * s.spec.cellCount();
-  v.tileActive = reinterpret_cast<uint8_t*>(delta.data() + 8 * s.spec.cellCount());
-  v.powderMoves = v.tileActive + tiles;
   return v;
 }
 
@@ -259,30 +254,6 @@ TEST(PowderDiffusion, ThinFilmSticksThickerPowderSlides) {
       EXPECT_LT(s.powderM(4, 4), 0.5f * depth);
     }
   }
-}
-
-// The tile masks only skip cells that would not move snow: with and without them the powder
-// ends with the same bytes, on rough terrain where some tiles are active and some are not.
-TEST(PowderDiffusion, TileGatingGivesTheSameBytes) {
-  SnowState gated = test::makeRoughState(150, 90, 5);
-  for (int y = 0; y < 90; ++y)
-    for (int x = 0; x < 150; ++x)
-      if (x > 64) gated.powderM(x, y) = 0.f;  // the right tiles hold no powder
-  SnowState plain = gated;
-  std::vector<float> d1, d2;
-  SnowFieldsView vg = viewOf(gated, d1), vp = viewOf(plain, d2);
-  vp.tileActive = nullptr;
-  SerialExec exec;
-  PowderDiffusionArgs a;
-  a.dtDays = 2.f;
-  for (int i = 0; i < 10; ++i) {
-    runPowderDiffusion(exec, vg, a);
-    runPowderDiffusion(exec, vp, a);
-  }
-  int inactive = 0;
-  for (int t = 0; t < vg.tilesX() * vg.tilesY(); ++t) inactive += vg.tileActive[t] == 0;
-  EXPECT_GT(inactive, 0);
-  EXPECT_EQ(0, std::memcmp(gated.powderM.data(), plain.powderM.data(), gated.powderM.size() * sizeof(float)));
 }
 
 // A lone heap spreads even though central differences at its top read zero.

@@ -1,13 +1,12 @@
-// Powder diffusion step (paper §5.3), run as five colour passes of the §7.1 cross tiling
-// (colour = (x + 2y) mod 5): a cell of the active colour moves powder only into its own cross
-// (itself and its four neighbours), and crosses of one colour never overlap, so no two threads
-// write the same cell and no atomics are needed.
-//
-// Each substep first computes every cell's outflows from the state at the substep's start
-// (PowderFlowKernel, per cell, writing only its own cell), then gives them in the five colour
-// passes (PowderGiveKernel). The outflows never see snow moved in the same substep, so the
-// result does not depend on the order of the colour passes: otherwise snow moved right in pass c
-// could move right again in pass c + 1, a directional bias that draws streaks.
+// Powder diffusion step (paper §5.3), two per-cell passes a substep, so every cell moves snow at
+// once (no colour passes, no atomics, nothing depends on the order cells are visited):
+//  1. PowderFlowKernel: each cell's shares toward its four neighbours and what it keeps, from the
+//     state at the substep's start, written to its own cell only;
+//  2. PowderGatherKernel: each cell's powder becomes what it keeps plus what its neighbours give.
+// Shares never see snow moved in the same substep, so snow cannot run on within a substep (a
+// directional bias that draws streaks). The CPU runs both passes row by row over strips of the
+// grid with the shares in cache (powder_diffusion_rows.h); the serial executor and CUDA run them
+// one after the other over the whole grid.
 //
 // The paper shifts toward each 4-neighbour n the share m_d = dt * k_m * max(0, s_d - s_d0),
 // s_d = (A(p) - A(n)) / |p - n|. Read literally, that threshold is anisotropic: a slope of 0.7
@@ -25,11 +24,10 @@
 // it, which is the paper's incoming term. Two limits keep it stable:
 //  - no single shift exceeds a fifth of the height difference, so even a cell shedding to all
 //    four neighbours cannot end below them: no overshoot, no oscillation;
-//  - the outflows are scaled so their sum never exceeds the snapshot P (the paper's rescaling:
-//    no cell goes negative; a cell only gains snow before its own pass).
+//  - the outflows are scaled so their sum never exceeds P at the substep's start (the paper's
+//    rescaling: no cell goes negative, whatever its neighbours give it).
 // A powder film thinner than diffusion_min_depth_m (1 mm) does not slide: a dusting sticks to
-// rock, and the substeps skip whole 32 x 32 tiles where no cell holds powder above its rest
-// slope (PowderActivityKernel), so the work follows the snow.
+// rock (and the CPU skips four cells at a time where none holds more).
 // Snow never enters NODATA cells or leaves the grid, so the step conserves mass exactly up to
 // float rounding.
 #pragma once
@@ -51,7 +49,9 @@ struct PowderDiffusionArgs {
 // actually gained, (P_n + a) - P_n, which is exact in float: a share far below a deep receiver's
 // last bit then stays at the source instead of vanishing (a bias that added up over long
 // seasons). A gain that rounding makes larger than what the source still has is not made, so
-// the source never goes negative and needs no clamp. `record`, if given, adds the gain.
+// the source never goes negative and needs no clamp. `record`, if given, adds the gain. (Wind
+// transport and ski tracks give this way; powder diffusion's shares do the same against the
+// receiver's powder at the substep's start, powderSharesAt.)
 SNOW_HD SNOW_INLINE float giveTo(float& receiver, float amount, float remaining, float* record) {
   const float before = receiver;
   const float after = before + amount;
@@ -64,8 +64,7 @@ SNOW_HD SNOW_INLINE float giveTo(float& receiver, float amount, float remaining,
 
 // The downhill slopes toward the four neighbours (drop / distance, 0 uphill) from a surface
 // read through `surfaceAt(index)`, and the excess of the steepest-descent magnitude over the
-// rest slope. Shared by the kernel and by the tile-activity scan, so a tile is skipped exactly
-// when none of its cells would move powder.
+// rest slope.
 struct PowderSlopes {
   float drop[4] = {0.f, 0.f, 0.f, 0.f};   // height above each downhill neighbour
   float slope[4] = {0.f, 0.f, 0.f, 0.f};  // s_d where positive (downhill)
@@ -93,42 +92,6 @@ SNOW_HD SNOW_INLINE PowderSlopes powderSlopes(const SnowFieldsView& v, int x, in
   return r;
 }
 
-// One thread per tile: is there a cell with powder above its rest slope? Reads the state the
-// substep starts from, as the flow kernel does.
-struct PowderActivityKernel {
-  SnowFieldsView v;
-  float restSlope;
-  float minDepthM;
-  SNOW_HD void operator()(int tx, int ty) const {
-    const int x0 = tx * SnowFieldsView::kTileSize, y0 = ty * SnowFieldsView::kTileSize;
-    const int x1 = minInt(x0 + SnowFieldsView::kTileSize, v.width), y1 = minInt(y0 + SnowFieldsView::kTileSize, v.height);
-    uint8_t active = 0;
-    const SnowFieldsView& view = v;
-    for (int y = y0; y < y1 && !active; ++y)
-      for (int x = x0; x < x1; ++x) {
-        const int i = v.index(x, y);
-        if (!v.valid[i] || !(v.powder[i] > minDepthM)) continue;
-        if (powderSlopes(v, x, y, restSlope, [&view](int j) { return view.surface(j); }).excess > 0.f) {
-          active = 1;
-          break;
-        }
-      }
-    v.tileActive[ty * v.tilesX() + tx] = active;
-  }
-};
-
-// Runs `kernel` only on cells whose tile is flagged in `mask` (all cells when mask is null).
-template <class K>
-struct TileGated {
-  K kernel;
-  const uint8_t* mask;
-  int tilesX;
-  SNOW_HD void operator()(int x, int y) const {
-    if (mask && !mask[(y >> SnowFieldsView::kTileShift) * tilesX + (x >> SnowFieldsView::kTileShift)]) return;
-    kernel(x, y);
-  }
-};
-
 // Copies A and P before the colour passes of a wind-transport step (per cell, no neighbour reads).
 struct PowderSnapshotKernel {
   SnowFieldsView v;
@@ -139,70 +102,89 @@ struct PowderSnapshotKernel {
   }
 };
 
-// Pass 1 of a substep, per cell (writes only its own cell): the outflows toward the four
-// neighbours, from the state before any colour pass. Bit d of powderMoves[i] says whether
-// powderFlow[4i + d] holds a share to give. Splitting the step this way lets the arithmetic run
-// over contiguous rows (four cells at a time on the CPU, powder_diffusion_rows.h), and leaves
-// the colour passes only the giving, which is what must follow the cross order.
+// Where the shares of a substep live: five floats a cell, the shares toward +x, -x, +y, -y and
+// what the cell keeps.
+SNOW_HD SNOW_INLINE int powderShareSlot(int i, int d) { return 5 * i + d; }
+constexpr int kPowderKeepSlot = 4;
+
+// Pass 1 of a substep at one cell, from the state at the substep's start only: the shares the
+// cell gives its four neighbours and what it keeps. Each share is what the receiver gains when
+// the share is added to what it held at the start, (P_n + a) - P_n, exact in float: a share far
+// below a deep receiver's last bit stays at the source instead of vanishing (a bias that added
+// up over long seasons). A share that rounding makes larger than what the source still has is
+// not given, so the source never goes negative and needs no clamp.
+SNOW_HD SNOW_INLINE void powderSharesAt(const SnowFieldsView& v, const PowderDiffusionArgs& a, int x, int y, float share[4],
+                                        float& keep) {
+  const int i = v.index(x, y);
+  share[0] = share[1] = share[2] = share[3] = 0.f;
+  const float powder = v.powder[i];
+  keep = powder;
+  if (!v.valid[i]) return;
+  if (v.bedformActive && v.bedformActive[i]) return;  // the bedform model's repose relaxation holds it
+  if (!(powder > a.minDepthM)) return;
+  const SnowFieldsView& view = v;
+  const PowderSlopes s = powderSlopes(v, x, y, a.restSlope, [&view](int j) { return view.surface(j); });
+  const float weightSum = s.slope[0] + s.slope[1] + s.slope[2] + s.slope[3];
+  if (!(s.excess > 0.f) || !(weightSum > 0.f)) return;
+  const float minCell = minf(v.cellSizeXM, v.cellSizeYM);
+  const float shareTotal = a.dtDays * a.diffusionRatePerDay * (a.diffusionLengthM / minCell) * s.excess;
+  // The share leaving toward d is (shareTotal * powder) * s_d / sum(s): one division a cell.
+  const float perWeight = shareTotal * powder / weightSum;
+  float out[4] = {0.f, 0.f, 0.f, 0.f};
+  float total = 0.f;
+  for (int d = 0; d < 4; ++d) {
+    if (!(s.slope[d] > 0.f)) continue;
+    out[d] = minf(perWeight * s.slope[d], 0.2f * s.drop[d]);
+    total += out[d];
+  }
+  if (!(total > 0.f)) return;
+  // When the outflows want more than the cell holds, they are scaled to all but a millionth
+  // of it: the float sums of the shares then stay below the powder (a clamp at zero would add
+  // a little snow each time, a bias that adds up over a season).
+  const float scale = total >= powder ? powder / total * (1.f - 1e-6f) : 1.f;
+  float remaining = powder;
+  for (int d = 0; d < 4; ++d) {
+    const float amount = out[d] * scale;
+    if (!(amount > 0.f)) continue;
+    const int nx = x + (d == 0 ? 1 : (d == 1 ? -1 : 0)), ny = y + (d == 2 ? 1 : (d == 3 ? -1 : 0));
+    const float before = v.powder[v.index(nx, ny)];
+    const float gained = (before + amount) - before;
+    if (!(gained > 0.f) || gained > remaining) continue;
+    share[d] = gained;
+    remaining = remaining - gained;
+  }
+  keep = remaining;
+}
+
+// Pass 1, per cell (writes only its own cell's five slots).
 struct PowderFlowKernel {
   SnowFieldsView v;
   PowderDiffusionArgs a;
 
   SNOW_HD void operator()(int x, int y) const {
+    float share[4], keep;
+    powderSharesAt(v, a, x, y, share, keep);
     const int i = v.index(x, y);
-    v.powderMoves[i] = 0;
-    if (!v.valid[i]) return;
-    if (v.bedformActive && v.bedformActive[i]) return;  // the bedform model's repose relaxation holds it
-    const float powder = v.powder[i];
-    if (!(powder > a.minDepthM)) return;
-    const SnowFieldsView& view = v;
-    const PowderSlopes s = powderSlopes(v, x, y, a.restSlope, [&view](int j) { return view.surface(j); });
-    const float weightSum = s.slope[0] + s.slope[1] + s.slope[2] + s.slope[3];
-    if (!(s.excess > 0.f) || !(weightSum > 0.f)) return;
-    const float minCell = minf(v.cellSizeXM, v.cellSizeYM);
-    const float shareTotal = a.dtDays * a.diffusionRatePerDay * (a.diffusionLengthM / minCell) * s.excess;
-    // The share leaving toward d is (shareTotal * powder) * s_d / sum(s): one division a cell.
-    const float perWeight = shareTotal * powder / weightSum;
-    float out[4] = {0.f, 0.f, 0.f, 0.f};
-    float total = 0.f;
-    for (int d = 0; d < 4; ++d) {
-      if (!(s.slope[d] > 0.f)) continue;
-      out[d] = minf(perWeight * s.slope[d], 0.2f * s.drop[d]);
-      total += out[d];
-    }
-    if (!(total > 0.f)) return;
-    // When the outflows want more than the cell holds, they are scaled to all but a millionth
-    // of it: the float sums of the shares then stay below the powder, so the source never
-    // rounds below zero and needs no clamp (a clamp at zero adds a little snow each time, a
-    // bias that adds up over a season).
-    const bool empties = total >= powder;
-    const float scale = empties ? powder / total * (1.f - 1e-6f) : 1.f;
-    uint8_t moves = 0;
-    for (int d = 0; d < 4; ++d) {
-      if (!(out[d] > 0.f)) continue;
-      v.powderFlow[4 * i + d] = out[d] * scale;
-      moves = static_cast<uint8_t>(moves | (1u << d));
-    }
-    v.powderMoves[i] = moves;
+    for (int d = 0; d < 4; ++d) v.powderFlow[powderShareSlot(i, d)] = share[d];
+    v.powderFlow[powderShareSlot(i, kPowderKeepSlot)] = keep;
   }
 };
 
-// Pass 2, one colour at a time: a cell of the colour gives its shares to its cross. The source
-// gives from what it holds now (its own gains from earlier colours included), through giveTo.
-struct PowderGiveKernel {
+// Pass 2, per cell, after pass 1 has run on every cell: a valid cell's powder becomes what it
+// keeps plus the shares its four neighbours give it, added in a fixed order (+x, -x, +y, -y
+// neighbour; nothing from beyond the grid). Reads pass 1's slots only, writes only its own cell.
+struct PowderGatherKernel {
   SnowFieldsView v;
 
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
-    const unsigned moves = v.powderMoves[i];
-    if (!moves) return;
-    float remaining = v.powder[i];
-    for (int d = 0; d < 4; ++d) {
-      if (!(moves & (1u << d))) continue;
-      const int nx = x + (d == 0 ? 1 : (d == 1 ? -1 : 0)), ny = y + (d == 2 ? 1 : (d == 3 ? -1 : 0));
-      remaining = giveTo(v.powder[v.index(nx, ny)], v.powderFlow[4 * i + d], remaining, nullptr);
-    }
-    v.powder[i] = remaining;
+    if (!v.valid[i]) return;
+    const float* f = v.powderFlow;
+    const float fromPlusX = x + 1 < v.width ? f[powderShareSlot(i + 1, 1)] : 0.f;
+    const float fromMinusX = x > 0 ? f[powderShareSlot(i - 1, 0)] : 0.f;
+    const float fromPlusY = y + 1 < v.height ? f[powderShareSlot(i + v.width, 3)] : 0.f;
+    const float fromMinusY = y > 0 ? f[powderShareSlot(i - v.width, 2)] : 0.f;
+    v.powder[i] = (((f[powderShareSlot(i, kPowderKeepSlot)] + fromPlusX) + fromMinusX) + fromPlusY) + fromMinusY;
   }
 };
 
