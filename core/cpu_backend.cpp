@@ -36,59 +36,33 @@ class TbbExec : public HostStorage {
     forEachCell(width, height, second);
   }
   // A powder-diffusion substep, its two passes interleaved by rows (powder_diffusion_rows.h) so
-  // the shares and the snow surface stay in cache-sized row buffers. The grid is cut into strips
-  // of kStripRows rows. First, pass 1 on each strip's first and last rows (into edgeRows_). Then
-  // each strip, as a task of its own, runs pass 1 on its next inner row and pass 2 on the row
-  // above it, in order: pass 1 on row r reads the powder of rows r - 1 .. r + 1 before pass 2
-  // writes them (pass 2 on row r comes after pass 1 on row r + 1, and the tasks of other strips
-  // only read their own rows), and pass 2 on row r finds the shares of rows r - 1 .. r + 1
-  // computed. So the result is the two whole-grid passes' bytes.
+  // the shares stay in cache-sized row buffers. The grid is cut into strips of kStripRows rows.
+  // First, pass 1 on each strip's first and last rows (into edgeRows_). Then each strip, as a
+  // task of its own, runs pass 1 on its next inner row and pass 2 on the row above it, in order:
+  // pass 1 on row r reads the powder of rows r - 1 .. r + 1 before pass 2 writes them (pass 2 on
+  // row r comes after pass 1 on row r + 1, and the tasks of other strips only read their own
+  // rows), and pass 2 on row r finds the shares of rows r - 1 .. r + 1 computed. So the result is
+  // the two whole-grid passes' bytes.
   void forEachCellThen(int width, int height, const PowderFlowKernel& first, const PowderGatherKernel& second) {
-    const SnowFieldsView& v = first.v;
     const int strips = (height + kStripRows - 1) / kStripRows;
     edgeRows_.resize(2 * strips, width);
     zeroRow_.resize(1, width);
     auto edgeSlot = [&](int r) { return 2 * (r / kStripRows) + (r % kStripRows == 0 ? 0 : 1); };
     auto isEdge = [&](int r) { return r % kStripRows == 0 || r % kStripRows == kStripRows - 1 || r == height - 1; };
-    // Pass 1 on row r with its surface rows from `surface` (three rows of `width`), where r has
-    // rows on both sides; the grid's first and last rows take the per-cell body.
-    auto sharesWithSurface = [&](int r, const PowderRowShares& out, std::vector<float>& surface) {
-      if (r == 0 || r == height - 1) {
-        powderSharesRow(first, r, out, nullptr);
-        return;
-      }
-      surface.resize(3 * static_cast<size_t>(width));
-      for (int k = 0; k < 3; ++k) powderSurfaceRow(v, r - 1 + k, surface.data() + k * static_cast<size_t>(width));
-      const float* rows[3] = {surface.data(), surface.data() + width, surface.data() + 2 * static_cast<size_t>(width)};
-      powderSharesRow(first, r, out, rows);
-    };
     tbb::parallel_for(0, strips, [&](int k) {
       const int a = k * kStripRows, b = std::min(height, a + kStripRows);
-      std::vector<float> surface;
-      sharesWithSurface(a, edgeRows_.row(edgeSlot(a)), surface);
-      if (b - 1 > a) sharesWithSurface(b - 1, edgeRows_.row(edgeSlot(b - 1)), surface);
+      powderSharesRow(first, a, edgeRows_.row(edgeSlot(a)));
+      if (b - 1 > a) powderSharesRow(first, b - 1, edgeRows_.row(edgeSlot(b - 1)));
     });
     tbb::parallel_for(0, strips, [&](int k) {
       const int a = k * kStripRows, b = std::min(height, a + kStripRows);
       PowderRowBuffer ring(3, width);
-      // The surface of rows r - 1 .. r + 1 for the inner row r, in slots by row mod 3: row r + 1
-      // is computed just before pass 1 on row r, when pass 2 has written only rows above r - 1.
-      std::vector<float> surface(3 * static_cast<size_t>(width));
-      auto surfaceSlot = [&](int r) { return surface.data() + (r % 3) * static_cast<size_t>(width); };
       auto rowOf = [&](int r) {
         if (r < 0 || r >= height) return zeroRow_.row(0);
         return isEdge(r) ? edgeRows_.row(edgeSlot(r)) : ring.row(r % 3);
       };
-      if (a + 1 < b - 1) {
-        powderSurfaceRow(v, a, surfaceSlot(a));
-        powderSurfaceRow(v, a + 1, surfaceSlot(a + 1));
-      }
       for (int y = a; y < b; ++y) {
-        if (y + 1 < b && !isEdge(y + 1)) {
-          powderSurfaceRow(v, y + 2, surfaceSlot(y + 2));
-          const float* rows[3] = {surfaceSlot(y), surfaceSlot(y + 1), surfaceSlot(y + 2)};
-          powderSharesRow(first, y + 1, ring.row((y + 1) % 3), rows);
-        }
+        if (y + 1 < b && !isEdge(y + 1)) powderSharesRow(first, y + 1, ring.row((y + 1) % 3));
         powderGatherRow(second.v, y, rowOf(y - 1), rowOf(y), rowOf(y + 1));
       }
     });

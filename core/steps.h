@@ -63,6 +63,7 @@ void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusi
   const int substeps = powderDiffusionSubsteps(a.dtDays, a.diffusionRatePerDay, a.diffusionLengthM, minCell);
   PowderDiffusionArgs sub = a;
   sub.dtDays = a.dtDays / static_cast<float>(substeps);
+  exec.forEachCell(v.width, v.height, PowderBaseKernel{v});
   // Each substep: every cell's shares from the state at the substep's start, then every cell
   // gathers what it keeps and what its neighbours give it. The TBB executor interleaves the two
   // passes row by row (powder_diffusion_rows.h); the others run them one after the other.

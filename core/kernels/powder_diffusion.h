@@ -31,6 +31,7 @@
 // Snow never enters NODATA cells or leaves the grid, so the step conserves mass exactly up to
 // float rounding.
 #pragma once
+#include <cmath>
 #include "../hd.h"
 #include "../snow_state.h"
 
@@ -102,6 +103,19 @@ struct PowderSnapshotKernel {
   }
 };
 
+// Once a step, before its substeps: the snow surface without the powder, B + ((C + S) + U), which
+// the substeps do not change, into scratchSurface (+inf at NODATA cells: a valid cell then sees
+// no drop toward one, as the per-cell body's validity test leaves it). A substep reads the
+// surface as that plus P.
+struct PowderBaseKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    v.scratchSurface[i] = v.valid[i] ? v.bedrock[i] + ((v.compacted[i] + v.stable[i]) + v.unstable[i]) : INFINITY;
+  }
+};
+SNOW_HD SNOW_INLINE float powderSurface(const SnowFieldsView& v, int i) { return v.scratchSurface[i] + v.powder[i]; }
+
 // Where the shares of a substep live: five floats a cell, the shares toward +x, -x, +y, -y and
 // what the cell keeps.
 SNOW_HD SNOW_INLINE int powderShareSlot(int i, int d) { return 5 * i + d; }
@@ -123,7 +137,7 @@ SNOW_HD SNOW_INLINE void powderSharesAt(const SnowFieldsView& v, const PowderDif
   if (v.bedformActive && v.bedformActive[i]) return;  // the bedform model's repose relaxation holds it
   if (!(powder > a.minDepthM)) return;
   const SnowFieldsView& view = v;
-  const PowderSlopes s = powderSlopes(v, x, y, a.restSlope, [&view](int j) { return view.surface(j); });
+  const PowderSlopes s = powderSlopes(v, x, y, a.restSlope, [&view](int j) { return powderSurface(view, j); });
   const float weightSum = s.slope[0] + s.slope[1] + s.slope[2] + s.slope[3];
   if (!(s.excess > 0.f) || !(weightSum > 0.f)) return;
   const float minCell = minf(v.cellSizeXM, v.cellSizeYM);

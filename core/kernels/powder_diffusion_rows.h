@@ -8,13 +8,15 @@
 // and TBB executors byte for byte). Host only: never included by CUDA translation units.
 #pragma once
 #include <cstring>
-#include <limits>
 #include <vector>
 
 #include "powder_diffusion.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
 #endif
 
 namespace snow {
@@ -62,27 +64,85 @@ inline __m128 byteMask(const uint8_t* p) {
   return _mm_castsi128_ps(_mm_xor_si128(_mm_cmpeq_epi32(wide, zero), _mm_set1_epi32(-1)));
 }
 inline __m128 select(__m128 mask, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b)); }
+
+// Vector operations for powder_diffusion_lanes.inc: MINPS / MAXPS return the second operand
+// unless the first is strictly less / greater, exactly minf / maxf.
+struct Sse2 {
+  using F = __m128;
+  static constexpr int kLanes = 4;
+  static F zero() { return _mm_setzero_ps(); }
+  static F set1(float a) { return _mm_set1_ps(a); }
+  static F load(const float* p) { return _mm_loadu_ps(p); }
+  static void store(float* p, F a) { _mm_storeu_ps(p, a); }
+  static F add(F a, F b) { return _mm_add_ps(a, b); }
+  static F sub(F a, F b) { return _mm_sub_ps(a, b); }
+  static F mul(F a, F b) { return _mm_mul_ps(a, b); }
+  static F div(F a, F b) { return _mm_div_ps(a, b); }
+  static F min(F a, F b) { return _mm_min_ps(a, b); }
+  static F max(F a, F b) { return _mm_max_ps(a, b); }
+  static F sqrt(F a) { return _mm_sqrt_ps(a); }
+  static F gt(F a, F b) { return _mm_cmpgt_ps(a, b); }
+  static F ge(F a, F b) { return _mm_cmpge_ps(a, b); }
+  static F notGt(F a, F b) { return _mm_cmpngt_ps(a, b); }
+  static F bitAnd(F a, F b) { return _mm_and_ps(a, b); }
+  static F bitAndNot(F a, F b) { return _mm_andnot_ps(a, b); }
+  static F select(F mask, F a, F b) { return simd_detail::select(mask, a, b); }
+  static bool none(F mask) { return _mm_movemask_ps(mask) == 0; }
+  static F byteMask(const uint8_t* p) { return simd_detail::byteMask(p); }
+};
 }  // namespace simd_detail
+
+namespace sse2_lanes {
+using V = simd_detail::Sse2;
+#include "powder_diffusion_lanes.inc"
+}  // namespace sse2_lanes
 #endif
 
-// The snow surface A = B + (((C + S) + U) + P) of row y (SnowFieldsView::surface's order), +inf
-// at NODATA cells: the shares' pass reads it five times a cell, so each row computes it once. A
-// NODATA neighbour then has no drop (max(0, A - inf) = 0), as the per-cell body's validity test
-// leaves it.
-inline void powderSurfaceRow(const SnowFieldsView& v, int y, float* out) {
-  const size_t base = static_cast<size_t>(y) * v.width;
-  const float inf = std::numeric_limits<float>::infinity();
-  for (int x = 0; x < v.width; ++x) {
-    const size_t i = base + x;
-    const float a = v.bedrock[i] + (((v.compacted[i] + v.stable[i]) + v.unstable[i]) + v.powder[i]);
-    out[x] = v.valid[i] ? a : inf;
+#if defined(__x86_64__) && defined(__GNUC__)
+// The same body eight cells at a time, compiled for AVX2 (no FMA) and used when the CPU has it:
+// the same bytes as SSE2 and the per-cell body.
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace avx2_lanes {
+struct Avx2 {
+  using F = __m256;
+  static constexpr int kLanes = 8;
+  static F zero() { return _mm256_setzero_ps(); }
+  static F set1(float a) { return _mm256_set1_ps(a); }
+  static F load(const float* p) { return _mm256_loadu_ps(p); }
+  static void store(float* p, F a) { _mm256_storeu_ps(p, a); }
+  static F add(F a, F b) { return _mm256_add_ps(a, b); }
+  static F sub(F a, F b) { return _mm256_sub_ps(a, b); }
+  static F mul(F a, F b) { return _mm256_mul_ps(a, b); }
+  static F div(F a, F b) { return _mm256_div_ps(a, b); }
+  static F min(F a, F b) { return _mm256_min_ps(a, b); }
+  static F max(F a, F b) { return _mm256_max_ps(a, b); }
+  static F sqrt(F a) { return _mm256_sqrt_ps(a); }
+  static F gt(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
+  static F ge(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
+  static F notGt(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_NGT_UQ); }
+  static F bitAnd(F a, F b) { return _mm256_and_ps(a, b); }
+  static F bitAndNot(F a, F b) { return _mm256_andnot_ps(a, b); }
+  static F select(F mask, F a, F b) { return _mm256_blendv_ps(b, a, mask); }
+  static bool none(F mask) { return _mm256_movemask_ps(mask) == 0; }
+  static F byteMask(const uint8_t* p) {
+    const __m256i wide = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
+    return _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(wide, _mm256_setzero_si256()), _mm256_set1_epi32(-1)));
   }
-}
+};
+using V = Avx2;
+#include "powder_diffusion_lanes.inc"
+}  // namespace avx2_lanes
+#pragma GCC pop_options
 
-// Pass 1 on row y: every cell's shares and what it keeps, into `out`. For a row with rows on
-// both sides, `surface` holds rows y - 1, y and y + 1 (powderSurfaceRow); the first and last rows
-// of the grid take the per-cell body (pass nullptr).
-inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowShares& out, const float* const* surface) {
+inline bool cpuHasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
+// Pass 1 on row y: every cell's shares and what it keeps, into `out` (PowderBaseKernel has run).
+inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowShares& out) {
   const SnowFieldsView& v = k.v;
   auto scalar = [&](int x) {
     float share[4], keep;
@@ -92,64 +152,12 @@ inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowSha
   };
   int x = 0;
 #if defined(__SSE2__)
-  using namespace simd_detail;
-  if (surface && y > 0 && y < v.height - 1) {
+  if (y > 0 && y < v.height - 1) {
     for (; x < v.width && x < 1; ++x) scalar(x);  // the west edge: its neighbour tests need bounds
-    const int end = v.width - 1;
-    const float minCell = minf(v.cellSizeXM, v.cellSizeYM);
-    const __m128 zero = _mm_setzero_ps();
-    const __m128 perMetreX = _mm_set1_ps(1.f / v.cellSizeXM), perMetreY = _mm_set1_ps(1.f / v.cellSizeYM);
-    const __m128 rest = _mm_set1_ps(k.a.restSlope), minDepth = _mm_set1_ps(k.a.minDepthM);
-    const __m128 rate = _mm_set1_ps(k.a.dtDays * k.a.diffusionRatePerDay * (k.a.diffusionLengthM / minCell));
-    const __m128 fifth = _mm_set1_ps(0.2f), one = _mm_set1_ps(1.f), keepAll = _mm_set1_ps(1.f - 1e-6f);
-    const int w = v.width;
-    const int offset[4] = {1, -1, w, -w};
-    const float* minusY = surface[0];
-    const float* row = surface[1];
-    const float* plusY = surface[2];
-    for (; x + 4 <= end; x += 4) {
-      const int i = v.index(x, y);
-      const __m128 powder = _mm_loadu_ps(v.powder + i);
-      __m128 active = _mm_and_ps(byteMask(v.valid + i), _mm_cmpgt_ps(powder, minDepth));
-      if (_mm_movemask_ps(active) == 0) {
-        // Four cells without a powder film to move (most of a season's grid): they keep it all.
-        for (int d = 0; d < 4; ++d) _mm_storeu_ps(out.share[d] + x, zero);
-        _mm_storeu_ps(out.keep + x, powder);
-        continue;
-      }
-      const __m128 ap = _mm_loadu_ps(row + x);
-      const __m128 an[4] = {_mm_loadu_ps(row + x + 1), _mm_loadu_ps(row + x - 1), _mm_loadu_ps(plusY + x), _mm_loadu_ps(minusY + x)};
-      __m128 drop[4], slope[4];
-      for (int d = 0; d < 4; ++d) {
-        drop[d] = _mm_max_ps(zero, _mm_sub_ps(ap, an[d]));
-        slope[d] = _mm_mul_ps(drop[d], d < 2 ? perMetreX : perMetreY);
-      }
-      const __m128 sx = _mm_max_ps(slope[0], slope[1]), sy = _mm_max_ps(slope[2], slope[3]);
-      const __m128 excess = _mm_sub_ps(_mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(sx, sx), _mm_mul_ps(sy, sy))), rest);
-      const __m128 weightSum = _mm_add_ps(_mm_add_ps(_mm_add_ps(slope[0], slope[1]), slope[2]), slope[3]);
-      if (v.bedformActive) active = _mm_andnot_ps(byteMask(v.bedformActive + i), active);
-      active = _mm_and_ps(active, _mm_and_ps(_mm_cmpgt_ps(excess, zero), _mm_cmpgt_ps(weightSum, zero)));
-      const __m128 perWeight = _mm_div_ps(_mm_mul_ps(_mm_mul_ps(rate, excess), powder), weightSum);
-      __m128 outflow[4];
-      __m128 total = zero;
-      for (int d = 0; d < 4; ++d) {
-        const __m128 o = _mm_min_ps(_mm_mul_ps(perWeight, slope[d]), _mm_mul_ps(fifth, drop[d]));
-        outflow[d] = _mm_and_ps(_mm_cmpgt_ps(slope[d], zero), o);
-        total = _mm_add_ps(total, outflow[d]);
-      }
-      active = _mm_and_ps(active, _mm_cmpgt_ps(total, zero));
-      const __m128 scale = select(_mm_cmpge_ps(total, powder), _mm_mul_ps(_mm_div_ps(powder, total), keepAll), one);
-      __m128 remaining = powder;
-      for (int d = 0; d < 4; ++d) {
-        const __m128 amount = _mm_and_ps(active, _mm_mul_ps(outflow[d], scale));
-        const __m128 before = _mm_loadu_ps(v.powder + i + offset[d]);
-        const __m128 gained = _mm_sub_ps(_mm_add_ps(before, amount), before);
-        const __m128 given = _mm_and_ps(_mm_cmpgt_ps(gained, zero), _mm_cmpngt_ps(gained, remaining));
-        _mm_storeu_ps(out.share[d] + x, _mm_and_ps(given, gained));
-        remaining = select(given, _mm_sub_ps(remaining, gained), remaining);
-      }
-      _mm_storeu_ps(out.keep + x, remaining);
-    }
+#if defined(__x86_64__) && defined(__GNUC__)
+    if (cpuHasAvx2()) x = avx2_lanes::sharesLanes(k, y, out, x, v.width - 1);
+#endif
+    x = sse2_lanes::sharesLanes(k, y, out, x, v.width - 1);
   }
 #endif
   for (; x < v.width; ++x) scalar(x);
