@@ -8,6 +8,7 @@
 
 #include "exec_backend.h"
 #include "kernels/powder_diffusion_rows.h"
+#include "kernels/surface_rows.h"
 #include "serial_exec.h"
 
 namespace snow {
@@ -22,11 +23,15 @@ class TbbExec : public HostStorage {
   // Powder diffusion's shares live in row buffers here (forEachCellThen below), not in the view.
   static constexpr bool kPowderSharesInRows = true;
 
+  // A kernel with a row path (rowSpan, found by argument-dependent lookup) runs it per row.
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {
     tbb::parallel_for(tbb::blocked_range<int>(0, height, kRowGrain), [&](const tbb::blocked_range<int>& rows) {
-      for (int y = rows.begin(); y < rows.end(); ++y)
-        for (int x = 0; x < width; ++x) kernel(x, y);
+      for (int y = rows.begin(); y < rows.end(); ++y) {
+        if constexpr (HasRowSpan<K>) rowSpan(kernel, y, 0, width);
+        else
+          for (int x = 0; x < width; ++x) kernel(x, y);
+      }
     });
   }
   // `first` on every cell, then `second` (SerialExec::forEachCellThen).
