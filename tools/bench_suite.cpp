@@ -431,8 +431,9 @@ const KernelBytes kKernelBytes[] = {
     {"melt", 54, "valid, T_base, 4 layers, melted read; 4 layers, delta, melted written (49); sum: delta, valid (5)"},
     {"stability", 58, "slope pass (25); valid, T_base, slope, wind loading, S, U read, S, U written (33)"},
     {"wind transport", 73, "snapshot: B+4 layers read, A and P written (28); colour passes: valid, A, P, W_z, W_x, W_y read, P, scour, deposit read and written (45)"},
-    {"powder diffusion (one substep)", 63,
-     "flow pass: B+4 layers, valid read, four flows and their bits written (38); colour passes: bits, flows read, P read and written (25)"},
+    {"powder diffusion (one substep)", 34,
+     "base pass, once a step: B, C, S, U, valid read, B + C + S + U written (21); the substep's two passes row by row (shares in cache): base, P, "
+     "valid read, P written (13)"},
 };
 
 double hostCopyBandwidthGBs(size_t floats) {
