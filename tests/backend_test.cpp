@@ -6,6 +6,7 @@
 
 #include "core/cpu_backend.h"
 #include "core/kernel_registry.h"
+#include "core/kernels/powder_diffusion_rows.h"
 #include "test_support.h"
 
 using namespace snow;
@@ -97,27 +98,32 @@ TEST(CpuBackend, TotalsAreLayerSumsTimesCellArea) {
 // Powder diffusion's row path (its passes interleaved in strips of 32 rows, four cells at a time)
 // gives the per-cell bodies' bytes on any shape: grids narrower than four cells, a last strip of
 // one row, strips that end in the middle of the grid, NODATA holes and cliffs.
+// Run with AVX2 allowed (where the CPU has it: eight cells, then four, then one) and with SSE2 alone.
 TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
   const int shapes[][2] = {{1, 1}, {3, 2}, {2, 40}, {5, 33}, {37, 31}, {38, 32}, {41, 65}, {64, 97}};
-  for (const auto& shape : shapes) {
-    SCOPED_TRACE(std::to_string(shape[0]) + " x " + std::to_string(shape[1]));
-    const SnowState initial = test::makeRoughState(shape[0], shape[1], 3, 2.0, 3.0);
-    auto serial = createSerialBackend();
-    auto cpu = createCpuBackend();
-    SnowState a = initial, b = initial;
-    serial->upload(a);
-    cpu->upload(b);
-    PowderDiffusionArgs args;
-    args.dtDays = 0.3f;
-    for (int i = 0; i < 4; ++i) {
-      serial->powderDiffusion(args);
-      cpu->powderDiffusion(args);
-    }
-    serial->download(a);
-    cpu->download(b);
-    test::expectSameBytes(a, b);
-    if (shape[0] >= 37) {
-      EXPECT_NE(a.powderM.values(), initial.powderM.values()) << "no powder moved";
+  for (const bool avx2 : {true, false}) {
+    for (const auto& shape : shapes) {
+      SCOPED_TRACE(std::to_string(shape[0]) + " x " + std::to_string(shape[1]) + (avx2 ? ", AVX2 allowed" : ", SSE2 alone"));
+      powderAvx2Allowed() = avx2;
+      const SnowState initial = test::makeRoughState(shape[0], shape[1], 3, 2.0, 3.0);
+      auto serial = createSerialBackend();
+      auto cpu = createCpuBackend();
+      SnowState a = initial, b = initial;
+      serial->upload(a);
+      cpu->upload(b);
+      PowderDiffusionArgs args;
+      args.dtDays = 0.3f;
+      for (int i = 0; i < 4; ++i) {
+        serial->powderDiffusion(args);
+        cpu->powderDiffusion(args);
+      }
+      serial->download(a);
+      cpu->download(b);
+      powderAvx2Allowed() = true;
+      test::expectSameBytes(a, b);
+      if (shape[0] >= 37) {
+        EXPECT_NE(a.powderM.values(), initial.powderM.values()) << "no powder moved";
+      }
     }
   }
 }

@@ -7,6 +7,7 @@
 // the serial executor's and CUDA's, which run the per-cell bodies (the tests compare the serial
 // and TBB executors byte for byte). Host only: never included by CUDA translation units.
 #pragma once
+#include <atomic>
 #include <cstring>
 #include <vector>
 
@@ -15,7 +16,13 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if defined(__x86_64__) && defined(__GNUC__)
+// The AVX2 body needs GCC's per-function target pragma (clang does not take it).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__SSE2__)
+#define SNOW_POWDER_AVX2 1
+#else
+#define SNOW_POWDER_AVX2 0
+#endif
+#if SNOW_POWDER_AVX2
 #include <immintrin.h>
 #endif
 
@@ -98,7 +105,7 @@ using V = simd_detail::Sse2;
 }  // namespace sse2_lanes
 #endif
 
-#if defined(__x86_64__) && defined(__GNUC__)
+#if SNOW_POWDER_AVX2
 // The same body eight cells at a time, compiled for AVX2 (no FMA) and used when the CPU has it:
 // the same bytes as SSE2 and the per-cell body.
 #pragma GCC push_options
@@ -141,6 +148,13 @@ inline bool cpuHasAvx2() {
 }
 #endif
 
+// Whether the shares pass may take the AVX2 body where the CPU has it (tests turn it off to check
+// the SSE2 body alone against the per-cell one).
+inline std::atomic<bool>& powderAvx2Allowed() {
+  static std::atomic<bool> allowed{true};
+  return allowed;
+}
+
 // Pass 1 on row y: every cell's shares and what it keeps, into `out` (PowderBaseKernel has run).
 inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowShares& out) {
   const SnowFieldsView& v = k.v;
@@ -154,8 +168,8 @@ inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowSha
 #if defined(__SSE2__)
   if (y > 0 && y < v.height - 1) {
     for (; x < v.width && x < 1; ++x) scalar(x);  // the west edge: its neighbour tests need bounds
-#if defined(__x86_64__) && defined(__GNUC__)
-    if (cpuHasAvx2()) x = avx2_lanes::sharesLanes(k, y, out, x, v.width - 1);
+#if SNOW_POWDER_AVX2
+    if (cpuHasAvx2() && powderAvx2Allowed().load(std::memory_order_relaxed)) x = avx2_lanes::sharesLanes(k, y, out, x, v.width - 1);
 #endif
     x = sse2_lanes::sharesLanes(k, y, out, x, v.width - 1);
   }
