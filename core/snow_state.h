@@ -136,8 +136,9 @@ struct SnowFieldsView {
   // Per-cell scratch: |grad A| of the snow surface, taken before a per-cell pass that changes A,
   // so the pass never reads a neighbour that another thread is writing.
   float* surfaceSlope = nullptr;
-  // Per-cell scratch for transport snapshots (wind transport: A and P before its colour passes;
-  // the avalanche's scratchPowder holds its outflow scales).
+  // Per-cell scratch for transport: wind transport's snapshot of A and P before its colour
+  // passes; powder diffusion's surface below the powder in scratchSurface; the avalanche's
+  // outflow scales in scratchPowder.
   float* scratchSurface = nullptr;
   float* scratchPowder = nullptr;
   // Powder diffusion's shares of a substep: five per cell (toward +x, -x, +y, -y, and what the

@@ -4,6 +4,8 @@
 // An Exec provides:
 //   template <class K> void forEachCell(int width, int height, const K& kernel);
 //   template <class K> void forEachCellOfColour(int width, int height, int colour, const K& kernel);
+//   template <class F, class G> void forEachCellThen(int width, int height, const F& first, const G& second);
+//     (first on every cell, then second: SerialExec::forEachCellThen)
 //   double sum(const float* values, const uint8_t* valid, int width, int height);  // fixed order
 //   float maxValue(const float* values, const uint8_t* valid, int width, int height);
 //   void finish();  // waits for queued work (GPU) and reports its errors
