@@ -13,9 +13,9 @@ namespace snow {
 // Deflate effort for the lossless image formats, 0 (none) to 9 (smallest, slowest): PNG's zlib
 // level and OpenEXR's zip level (0 writes EXR uncompressed). 1 by default, as OpenCV's PNG
 // writer. Measured on a 1024² season's layers: EXR zip at level 4 (OpenImageIO's default) is
-// within 0.2 % of level 1's size for 28 % more time, 16-bit PNG at level 6 (libpng's default)
-// 1-6 % smaller for twice the time; a sparse texture (the 8192² ski tracks) is 2.5 times
-// smaller at those levels.
+// within 0.2 % of level 1's size for 28 % more time, 16-bit PNG at level 6 (libpng's default,
+// all row filters) 2-16 % smaller than level 1 (the "sub" row filter) for 1.6-4.8 times the
+// time; a sparse texture (the 8192² ski tracks) is 2.5-2.7 times smaller at those levels.
 constexpr int kDefaultCompressionLevel = 1;
 // The EXR compression a level gives, as OpenImageIO names it ("zip:1", "none"), for the manifest.
 std::string exrCompressionName(int level);
