@@ -1,6 +1,7 @@
 #include "cpu_backend.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -61,7 +62,10 @@ class TbbExec : public HostStorage {
     });
     tbb::parallel_for(0, strips, [&](int k) {
       const int a = k * kStripRows, b = std::min(height, a + kStripRows);
-      PowderRowBuffer ring(3, width);
+      // Each thread's three row buffers, kept from task to task (every cell of a buffer is written
+      // before it is read; the zero padding is never written).
+      PowderRowBuffer& ring = rings_.local();
+      ring.resize(3, width);
       auto rowOf = [&](int r) {
         if (r < 0 || r >= height) return zeroRow_.row(0);
         return isEdge(r) ? edgeRows_.row(edgeSlot(r)) : ring.row(r % 3);
@@ -113,6 +117,7 @@ class TbbExec : public HostStorage {
   std::vector<float> rowMax_;
   static constexpr int kStripRows = 32;
   PowderRowBuffer edgeRows_, zeroRow_;
+  tbb::enumerable_thread_specific<PowderRowBuffer> rings_;
 };
 
 }  // namespace
