@@ -27,7 +27,7 @@
 //  - the outflows are scaled so their sum never exceeds P at the substep's start (the paper's
 //    rescaling: no cell goes negative, whatever its neighbours give it).
 // A powder film thinner than diffusion_min_depth_m (1 mm) does not slide: a dusting sticks to
-// rock (and the CPU skips four cells at a time where none holds more).
+// rock (and the CPU's row path skips a whole vector of cells where none holds more).
 // Snow never enters NODATA cells or leaves the grid, so the step conserves mass exactly up to
 // float rounding.
 #pragma once
@@ -63,6 +63,10 @@ SNOW_HD SNOW_INLINE float giveTo(float& receiver, float amount, float remaining,
   return remaining - gained;
 }
 
+// The four neighbours in the order of the shares: +x, -x, +y, -y.
+SNOW_HD SNOW_INLINE int powderDx(int d) { return d == 0 ? 1 : (d == 1 ? -1 : 0); }
+SNOW_HD SNOW_INLINE int powderDy(int d) { return d == 2 ? 1 : (d == 3 ? -1 : 0); }
+
 // The downhill slopes toward the four neighbours (drop / distance, 0 uphill) from a surface
 // read through `surfaceAt(index)`, and the excess of the steepest-descent magnitude over the
 // rest slope.
@@ -77,7 +81,7 @@ SNOW_HD SNOW_INLINE PowderSlopes powderSlopes(const SnowFieldsView& v, int x, in
   PowderSlopes r;
   const float ap = surfaceAt(v.index(x, y));
   for (int d = 0; d < 4; ++d) {
-    const int dx = d == 0 ? 1 : (d == 1 ? -1 : 0), dy = d == 2 ? 1 : (d == 3 ? -1 : 0);
+    const int dx = powderDx(d), dy = powderDy(d);
     const int nx = x + dx, ny = y + dy;
     if (!v.isValid(nx, ny)) continue;
     // Times the reciprocal of the cell size, which the CPU's four-lane rows compute once a row
@@ -160,8 +164,7 @@ SNOW_HD SNOW_INLINE void powderSharesAt(const SnowFieldsView& v, const PowderDif
   for (int d = 0; d < 4; ++d) {
     const float amount = out[d] * scale;
     if (!(amount > 0.f)) continue;
-    const int nx = x + (d == 0 ? 1 : (d == 1 ? -1 : 0)), ny = y + (d == 2 ? 1 : (d == 3 ? -1 : 0));
-    const float before = v.powder[v.index(nx, ny)];
+    const float before = v.powder[v.index(x + powderDx(d), y + powderDy(d))];
     const float gained = (before + amount) - before;
     if (!(gained > 0.f) || gained > remaining) continue;
     share[d] = gained;
@@ -184,6 +187,12 @@ struct PowderFlowKernel {
   }
 };
 
+// What a cell holds after a substep: what it keeps plus its neighbours' shares, in this order
+// (the CPU's row path adds its vectors in the same order).
+SNOW_HD SNOW_INLINE float powderGathered(float keep, float fromPlusX, float fromMinusX, float fromPlusY, float fromMinusY) {
+  return (((keep + fromPlusX) + fromMinusX) + fromPlusY) + fromMinusY;
+}
+
 // Pass 2, per cell, after pass 1 has run on every cell: a valid cell's powder becomes what it
 // keeps plus the shares its four neighbours give it, added in a fixed order (+x, -x, +y, -y
 // neighbour; nothing from beyond the grid). Reads pass 1's slots only, writes only its own cell.
@@ -198,7 +207,7 @@ struct PowderGatherKernel {
     const float fromMinusX = x > 0 ? f[powderShareSlot(i - 1, 0)] : 0.f;
     const float fromPlusY = y + 1 < v.height ? f[powderShareSlot(i + v.width, 3)] : 0.f;
     const float fromMinusY = y > 0 ? f[powderShareSlot(i - v.width, 2)] : 0.f;
-    v.powder[i] = (((f[powderShareSlot(i, kPowderKeepSlot)] + fromPlusX) + fromMinusX) + fromPlusY) + fromMinusY;
+    v.powder[i] = powderGathered(f[powderShareSlot(i, kPowderKeepSlot)], fromPlusX, fromMinusX, fromPlusY, fromMinusY);
   }
 };
 

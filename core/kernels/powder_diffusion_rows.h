@@ -178,7 +178,7 @@ inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowSha
 }
 
 // Pass 2 on row y, from the shares of rows y - 1, y and y + 1 (a zeroed buffer for a row beyond
-// the grid): PowderGatherKernel's sum, in its order.
+// the grid): powderGathered's sum, in its order.
 inline void powderGatherRow(const SnowFieldsView& v, int y, const PowderRowShares& minusY, const PowderRowShares& row,
                             const PowderRowShares& plusY) {
   float* powder = v.powder + static_cast<size_t>(y) * v.width;
@@ -195,7 +195,7 @@ inline void powderGatherRow(const SnowFieldsView& v, int y, const PowderRowShare
   }
 #endif
   for (; x < v.width; ++x)
-    if (valid[x]) powder[x] = (((row.keep[x] + row.share[1][x + 1]) + row.share[0][x - 1]) + plusY.share[3][x]) + minusY.share[2][x];
+    if (valid[x]) powder[x] = powderGathered(row.keep[x], row.share[1][x + 1], row.share[0][x - 1], plusY.share[3][x], minusY.share[2][x]);
 }
 
 }  // namespace snow
