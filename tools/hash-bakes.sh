@@ -1,0 +1,78 @@
+#!/usr/bin/env bash
+# Bakes six scenes that cover every mode and most outputs and prints one SHA-256 a file, so a
+# refactoring can show it keeps the bytes: run it before and after, then diff the two lists.
+#   bash tools/hash-bakes.sh [SNOWBAKE_BINARY] [WORK_DIR] > hashes.txt
+# The scenes: the demo (preset:default); presets/art_direction.toml; presets/bedforms.toml;
+# occlusion mode on the builtin range with an occluder-free mesh terrain output; mesh mode on the
+# README's table (docs/pictures/mesh_snow_table.py); a real DEM from ../shared/data with every
+# layer, encoding, mesh, VDB, displacement and frames (skipped with a message when absent).
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+bin="$(realpath "${1:-$root/build/snowbake}")"
+work="${2:-$(mktemp -d)}"
+mkdir -p "$work"
+data="$root/../shared/data"
+bake() {  # NAME SCENE [ARGS...]
+  local name="$1" scene="$2"; shift 2
+  "$bin" bake "$scene" --out "$work/$name" --no-cache --quiet --threads 2 "$@" > "$work/$name.log" 2>&1 ||
+    { echo "hash-bakes: $name failed (log: $work/$name.log)" >&2; cat "$work/$name.log" >&2; exit 1; }
+}
+bake demo preset:default
+bake art_direction "$root/presets/art_direction.toml"
+bake bedforms "$root/presets/bedforms.toml"
+cat > "$work/occlusion.toml" <<'TOML'
+name = "hash-bakes: occlusion mode"
+mode = "occlusion"
+[terrain]
+builtin = "ridged"
+size = 128
+cell_size_m = 20.0
+[outputs]
+layers = ["ambient_occlusion", "sun_visibility", "occlusion_accumulation", "occlusion_dissipation", "stable", "depth", "preview"]
+encodings = ["png16"]
+meshes = ["obj"]
+TOML
+bake occlusion "$work/occlusion.toml"
+/usr/bin/python3 "$root/docs/pictures/mesh_snow_table.py" obj "$work/table.obj"
+sed -e 's/^site_spacing_m = .*/site_spacing_m = 0.05/' "$root/docs/pictures/mesh_snow_table.toml" > "$work/mesh.toml"
+bake mesh "$work/mesh.toml"
+if [ -f "$data/dem/tyrol_avaWog_5m.asc" ]; then
+  cat > "$work/dem.toml" <<TOML
+name = "hash-bakes: a real DEM with every output"
+[terrain]
+file = "$data/dem/tyrol_avaWog_5m.asc"
+[season]
+start_date = 2025-12-01
+days = 40
+[[weather.keyframe]]
+day = 0
+sea_level_temperature_c = 4.0
+wind_direction_deg = 250
+wind_speed_mps = 9.0
+[[events]]
+type = "skier"
+day = 20
+count = 3
+position_m = [600.0, 600.0]
+[outputs]
+layers = ["compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface", "valid_mask", "wind_speed",
+          "wind_direction", "wind_shadow_depth", "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
+          "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit", "avalanche_preview", "preview",
+          "ski_tracks", "ski_route_map"]
+encodings = ["png16", "png8", "r16"]
+multichannel_exr = true
+displacement_size = [300, 300]
+vdb = true
+meshes = ["obj", "ply", "glb", "fbx"]
+mesh_parts = ["surface", "body"]
+mesh_tile_size_m = 400.0
+frames_days = [10, 30]
+avalanche_maps = true
+ski_track_factor = 4
+TOML
+  bake dem "$work/dem.toml"
+else
+  echo "hash-bakes: $data absent: the real-DEM bake is skipped" >&2
+fi
+cd "$work"
+find . -mindepth 2 -type f | LC_ALL=C sort | xargs sha256sum
