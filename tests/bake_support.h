@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "tools/pipeline.h"
+#include "bake/bake.h"
 
 namespace snow::test {
 

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "bakers/grid_writer.h"
-#include "tools/pipeline.h"
+#include "bake/bake.h"
 
 using namespace std::string_literals;
 namespace fs = std::filesystem;

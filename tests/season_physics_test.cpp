@@ -14,7 +14,7 @@
 #include "precompute/wind.h"
 #include "precompute/wind_timeline.h"
 #include "bake_support.h"
-#include "tools/pipeline.h"
+#include "bake/bake.h"
 
 using namespace snow;
 namespace fs = std::filesystem;

@@ -14,7 +14,8 @@
 
 #include "core/errors.h"
 #include "tools/bench.h"
-#include "tools/pipeline.h"
+#include "bake/bake.h"
+#include "tools/info.h"
 
 int main(int argc, char** argv) {
   using namespace snow;

@@ -1,5 +1,6 @@
-// The bake pipeline behind `snowbake bake` and `snowbake demo`: scene -> terrain -> precompute ->
-// season -> outputs. Throws InputError for bad input (exit status 2) and other exceptions for
+// The bake behind `snowbake bake` and `snowbake demo`: scene -> terrain -> inputs and art
+// direction -> precompute -> season -> outputs -> manifest (bake.cpp lists the stages, one file
+// each in this folder). Throws InputError for bad input (exit status 2) and other exceptions for
 // failures (exit status 1).
 #pragma once
 #include <cstdint>
@@ -36,10 +37,6 @@ struct BakeResult {
 };
 
 BakeResult runBake(const BakeOptions& options, std::ostream& log);
-
-// `snowbake info`: what snowbake understood of a terrain: a DEM file, builtin:ridged, or a scene
-// (file or preset:NAME, with --set overrides) whose [terrain] says how to read its file.
-std::string describeTerrain(const std::string& source, bool json, const std::vector<std::string>& sets = {});
 
 const char* programVersion();
 

@@ -1,0 +1,28 @@
+// runBake: the scene, then the mode's driver (modes.h) over the stages (stages.h).
+#include "bake.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "modes.h"
+
+#ifndef SNOWBAKE_VERSION
+#define SNOWBAKE_VERSION "0.0.0"
+#endif
+
+namespace snow {
+
+const char* programVersion() { return SNOWBAKE_VERSION; }
+
+BakeResult runBake(const BakeOptions& options, std::ostream& log) {
+  const auto tStart = BakeClock::now();
+  const Scene scene = resolveScene(options);
+  const int threads = scene.threads > 0 ? scene.threads : tbb::info::default_concurrency();
+  tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  log << "snowbake " << programVersion() << ": scene " << scene.sourceName << " (" << scene.name << "), seed " << scene.seed << ", "
+      << threads << " thread" << (threads == 1 ? "" : "s") << "\n";
+  if (scene.mode == "mesh") return runMeshBake(scene, options, log, tStart);
+  return runGridBake(scene, options, threads, log, tStart);
+}
+
+}  // namespace snow

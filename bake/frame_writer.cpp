@@ -1,0 +1,37 @@
+#include "frame_writer.h"
+
+#include <algorithm>
+
+namespace snow {
+
+FrameWriter::FrameWriter(OutputWriter& writer, const SkiTracks* skiTracks, int threads, bool beside)
+    : writer_(writer), skiTracks_(skiTracks), beside_(beside), arena_(std::max(1, threads)) {}
+
+FrameWriter::~FrameWriter() {
+  if (thread_.joinable()) thread_.join();
+}
+
+void FrameWriter::join() {
+  if (!thread_.joinable()) return;
+  thread_.join();
+  if (error_) std::rethrow_exception(error_);
+  currentSink().merge(sink_);
+  sink_ = OutputSink();
+}
+
+void FrameWriter::write(double day, const SnowState& s) {
+  if (!beside_) return writer_.writeDay(s, day, skiTracks_ ? &skiTracks_->depth() : nullptr);
+  join();
+  state_ = s;
+  if (skiTracks_) skiDepth_ = skiTracks_->depth();
+  thread_ = std::thread([this, day] {
+    try {
+      SinkScope scope(sink_);
+      arena_.execute([&] { writer_.writeDay(state_, day, skiTracks_ ? &skiDepth_ : nullptr); });
+    } catch (...) {
+      error_ = std::current_exception();
+    }
+  });
+}
+
+}  // namespace snow

@@ -1,0 +1,43 @@
+// Frame days written beside the season: a frame's outputs are written on a thread of their own
+// from a copy of the state (and of the ski-track texture, which the season keeps stamping) while
+// the season goes on. One frame in flight: the next frame, or the season's end, waits for it.
+// Writers run in a task arena of their own so the season's parallel loops never run a writer's
+// task; each frame lists into its own sink, merged in frame order: the same files and manifest
+// as writing them in place.
+#pragma once
+#include <tbb/task_arena.h>
+
+#include <exception>
+#include <thread>
+
+#include "bakers/output_writer.h"
+#include "core/ski.h"
+
+namespace snow {
+
+class FrameWriter {
+ public:
+  // `beside`: false writes each frame in place (the season waits; the same files).
+  FrameWriter(OutputWriter& writer, const SkiTracks* skiTracks, int threads, bool beside);
+  ~FrameWriter();  // lets a writer still running finish (the season threw)
+  FrameWriter(const FrameWriter&) = delete;
+  FrameWriter& operator=(const FrameWriter&) = delete;
+
+  // The outputs of frame day `day` from `state`.
+  void write(double day, const SnowState& state);
+  // Waits for the frame in flight, merges its files into the current sink, rethrows its error.
+  void join();
+
+ private:
+  OutputWriter& writer_;
+  const SkiTracks* skiTracks_;
+  bool beside_;
+  tbb::task_arena arena_;
+  std::thread thread_;
+  SnowState state_;
+  Grid<float> skiDepth_;
+  OutputSink sink_;
+  std::exception_ptr error_;
+};
+
+}  // namespace snow

@@ -1,0 +1,105 @@
+// The grid modes: mode = "season" (the paper's season) and mode = "occlusion" (Foldes & Benes'
+// static cover in place of the season). Stages: terrain -> inputs and art direction ->
+// precompute -> season (or occlusion) -> outputs -> manifest.
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <iomanip>
+
+#include "bakers/bake_manifest.h"
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/format.h"
+#include "modes.h"
+#include "stages.h"
+
+namespace snow {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The state on the terrain, with art direction's initial snow, multipliers and masks.
+SnowState initialState(const BakeTerrain& t) {
+  SnowState state;
+  state.allocate(t.info().spec);
+  state.bedrockM = t.terrain.heightsM;
+  state.validCell = t.terrain.valid;
+  return state;
+}
+
+void createOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(dir + ": cannot create the output folder: " + ec.message());
+}
+
+// The scene's layers, and valid_mask with them where the terrain has NODATA cells.
+std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti) {
+  std::vector<std::string> layers = scene.outputs.layers;
+  if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
+  return layers;
+}
+
+}  // namespace
+
+BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, BakeClock::time_point tStart) {
+  const BakeTerrain terrain = loadBakeTerrain(scene, log);
+  const bool occlusionMode = scene.mode == "occlusion";
+  if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
+
+  // Painted rasters first: a bad mask fails before any precompute runs; so do bedform parameters
+  // that do not suit the grid.
+  SnowState state = initialState(terrain);
+  const ArtDirectionPlan art = prepareArtDirection(scene, terrain.info(), state, log);
+  if (scene.bedforms.enabled && !occlusionMode)
+    if (const std::string problem = validateBedformParameters(scene.bedforms.params, state.spec); !problem.empty())
+      throw InputError(scene.sourceName + ": " + problem);
+  const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
+  const Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
+
+  std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : chooseBackend(scene.backend, log);
+  const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
+  createOutputFolder(options.outDir);
+
+  OutputSink files;  // every file written, in order: the manifest's list
+  const SinkScope filesScope(files);
+  const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
+  OcclusionResult occlusion;
+  SeasonOutputs seasonOutputs;
+  OutputWriter writer({&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,
+                       &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr},
+                      log);
+  SeasonReport report;
+  if (occlusionMode) {
+    runOcclusion(scene, terrain, state, occlusion, log);
+    report = occlusion.report;
+  } else {
+    const SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
+    report = runSeasonStage(scene, options, threads, *backend, state, config, seasonOutputs, writer, log);
+  }
+
+  // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
+  const auto t0 = BakeClock::now();
+  writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
+  writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
+  writer.writeContactSheet();
+  writer.writeAvalancheMaps(report.avalanches, state.spec);
+  BakeResult result;
+  const Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
+                                                  occlusion.manifest, &report, art.rasters, art.editRecords, files.files});
+  result.files = files.paths;
+  const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
+  writeTextAtomically(manifestPath, manifestToJson(manifest));
+  result.files.push_back(manifestPath);
+  log << writer.occluderNotes();
+  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(secondsSince(t0), 2) << " s)\n";
+  for (const auto& [kind, seconds] : files.seconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";
+  log << "total: " << fixed(secondsSince(tStart), 2) << " s\n";
+  result.season = report;
+  result.backendName = backendName;
+  return result;
+}
+
+}  // namespace snow

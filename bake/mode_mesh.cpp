@@ -1,0 +1,105 @@
+// mode = "mesh": Fearing's snow on the mesh itself (docs/models/snow-on-meshes.md): placement,
+// stability, the snow body as meshes and a VDB, and a manifest.
+#include <filesystem>
+
+#include "bakers/manifest.h"
+#include "bakers/mesh_snow_body.h"
+#include "bakers/mesh_writer.h"
+#include "core/atomic_file.h"
+#include "core/errors.h"
+#include "core/format.h"
+#include "core/hash.h"
+#include "modes.h"
+#include "precompute/fallen_snow.h"
+
+namespace snow {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+MeshSnowManifest meshManifest(const Scene& scene, const TriangleMesh& mesh, const float lo[3], const float hi[3],
+                              const FallenSnowSettings& placement, const FallenSnowStability& stability, const FallenSnow& snow,
+                              const FallenSnowStabilityReport& st, const MeshSnowBody& body) {
+  MeshSnowManifest m;
+  m.programVersion = programVersion();
+  m.sceneSource = scene.sourceName;
+  m.sceneName = scene.name;
+  m.sceneHash = Fnv1a64().add(scene.canonicalToml).hex();
+  m.meshSource = mesh.source;
+  m.meshHash = hashFileFnv1a64(scene.terrain.file);
+  m.triangles = mesh.triangles.size();
+  for (int k = 0; k < 3; ++k) m.boundsMin[k] = lo[k], m.boundsMax[k] = hi[k];
+  m.seed = scene.seed;
+  m.placement = placement;
+  m.stability = stability;
+  m.sites = snow.sites.size();
+  m.skyM3 = snow.skyMassM3;
+  m.placedM3 = snow.placedM3;
+  m.stabilityReport = st;
+  m.voxelSizeM = body.voxelSizeM;
+  m.bodyTriangles = body.mesh.triangles.size();
+  return m;
+}
+
+}  // namespace
+
+BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, BakeClock::time_point tStart) {
+  BakeResult result;
+  result.backendName = "cpu (Embree ray queries, TBB)";
+  auto t0 = BakeClock::now();
+  const TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
+  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (const auto& p : mesh.positions)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  log << "mode: mesh (Fearing 2000: snow on the mesh itself; no grid, no season)\n";
+  log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
+      << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(secondsSince(t0), 2) << " s)\n";
+  t0 = BakeClock::now();
+  FallenSnowSettings placement = scene.meshSnow.placement;
+  placement.seed = scene.seed;
+  FallenSnow snow = placeFallenSnow(mesh, placement);
+  log << "placement: " << snow.sites.size() << " sites (" << snow.refinedCells << " cells refined), " << snow.flakes << " flakes ("
+      << snow.blocked << " blocked, " << snow.leftTheWorld << " left the world), sky " << fixed(snow.skyMassM3, 4) << " m^3, placed "
+      << fixed(snow.placedM3, 4) << " m^3 (" << fixed(secondsSince(t0), 2) << " s)\n";
+  t0 = BakeClock::now();
+  FallenSnowStability stability = scene.meshSnow.stability;
+  stability.seed = scene.seed;
+  const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, stability);
+  log << "stability: " << st.rounds << " rounds, " << st.passes << " passes"
+      << (st.unconvergedRounds ? " (" + std::to_string(st.unconvergedRounds) + " rounds hit the pass limit)" : std::string()) << ", "
+      << fixed(st.overEdgesM3, 4) << " m^3 over edges, " << fixed(st.leftTheWorldM3, 4) << " m^3 left the world, " << fixed(st.finalM3, 4)
+      << " m^3 kept (" << fixed(secondsSince(t0), 2) << " s)\n";
+  t0 = BakeClock::now();
+  std::error_code ec;
+  fs::create_directories(options.outDir, ec);
+  if (ec) throw InputError(options.outDir + ": cannot create the output folder: " + ec.message());
+  const MeshSnowBodyOptions& bo = scene.meshSnow.body;
+  const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / "snow.vdb").string() : std::string();
+  const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo, vdbPath);
+  log << "snow body: " << body.snowVoxels << " voxels of " << fixed(body.voxelSizeM, 4) << " m, " << body.mesh.triangles.size()
+      << " triangles (" << fixed(body.seconds, 2) << " s)\n";
+  MeshSnowManifest manifest = meshManifest(scene, mesh, lo, hi, placement, stability, snow, st, body);
+  if (!vdbPath.empty()) {
+    manifest.files.push_back({"snow.vdb",
+                              "the snow body: snow_sdf (level set, metres) and density (fog volume, kg/m^3 of " + fixed(bo.densityKgPerM3, 0) +
+                                  " inside)",
+                              "m; kg/m^3", "OpenVDB"});
+    result.files.push_back(vdbPath);
+  }
+  for (const std::string& format : scene.outputs.meshes) {
+    const std::string name = "snow_body." + format;
+    const std::string path = (fs::path(options.outDir) / name).string();
+    writeMesh(path, format, body.mesh);
+    manifest.files.push_back({name, "the snow body, closed, in the input mesh's frame", "m", meshFormatDescription(format)});
+    result.files.push_back(path);
+  }
+  const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
+  writeTextAtomically(manifestPath, meshSnowManifestToJson(manifest));
+  result.files.push_back(manifestPath);
+  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(secondsSince(t0), 2) << " s)\n";
+  log << "total: " << fixed(secondsSince(tStart), 2) << " s\n";
+  return result;
+}
+
+}  // namespace snow

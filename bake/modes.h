@@ -1,0 +1,14 @@
+// The bake's modes, each a driver over the stages (stages.h); bake.cpp picks one by scene.mode.
+#pragma once
+#include <ostream>
+
+#include "stages.h"
+
+namespace snow {
+
+// mode = "season" and mode = "occlusion" (mode_grid.cpp).
+BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, BakeClock::time_point tStart);
+// mode = "mesh" (mode_mesh.cpp): Fearing's snow on the mesh itself, no grid and no season.
+BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, BakeClock::time_point tStart);
+
+}  // namespace snow

@@ -1,0 +1,84 @@
+// What the season runs: the scene's days, weather and events, art direction's edits and masked
+// events, and the ski-track texture and route map when the outputs ask for them.
+#include <algorithm>
+#include <array>
+
+#include "core/errors.h"
+#include "core/format.h"
+#include "stages.h"
+
+namespace snow {
+namespace {
+
+// A user event's point (metres from the north-west corner, or the DEM's own projected
+// coordinates) as a valid cell.
+std::array<int, 2> eventCell(const Scene& scene, const TerrainInfo& ti, const SnowState& state, const Scene::AvalancheEvent& a,
+                             const std::string& what, const std::string& point) {
+  const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: " + what + " on day " + fixed(a.day, 1);
+  double xM = a.xM, yM = a.yM;
+  if (a.mapCoordinates) {
+    if (ti.coordinateSystem.rfind("geographic", 0) == 0)
+      throw InputError(where + ": map_position needs a DEM in projected metres; this one is " + ti.coordinateSystem + " (use position_m)");
+    xM = a.xM - ti.spec.originX;
+    yM = ti.spec.originY - a.yM;
+  }
+  const double fx = xM / ti.spec.cellSizeXM, fy = yM / ti.spec.cellSizeYM;
+  if (!(fx >= 0.0 && fy >= 0.0 && fx < ti.spec.width && fy < ti.spec.height))
+    throw InputError(where + ": the " + point + " (" + fixed(xM, 1) + " m east, " + fixed(yM, 1) +
+                     " m south of the north-west corner) is outside the terrain (" + fixed(ti.spec.width * ti.spec.cellSizeXM, 1) + " x " +
+                     fixed(ti.spec.height * ti.spec.cellSizeYM, 1) + " m)");
+  const int x = static_cast<int>(fx), y = static_cast<int>(fy);
+  if (!state.validCell(x, y)) throw InputError(where + ": the " + point + " falls on a NODATA cell");
+  return {x, y};
+}
+
+bool asks(const std::vector<std::string>& layers, const char* name) { return std::find(layers.begin(), layers.end(), name) != layers.end(); }
+
+}  // namespace
+
+SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const ArtDirectionPlan& art,
+                              const Precomputed& pre, const std::vector<std::string>& layers, SeasonOutputs& outputs, std::ostream& log) {
+  SeasonConfig config;
+  config.days = scene.days;
+  config.seed = scene.seed;
+  config.params = scene.params;
+  config.weather = scene.weather;
+  config.userSnowfalls = scene.userSnowfalls;
+  config.avalancheMaps = scene.outputs.avalancheMaps;
+  config.avalancheFrameIntervalS = scene.outputs.avalancheFrameIntervalS;
+  config.edits = art.edits;
+  config.userAvalanches = art.avalanches;  // masked releases
+  config.userSkiers = art.skiers;          // skiers from start masks
+  for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
+    if (a.mask) continue;
+    const auto c = eventCell(scene, terrain.info(), state, a, "avalanche", "rupture point");
+    config.userAvalanches.push_back({a.day, c[0], c[1], false, nullptr});
+  }
+  for (const Scene::AvalancheEvent& a : scene.userSkiers) {
+    if (a.mask) continue;
+    const auto c = eventCell(scene, terrain.info(), state, a, "skier", "start point");
+    config.userSkiers.push_back({a.day, c[0], c[1], a.count, nullptr});
+  }
+  if (asks(layers, "ski_route_map")) outputs.routeMap = routeMap(state.bedrockM, state.validCell, state.spec);
+  if (asks(layers, "ski_tracks")) {
+    outputs.skiTracks.emplace(state.spec, scene.outputs.skiTrackFactor);
+    config.skiTracks = &*outputs.skiTracks;
+  }
+  config.frameDays = scene.outputs.frameDays;
+  config.windTransport = pre.wind->hasWind();
+  if (scene.bedforms.enabled) {
+    config.bedforms = scene.bedforms.params;
+    if (!config.windTransport) log << "bedforms: the scene has no wind; only the cohesion of the snow will change\n";
+  }
+  // The static fields refreshed daily when they change through the season: the temperature from
+  // each day's exposure, and the wind with several keyframe states (or calm keyframes among windy ones).
+  const bool windChanges = pre.wind->varies();
+  if (pre.exposure || windChanges)
+    config.updateStaticFields = [&pre, &params = scene.params, windChanges](int day, SnowState& s) {
+      if (pre.exposure) pre.temperatureForDay(day, s, params);
+      if (windChanges) pre.windForDay(day, s);
+    };
+  return config;
+}
+
+}  // namespace snow

@@ -1,0 +1,115 @@
+// Stage 4: the precompute, once per terrain: sun exposure (direct, sky, indirect) and the wind
+// timeline (each wind state's field and wind-effect surface), both through the cache.
+#include "core/errors.h"
+#include "core/format.h"
+#include "core/hash.h"
+#include "precompute/ray_scene.h"
+#include "stages.h"
+
+namespace snow {
+namespace {
+
+// Sun exposure, from the cache when every input is unchanged.
+Exposure loadOrComputeExposure(const SnowState& state, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,
+                               const ExposureSettings& es, const PrecomputeCache& cache, std::ostream& log) {
+  Fnv1a64 h;
+  h.add("exposure-v2");
+  h.add(es.horizonSweep ? "horizon-sweep" : "embree");
+  h.add(state.bedrockM.data(), state.bedrockM.size() * sizeof(float));
+  h.add(state.validCell.data(), state.validCell.size());
+  const double numbers[] = {static_cast<double>(state.spec.width), static_cast<double>(state.spec.height), state.spec.cellSizeXM,
+                            state.spec.cellSizeYM, es.latitudeDeg, static_cast<double>(es.startDayOfYear), es.seasonDays,
+                            p.directSunWeightHours, p.skyAmbientWeightHours, p.indirectSunWeightHours};
+  h.add(numbers, sizeof numbers);
+  h.add(es.quality.name);
+  for (const auto& m : occluders) {
+    h.add(m.positions.data(), m.positions.size() * sizeof(m.positions[0]));
+    h.add(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
+  }
+  const std::string key = h.hex();
+  // The sample days are fixed by the settings: list them, then fill the grids from the cache.
+  Exposure e;
+  e.days = exposureSampleDays(es);
+  std::vector<Grid<float>*> grids{&e.skyHours};
+  for (auto& d : e.days) grids.push_back(&d.sunHours), grids.push_back(&d.indirectHours);
+  if (cache.load("exposure", key, state.spec.width, state.spec.height, grids)) {
+    log << "  sun exposure: from the cache\n";
+    return e;
+  }
+  std::unique_ptr<RayScene> scene;
+  if (!es.horizonSweep) scene = std::make_unique<RayScene>(state.bedrockM, state.spec, occluders);
+  e = computeExposure(scene.get(), state.bedrockM, state.validCell, state.spec, p, es);
+  const ExposureTimings& t = e.timings;
+  if (es.horizonSweep)
+    log << "  sun exposure (horizon sweep): horizons " << fixed(t.horizonSeconds, 2) << " s, direct " << fixed(t.sunSeconds, 2)
+        << " s, sky " << fixed(t.skySeconds, 2) << " s, indirect " << fixed(t.indirectSeconds, 2) << " s\n";
+  else
+    log << "  sun exposure (Embree rays): direct " << fixed(t.sunSeconds, 2) << " s (" << t.sunRays << " rays), sky "
+        << fixed(t.skySeconds, 2) << " s (" << t.skyRays << " rays), indirect " << fixed(t.indirectSeconds, 2) << " s\n";
+  std::vector<const Grid<float>*> out{&e.skyHours};
+  for (const auto& d : e.days) out.push_back(&d.sunHours), out.push_back(&d.indirectHours);
+  cache.store("exposure", key, out);
+  return e;
+}
+
+void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const PrecomputeCache& cache,
+                        Precomputed& pre, std::ostream& log) {
+  const auto t0 = BakeClock::now();
+  ExposureSettings es;
+  es.quality = sunQuality(scene.sunQuality);
+  es.latitudeDeg = terrain.latitudeDeg;
+  es.startDayOfYear = scene.startDayOfYear();
+  es.seasonDays = scene.days;
+  // The fast path where it is valid (a pure height field) unless the scene asks for rays.
+  es.horizonSweep = scene.sunMethod == "horizon" || (scene.sunMethod == "auto" && terrain.occluders.empty());
+  if (scene.sunMethod == "horizon" && !terrain.occluders.empty())
+    throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
+  pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, log);
+  log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", "
+      << pre.exposure->days.size() << " sample days) (" << fixed(secondsSince(t0), 2) << " s)\n";
+}
+
+}  // namespace
+
+void Precomputed::temperatureForDay(int day, SnowState& s, const ModelParameters& params) const {
+  if (exposure) s.exposureHours = exposure->totalAt(day);
+  computeTemperatureBase(s, params);
+}
+
+void Precomputed::windForDay(int day, SnowState& s) const {
+  WindFieldsAtDay f = wind->at(day);
+  s.windXMps = std::move(f.windXMps);
+  s.windYMps = std::move(f.windYMps);
+  s.windEffectZM = std::move(f.windEffectZM);
+  s.windLoadingMps2 = std::move(f.windLoadingMps2);
+}
+
+Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
+                          std::ostream& log) {
+  Precomputed pre;
+  const bool occlusionMode = scene.mode == "occlusion";
+  if (occlusionMode)
+    log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
+  else if (scene.sunExposure)
+    precomputeExposure(scene, terrain, state, cache, pre, log);
+  else
+    log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
+  pre.temperatureForDay(0, state, scene.params);
+  const auto t0 = BakeClock::now();
+  const WeatherTimeline calm;
+  pre.wind.emplace(state.bedrockM, state.validCell, state.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
+                   WindSolverOptions{}, &log);
+  const WindTimeline& wind = *pre.wind;
+  if (occlusionMode) {
+  } else if (wind.hasWind()) {
+    log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " (" << wind.computedStates()
+        << " computed, " << wind.cachedStates() << " from the cache"
+        << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(secondsSince(t0), 2) << " s)\n";
+  } else {
+    log << "precompute: no wind in the season: wind field skipped\n";
+  }
+  pre.windForDay(0, state);
+  return pre;
+}
+
+}  // namespace snow

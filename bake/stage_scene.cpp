@@ -1,0 +1,29 @@
+// Stage 1: the scene, with the command line's overrides.
+#include <filesystem>
+
+#include "core/errors.h"
+#include "stages.h"
+
+namespace snow {
+
+Scene resolveScene(const BakeOptions& options) {
+  Scene scene = loadScene(options.scene, options.sets);
+  if (options.terrainFile) {
+    std::error_code ec;
+    if (!std::filesystem::exists(*options.terrainFile, ec))
+      throw InputError(*options.terrainFile + ": terrain file does not exist (--terrain)");
+    // The scene's reading options (cell size, height range, resampling...) still apply.
+    scene.terrain.builtin = false;
+    scene.terrain.file = *options.terrainFile;
+    scene.terrain.declaredAt = "--terrain";
+  }
+  if (options.seed) scene.seed = *options.seed;
+  if (options.threads) scene.threads = *options.threads;
+  if (options.backend) scene.backend = *options.backend;
+  if (scene.backend != "cpu" && scene.backend != "cuda" && scene.backend != "auto")
+    throw InputError("--backend " + scene.backend + ": must be cpu, cuda or auto");
+  if (scene.threads < 0) throw InputError("--threads " + std::to_string(scene.threads) + ": must be 0 (all cores) or more");
+  return scene;
+}
+
+}  // namespace snow

@@ -1,0 +1,87 @@
+// The stages of a bake, in the order bake.cpp runs them. Each is a function (or a small class)
+// in a file of its own in this folder; the modes (mode_grid.cpp for season and occlusion,
+// mode_mesh.cpp) are drivers that chain them.
+#pragma once
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <ostream>
+#include <vector>
+
+#include "art_direction.h"
+#include "bake.h"
+#include "bakers/manifest.h"
+#include "bakers/output_writer.h"
+#include "core/backend.h"
+#include "core/season.h"
+#include "core/ski.h"
+#include "precompute/cache.h"
+#include "precompute/exposure.h"
+#include "precompute/mesh.h"
+#include "precompute/scene.h"
+#include "precompute/terrain_loader.h"
+#include "precompute/wind_timeline.h"
+#include "scene/layers.h"
+
+namespace snow {
+
+using BakeClock = std::chrono::steady_clock;
+inline double secondsSince(BakeClock::time_point t0) { return std::chrono::duration<double>(BakeClock::now() - t0).count(); }
+
+// stage_scene.cpp: the scene file with the command line's overrides (--terrain, --seed,
+// --threads, --backend) applied and checked.
+Scene resolveScene(const BakeOptions& options);
+
+// stage_terrain.cpp: the terrain, the occluder meshes and the site's latitude.
+struct BakeTerrain {
+  Terrain terrain;
+  std::vector<TriangleMesh> occluders;
+  double latitudeDeg = 45.0;
+  const TerrainInfo& info() const { return terrain.info; }
+};
+BakeTerrain loadBakeTerrain(const Scene& scene, std::ostream& log);
+
+// stage_precompute.cpp: sun exposure (from the cache when it can) and the wind timeline; fills
+// the state's static fields of day 0 and refreshes them on later days.
+struct Precomputed {
+  std::optional<Exposure> exposure;
+  std::optional<WindTimeline> wind;  // a calm timeline in occlusion mode
+  // T = T0 + k_t A + k_i I (§4.1), the exposure of the day interpolated between samples.
+  void temperatureForDay(int day, SnowState& s, const ModelParameters& params) const;
+  // The day's wind (calm: no wind, W_z on the ground).
+  void windForDay(int day, SnowState& s) const;
+};
+Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
+                          std::ostream& log);
+
+// stage_backend.cpp: the season's backend (--backend, run.backend: cpu, cuda or auto).
+std::unique_ptr<SnowBackend> chooseBackend(const std::string& wanted, std::ostream& log);
+
+// stage_occlusion.cpp: mode = "occlusion" (Foldes & Benes 2007) in place of the season: the
+// four occlusion fields, the static cover in the state's stable layer, and on a mesh terrain the
+// mesh with its snow.
+struct OcclusionResult {
+  OcclusionGrids grids;
+  ManifestOcclusion manifest;
+  std::optional<TriangleMesh> snowMesh;
+  SeasonReport report;  // the final snow and the time taken
+};
+void runOcclusion(const Scene& scene, const BakeTerrain& terrain, SnowState& state, OcclusionResult& result, std::ostream& log);
+
+// season_config.cpp: what the season runs: the scene's events as cells, art direction's edits
+// and masked events, the ski-track texture and route map when the outputs ask for them.
+struct SeasonOutputs {
+  std::optional<SkiTracks> skiTracks;  // when the layers ask for ski_tracks
+  Grid<float> routeMap;                // when the layers ask for ski_route_map
+};
+SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const ArtDirectionPlan& art,
+                              const Precomputed& pre, const std::vector<std::string>& layers, SeasonOutputs& outputs, std::ostream& log);
+
+// stage_season.cpp: the season, with frame days written beside it (frame_writer.h); logs its report.
+SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int threads, SnowBackend& backend, SnowState& state,
+                            const SeasonConfig& config, SeasonOutputs& outputs, OutputWriter& writer, std::ostream& log);
+// season_log.cpp: the season's report as the log prints it.
+void logSeasonReport(const SeasonReport& report, const Scene& scene, const SeasonConfig& config, const std::string& backendName,
+                     std::ostream& log);
+
+}  // namespace snow

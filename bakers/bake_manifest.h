@@ -1,0 +1,28 @@
+// The manifest of a grid bake (season or occlusion mode), assembled from what each stage made.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "core/season.h"
+#include "manifest.h"
+#include "precompute/scene.h"
+#include "precompute/terrain_loader.h"
+
+namespace snow {
+
+struct BakeManifestInputs {
+  const Scene* scene = nullptr;
+  const Terrain* terrain = nullptr;
+  double latitudeDeg = 0.0;
+  std::string programVersion;
+  std::string backendName;
+  ManifestOcclusion occlusion;              // occlusion mode's settings
+  const SeasonReport* report = nullptr;     // the season's (or occlusion mode's) report
+  std::vector<ManifestRaster> artRasters;   // art direction's rasters
+  std::vector<ManifestEdit> edits;          // its edits (volumes filled from the report here)
+  std::vector<ManifestFile> files;          // every file written, in order
+};
+
+Manifest assembleBakeManifest(const BakeManifestInputs& in);
+
+}  // namespace snow

@@ -1,0 +1,48 @@
+// OutputWriter's per-avalanche maps (outputs.avalanche_maps, outputs.avalanche_frame_interval_s),
+// full-size so they line up with the layers: avalanches/NNN_<map>, avalanches/NNN/depth.FFFF.
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include "core/format.h"
+#include "grid_writer.h"
+#include "output_writer.h"
+
+namespace snow {
+
+namespace fs = std::filesystem;
+
+void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalanches, const GridSpec& spec) {
+  int number = 0;
+  for (const AvalancheRecord& a : avalanches) {
+    if (!a.released) continue;
+    ++number;
+    if (!a.maps) continue;
+    std::ostringstream stem;
+    stem << "avalanches/" << std::setw(3) << std::setfill('0') << number;
+    // A crop of the avalanche's box pasted into a full-size grid.
+    auto write = [&](const std::string& rel, Grid<float> full, const GridCrop& c, const std::string& content, const std::string& unit,
+                     double day) {
+      for (int y = 0; y < c.grid.height(); ++y)
+        for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
+      fs::create_directories((fs::path(src_.outDir) / rel).parent_path());
+      const WrittenImage img =
+          writeFloatImage((fs::path(src_.outDir) / rel).string(), scene_.outputs.format, full, "value", scene_.outputs.compressionLevel);
+      listFile(img.path, content, unit, floatImageFormat_, day, img.minValue, img.maxValue);
+    };
+    const Grid<float> zero(spec.width, spec.height, 0.f);
+    const std::string which = "avalanche " + std::to_string(number) + " (day " + fixed(a.day, 2) + ")";
+    write(stem.str() + "_release", zero, a.maps->release, which + ": release zone (1 released, 0 not)", "1", a.day);
+    write(stem.str() + "_scour", zero, a.maps->scour, which + ": snow taken away, net (m)", "m", a.day);
+    write(stem.str() + "_deposit", zero, a.maps->deposit, which + ": snow left, net (m)", "m", a.day);
+    for (size_t k = 0; k < a.maps->frames.size(); ++k) {
+      std::ostringstream rel;
+      rel << stem.str() << "/depth." << std::setw(4) << std::setfill('0') << k;
+      const auto& [seconds, c] = a.maps->frames[k];
+      write(rel.str(), a.maps->depthAtRelease, c, which + ": snow depth C+S+U+P at " + fixed(seconds, 2) + " s after the release (m)", "m",
+            a.day + seconds / 86400.0);
+    }
+  }
+}
+
+}  // namespace snow

@@ -1,0 +1,243 @@
+// OutputWriter: a day's layers, previews, displacement maps, multi-channel EXR and VDB, and the
+// contact sheet. The meshes are in output_meshes.cpp, each avalanche's maps in output_avalanches.cpp.
+#include "output_writer.h"
+
+#include <tbb/task_group.h>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include "core/format.h"
+#include "grid_writer.h"
+#include "precompute/solar.h"
+#include "vdb_writer.h"
+
+namespace snow {
+
+namespace fs = std::filesystem;
+
+namespace {
+thread_local OutputSink* tlSink = nullptr;
+}  // namespace
+
+OutputSink& currentSink() { return *tlSink; }
+SinkScope::SinkScope(OutputSink& sink) : previous_(tlSink) {
+  tlSink = &sink;
+  sink.last = std::chrono::steady_clock::now();
+}
+SinkScope::~SinkScope() { tlSink = previous_; }
+
+std::string OutputWriter::Day::base(const std::string& stem, const std::string& outDir) const {
+  return (fs::path(outDir) / (frame ? "frames" : "") / (stem + dayTag)).string();
+}
+
+OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std::move(sources)), scene_(*src_.scene), log_(log) {
+  floatImageFormat_ = scene_.outputs.format == "exr"
+                          ? "OpenEXR, 1 channel float32 (" + exrCompressionName(scene_.outputs.compressionLevel) + "), linear"
+                          : "TIFF, 1 channel float32 (zip), linear";
+}
+
+void OutputWriter::listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
+                            double day, float minValue, float maxValue) const {
+  OutputSink& sink = currentSink();
+  sink.addSeconds(format.substr(0, format.find(',')));
+  ManifestFile f;
+  f.path = fs::relative(path, src_.outDir).string();
+  f.content = content;
+  f.unit = unit;
+  f.format = format;
+  f.day = day;
+  f.minValue = minValue;
+  f.maxValue = maxValue;
+  sink.files.push_back(f);
+  sink.paths.push_back(path);
+}
+
+void OutputWriter::writeDay(const SnowState& s, double day, const Grid<float>* skiDepth) {
+  OutputSink& parent = currentSink();
+  Day d{s, day, day >= 0.0 ? day : scene_.days, day >= 0.0, "", skiDepth};
+  if (d.frame) {
+    fs::create_directories(fs::path(src_.outDir) / "frames");
+    std::ostringstream o;
+    o << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
+    d.dayTag = o.str();
+  }
+  // The VDB and the meshes (the larger writers) run beside the layers as tasks of their own,
+  // each listing into its own sink, merged below in a fixed order.
+  OutputSink layerSink, vdbSink, meshSink;
+  tbb::task_group group;
+  group.run([&] {
+    SinkScope scope(vdbSink);
+    writeVdb(d);
+  });
+  group.run([&] {
+    SinkScope scope(meshSink);
+    writeMeshes(d);
+  });
+  std::exception_ptr layerError;
+  try {
+    SinkScope scope(layerSink);
+    writeLayers(d);
+  } catch (...) {
+    layerError = std::current_exception();
+  }
+  group.wait();  // rethrows the VDB and mesh writers' error
+  if (layerError) std::rethrow_exception(layerError);
+  parent.merge(layerSink);
+  parent.merge(vdbSink);
+  parent.merge(meshSink);
+}
+
+void OutputWriter::writeLayers(const Day& d) {
+  // The day's wind and sun, fetched once when a layer needs them.
+  uint8_t needs = 0;
+  for (const auto& name : src_.layers) needs |= findLayer(name)->needs;
+  WindFieldsAtDay wind;
+  Grid<float> sunHours;
+  LayerInputs in;
+  in.state = &d.s;
+  in.params = &scene_.params;
+  if (needs & kNeedsWind) {
+    wind = src_.wind->at(d.outputDay);
+    in.windXMps = &wind.windXMps, in.windYMps = &wind.windYMps, in.windEffectZM = &wind.windEffectZM;
+  }
+  if (needs & kNeedsSun) {
+    sunHours = src_.exposure ? src_.exposure->totalAt(d.outputDay) : Grid<float>(d.s.spec.width, d.s.spec.height, 0.f);
+    in.sunHours = &sunHours;
+    in.seaLevelTemperatureC = scene_.weather.at(d.outputDay).seaLevelTemperatureC;
+  }
+  in.skiDepth = d.skiDepth;
+  in.routeMap = src_.routeMap;
+  in.occlusion = src_.occlusion;
+  std::vector<std::string> channelNames;
+  std::vector<Grid<float>> channels;
+  for (const auto& name : src_.layers) {
+    if (d.frame && name == "valid_mask") continue;
+    const LayerInfo& layer = *findLayer(name);
+    if (layer.kind == LayerKind::Preview)
+      writePreview(d, layer);
+    else
+      writeFloatLayer(d, layer, layer.compute(in), channelNames, channels);
+  }
+  writeDisplacement(d);
+  writeMultiChannel(d, channelNames, channels);
+}
+
+void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
+                                   std::vector<Grid<float>>& channels) {
+  const auto& out = scene_.outputs;
+  const std::string base = d.base(layer.name, src_.outDir);
+  std::string content = layer.content;
+  const bool ownSize = grid.width() != d.s.spec.width || grid.height() != d.s.spec.height;
+  // The ski-track texture is finer than the grid: its texels per cell, listed with each file.
+  if (layer.needs & kNeedsSkiTracks)
+    content += " (" + std::to_string(src_.skiTrackFactor) + " x " + std::to_string(src_.skiTrackFactor) + " texels per cell)";
+  auto sized = [&] {
+    if (ownSize) currentSink().files.back().width = grid.width(), currentSink().files.back().height = grid.height();
+  };
+  const WrittenImage img = writeFloatImage(base, out.format, grid, layer.name, out.compressionLevel);
+  listFile(img.path, content, layer.unit, floatImageFormat_, d.day, img.minValue, img.maxValue);
+  sized();
+  for (const std::string& encoding : out.encodings) {
+    const WrittenImage e = writeNormalised(base, encoding, grid, out.compressionLevel);
+    listFile(e.path, content, layer.unit, normalisedFormat(encoding, grid.width(), grid.height()), d.day, e.minValue, e.maxValue);
+    sized();
+  }
+  if (out.multichannelExr && !ownSize) {
+    channelNames.push_back(layer.name);
+    channels.push_back(std::move(grid));
+  }
+}
+
+void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
+  const std::string path = d.base(layer.name, src_.outDir) + ".png";
+  const SnowState& s = d.s;
+  const int level = scene_.outputs.compressionLevel;
+  if (std::string(layer.name) == "avalanche_preview") {
+    const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
+    writeRgbPng(path, s.spec.width, s.spec.height,
+                avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM), level);
+    listFile(path, layer.content, layer.unit, "PNG, 3 channels uint8, sRGB", d.day, 0.f, 255.f);
+    return;
+  }
+  // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
+  const double latitude = src_.latitudeDeg;
+  SunPosition sun = sunPosition(latitude, scene_.startDayOfYear() + d.outputDay, 12.0);
+  double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
+  if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
+  const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
+  writeRgbPng(path, s.spec.width, s.spec.height, rgb, level);
+  listFile(path, layer.content, layer.unit, "PNG, 3 channels uint8, sRGB", d.day, 0.f, 255.f);
+  // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
+  const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
+  const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
+  std::vector<uint8_t> thumb(static_cast<size_t>(tw) * th * 3);
+  for (int y = 0; y < th; ++y)
+    for (int x = 0; x < tw; ++x)
+      std::copy_n(&rgb[(static_cast<size_t>(y * stride) * s.spec.width + x * stride) * 3], 3, &thumb[(static_cast<size_t>(y) * tw + x) * 3]);
+  previews_.push_back(std::move(thumb));
+  previewWidth_ = tw, previewHeight_ = th;
+}
+
+// Snow depth (for a displacement modifier on the terrain) and the snow surface's height at the
+// requested resolution, bilinear from the grid.
+void OutputWriter::writeDisplacement(const Day& d) {
+  const auto& out = scene_.outputs;
+  if (out.displacementWidth <= 0) return;
+  for (const std::string what : {"depth", "surface"}) {
+    const LayerInfo& layer = *findLayer(what);
+    const Grid<float> g = resampleBilinear(layer.compute(LayerInputs{&d.s}), out.displacementWidth, out.displacementHeight);
+    const WrittenImage img = writeFloatImage(d.base("displacement_" + what, src_.outDir), out.format, g, what, out.compressionLevel);
+    listFile(img.path,
+             std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                 " over the same extent",
+             "m", floatImageFormat_, d.day, img.minValue, img.maxValue);
+  }
+}
+
+void OutputWriter::writeMultiChannel(const Day& d, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels) {
+  if (channels.empty()) return;
+  const std::string path = d.base("layers", src_.outDir) + ".exr";
+  std::vector<const Grid<float>*> grids;
+  for (const auto& g : channels) grids.push_back(&g);
+  writeMultiChannelExr(path, names, grids, scene_.outputs.compressionLevel);
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  listFile(path, "all layers as named channels: " + list, "per channel, as the single-layer files",
+           "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompressionName(scene_.outputs.compressionLevel) +
+               "), linear",
+           d.day, 0.f, 0.f);
+}
+
+void OutputWriter::writeVdb(const Day& d) {
+  if (!scene_.outputs.vdb) return;
+  VdbOptions vo;
+  vo.voxelSizeM = scene_.outputs.vdbVoxelSizeM > 0.0 ? scene_.outputs.vdbVoxelSizeM : std::min(d.s.spec.cellSizeXM, d.s.spec.cellSizeYM);
+  const std::string path = d.base("snow", src_.outDir) + ".vdb";
+  const VdbSummary v = writeSnowVdb(path, d.s, vo);
+  listFile(path,
+           "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
+               fixed(vo.compactedKgPerM3, 0) + "/" + fixed(vo.stableKgPerM3, 0) + "/" + fixed(vo.unstableKgPerM3, 0) + "/" +
+               fixed(vo.powderKgPerM3, 0) + "); " + std::to_string(v.snowVoxels) +
+               " snow voxels; x east, y north from the south-west corner, z altitude",
+           "m (voxel size " + fixed(vo.voxelSizeM, 3) + ")", "OpenVDB", d.day, 0.f, 0.f);
+}
+
+void OutputWriter::writeContactSheet() {
+  if (previews_.size() <= 1) return;
+  int sw = 0, sh = 0;
+  const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(previews_.size()))));
+  const std::vector<uint8_t> sheet = contactSheetRgb(previews_, previewWidth_, previewHeight_, columns, sw, sh);
+  const std::string path = (fs::path(src_.outDir) / "contact_sheet.png").string();
+  writeRgbPng(path, sw, sh, sheet, scene_.outputs.compressionLevel);
+  listFile(path,
+           "contact sheet of the season: the previews of the frame days in order, then the season's end, " + std::to_string(columns) +
+               " to a row",
+           "sRGB", "PNG, 3 channels uint8, sRGB", -1.0, 0.f, 255.f);
+}
+
+}  // namespace snow

@@ -1,0 +1,92 @@
+// The bake's outputs of one day (a frame day, or the season's end): every layer in its float
+// format and encodings, previews, displacement maps, the multi-channel EXR, the VDB and the
+// meshes; then the season's contact sheet and each avalanche's maps. Every file is listed in the
+// current sink (output_sink.h), which becomes the manifest's file list.
+#pragma once
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "core/avalanche.h"
+#include "core/snow_state.h"
+#include "output_sink.h"
+#include "precompute/exposure.h"
+#include "precompute/mesh.h"
+#include "precompute/scene.h"
+#include "precompute/wind_timeline.h"
+#include "scene/layers.h"
+
+namespace snow {
+
+// What the outputs are made from beyond the day's snow state. Pointers may be null where a
+// scene has none (no exposure with precompute.sun = false, no occlusion fields in a season).
+struct OutputSources {
+  const Scene* scene = nullptr;
+  std::string outDir;
+  double latitudeDeg = 0.0;
+  std::vector<std::string> layers;       // the scene's, with valid_mask added on terrains with NODATA
+  const WindTimeline* wind = nullptr;
+  const Exposure* exposure = nullptr;
+  const OcclusionGrids* occlusion = nullptr;
+  const Grid<float>* routeMap = nullptr;  // the skiers' route map (empty without skiers)
+  int skiTrackFactor = 0;                 // the ski-track texture's texels per cell, 0 without one
+  const std::vector<TriangleMesh>* occluders = nullptr;
+  const TriangleMesh* snowMesh = nullptr;  // occlusion mode on a mesh terrain: the mesh with its snow
+};
+
+class OutputWriter {
+ public:
+  OutputWriter(OutputSources sources, std::ostream& log);
+
+  // The outputs of season day `day` (a frame, under frames/ with a .DDDD tag), or of the
+  // season's end for day < 0. `skiDepth`: the ski-track texture of that day (null without one).
+  void writeDay(const SnowState& s, double day, const Grid<float>* skiDepth);
+  // After the last day: the previews of every day on one sheet (when there were several).
+  void writeContactSheet();
+  // Each released avalanche's release zone, scour, deposit and motion frames (outputs.avalanche_maps).
+  void writeAvalancheMaps(const std::vector<AvalancheRecord>& avalanches, const GridSpec& spec);
+  // Occlusion mode on a mesh terrain: the mesh with its snow, known once the occlusion ran.
+  void setSnowMesh(const TriangleMesh* mesh) { src_.snowMesh = mesh; }
+  // Lines about snow on the occluders, gathered while the writers ran beside each other.
+  const std::string& occluderNotes() const { return occluderNotes_; }
+
+  // Lists a file written in the current sink.
+  void listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format, double day,
+                float minValue, float maxValue) const;
+
+ private:
+  // One day's outputs: what they show and where they go.
+  struct Day {
+    const SnowState& s;
+    double day;             // the frame's day, or < 0 for the season's end
+    double outputDay;       // the season day the outputs show
+    bool frame;
+    std::string dayTag;     // ".DDDD" on frame days
+    const Grid<float>* skiDepth;
+    // DIR/STEM at the season's end, DIR/frames/STEM.DDDD on a frame day (zero-padded, so DCC
+    // tools read the frames as a sequence), less the extension.
+    std::string base(const std::string& stem, const std::string& outDir) const;
+  };
+  void writeLayers(const Day& d);
+  void writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
+                       std::vector<Grid<float>>& channels);
+  void writePreview(const Day& d, const LayerInfo& layer);
+  void writeDisplacement(const Day& d);
+  void writeMultiChannel(const Day& d, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels);
+  void writeVdb(const Day& d);
+  void writeMeshes(const Day& d);
+  void writeGridMeshParts(const Day& d);
+  void writeOccluderSnow(const Day& d);
+  void writeSnowMesh(const Day& d);
+
+  OutputSources src_;
+  const Scene& scene_;
+  std::ostream& log_;
+  std::string floatImageFormat_;  // the manifest's format line of every float image
+  std::string occluderNotes_;
+  std::vector<std::vector<uint8_t>> previews_;  // every preview written, subsampled, for the contact sheet
+  int previewWidth_ = 0, previewHeight_ = 0;
+};
+
+}  // namespace snow
