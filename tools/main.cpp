@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "core/errors.h"
-#include "tools/bench.h"
+#include "bench/bench.h"
 #include "tools/pipeline.h"
 
 int main(int argc, char** argv) {

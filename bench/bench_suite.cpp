@@ -28,7 +28,7 @@
 #include "precompute/exposure.h"
 #include "precompute/terrain_loader.h"
 #include "precompute/wind.h"
-#include "pipeline.h"
+#include "tools/pipeline.h"
 
 extern char** environ;
 
