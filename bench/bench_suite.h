@@ -3,19 +3,17 @@
 // stage and peak memory, each size in its own process), the machine limit (copy bandwidth and
 // the season kernels' achieved bandwidth) and CPU against CUDA agreement.
 #pragma once
-#include <chrono>
 #include <cstdio>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "bench.h"
+#include "core/util.h"
 #include "plot.h"
 
 namespace snow {
 
-using BenchClock = std::chrono::steady_clock;
-inline double benchSince(BenchClock::time_point t) { return std::chrono::duration<double>(BenchClock::now() - t).count(); }
 // printf-style formatting of one number.
 inline std::string benchFormat(const char* f, double v) {
   char buf[64];
