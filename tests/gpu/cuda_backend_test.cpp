@@ -93,7 +93,7 @@ TEST(CudaBackend, LongSequencesStayIdentical) {
 }
 
 // Not a benchmark (those live in the bench suite): prints the time of each step on a 1024^2 grid
-// so a GPU session records what it saw, and checks the steps finish without a CUDA error.
+// so a run on a GPU machine records what it saw, and checks the steps finish without a CUDA error.
 TEST(CudaBackend, StepTimesOn1024Squared) {
   SKIP_WITHOUT_CUDA();
   const SnowState initial = test::makeRoughState(1024, 1024, 3, 10.0, 10.0);
