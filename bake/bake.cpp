@@ -15,7 +15,7 @@ namespace snow {
 const char* programVersion() { return SNOWBAKE_VERSION; }
 
 BakeResult runBake(const BakeOptions& options, std::ostream& log) {
-  const auto tStart = BakeClock::now();
+  const auto tStart = WallClock::now();
   const Scene scene = resolveScene(options);
   const int threads = scene.threads > 0 ? scene.threads : tbb::info::default_concurrency();
   tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));

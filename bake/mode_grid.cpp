@@ -44,7 +44,7 @@ std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti
 
 }  // namespace
 
-BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, BakeClock::time_point tStart) {
+BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
   const bool occlusionMode = scene.mode == "occlusion";
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
@@ -81,7 +81,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   }
 
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
-  const auto t0 = BakeClock::now();
+  const auto t0 = WallClock::now();
   writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
   writer.writeContactSheet();
@@ -94,9 +94,9 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   writeTextAtomically(manifestPath, manifestToJson(manifest));
   result.files.push_back(manifestPath);
   log << writer.occluderNotes();
-  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(secondsSince(t0), 2) << " s)\n";
+  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   for (const auto& [kind, seconds] : files.seconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";
-  log << "total: " << fixed(secondsSince(tStart), 2) << " s\n";
+  log << "total: " << fixed(elapsedSeconds(tStart), 2) << " s\n";
   result.season = report;
   result.backendName = backendName;
   return result;

@@ -44,33 +44,33 @@ MeshSnowManifest meshManifest(const Scene& scene, const TriangleMesh& mesh, cons
 
 }  // namespace
 
-BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, BakeClock::time_point tStart) {
+BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, WallClock::time_point tStart) {
   BakeResult result;
   result.backendName = "cpu (Embree ray queries, TBB)";
-  auto t0 = BakeClock::now();
+  auto t0 = WallClock::now();
   const TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (const auto& p : mesh.positions)
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
   log << "mode: mesh (Fearing 2000: snow on the mesh itself; no grid, no season)\n";
   log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
-      << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(secondsSince(t0), 2) << " s)\n";
-  t0 = BakeClock::now();
+      << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  t0 = WallClock::now();
   FallenSnowSettings placement = scene.meshSnow.placement;
   placement.seed = scene.seed;
   FallenSnow snow = placeFallenSnow(mesh, placement);
   log << "placement: " << snow.sites.size() << " sites (" << snow.refinedCells << " cells refined), " << snow.flakes << " flakes ("
       << snow.blocked << " blocked, " << snow.leftTheWorld << " left the world), sky " << fixed(snow.skyMassM3, 4) << " m^3, placed "
-      << fixed(snow.placedM3, 4) << " m^3 (" << fixed(secondsSince(t0), 2) << " s)\n";
-  t0 = BakeClock::now();
+      << fixed(snow.placedM3, 4) << " m^3 (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  t0 = WallClock::now();
   FallenSnowStability stability = scene.meshSnow.stability;
   stability.seed = scene.seed;
   const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, stability);
   log << "stability: " << st.rounds << " rounds, " << st.passes << " passes"
       << (st.unconvergedRounds ? " (" + std::to_string(st.unconvergedRounds) + " rounds hit the pass limit)" : std::string()) << ", "
       << fixed(st.overEdgesM3, 4) << " m^3 over edges, " << fixed(st.leftTheWorldM3, 4) << " m^3 left the world, " << fixed(st.finalM3, 4)
-      << " m^3 kept (" << fixed(secondsSince(t0), 2) << " s)\n";
-  t0 = BakeClock::now();
+      << " m^3 kept (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  t0 = WallClock::now();
   std::error_code ec;
   fs::create_directories(options.outDir, ec);
   if (ec) throw InputError(options.outDir + ": cannot create the output folder: " + ec.message());
@@ -97,8 +97,8 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, meshSnowManifestToJson(manifest));
   result.files.push_back(manifestPath);
-  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(secondsSince(t0), 2) << " s)\n";
-  log << "total: " << fixed(secondsSince(tStart), 2) << " s\n";
+  log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  log << "total: " << fixed(elapsedSeconds(tStart), 2) << " s\n";
   return result;
 }
 

@@ -7,8 +7,8 @@
 namespace snow {
 
 // mode = "season" and mode = "occlusion" (mode_grid.cpp).
-BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, BakeClock::time_point tStart);
+BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart);
 // mode = "mesh" (mode_mesh.cpp): Fearing's snow on the mesh itself, no grid and no season.
-BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, BakeClock::time_point tStart);
+BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, WallClock::time_point tStart);
 
 }  // namespace snow

@@ -34,7 +34,7 @@ OcclusionSettings occlusionSettings(const Scene& scene, double latitudeDeg) {
 // x east from its origin, rows south from it).
 TriangleMesh snowOnInputMesh(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const OcclusionSettings& os,
                              std::ostream& log) {
-  const auto tm = BakeClock::now();
+  const auto tm = WallClock::now();
   TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
   std::vector<TriangleMesh> meshes = terrain.occluders;
   meshes.insert(meshes.begin(), mesh);
@@ -55,7 +55,7 @@ TriangleMesh snowOnInputMesh(const Scene& scene, const BakeTerrain& terrain, con
     mesh.positions[k][2] += snow, volume += snow;
   }
   log << "occlusion: mesh " << mesh.source << ", " << mesh.positions.size() << " vertices, " << mesh.triangles.size()
-      << " triangles: " << fixed(secondsSince(tm), 2) << " s (mean snow " << fixed(volume / std::max<size_t>(1, mesh.positions.size()), 3)
+      << " triangles: " << fixed(elapsedSeconds(tm), 2) << " s (mean snow " << fixed(volume / std::max<size_t>(1, mesh.positions.size()), 3)
       << " m per vertex)\n";
   return mesh;
 }
@@ -65,9 +65,9 @@ TriangleMesh snowOnInputMesh(const Scene& scene, const BakeTerrain& terrain, con
 void runOcclusion(const Scene& scene, const BakeTerrain& terrain, SnowState& state, OcclusionResult& result, std::ostream& log) {
   const OcclusionSettings os = occlusionSettings(scene, terrain.latitudeDeg);
   const double sunDay = scene.occlusion.day.value_or(scene.days / 2.0);
-  const auto tOcc = BakeClock::now();
+  const auto tOcc = WallClock::now();
   const RayScene rays(state.bedrockM, state.spec, terrain.occluders);
-  const double buildSeconds = secondsSince(tOcc);
+  const double buildSeconds = elapsedSeconds(tOcc);
   const OcclusionSnow o = computeOcclusionSnowOnTerrain(rays, state.bedrockM, state.validCell, state.spec, os);
   auto asGrid = [&](const std::vector<float>& v) {
     Grid<float> g(state.spec.width, state.spec.height, 0.f);
@@ -94,7 +94,7 @@ void runOcclusion(const Scene& scene, const BakeTerrain& terrain, SnowState& sta
     result.manifest.meshSource = result.snowMesh->source;
   }
   for (size_t i = 0; i < state.stableM.size(); ++i) result.report.final.stableM3 += state.stableM.values()[i] * state.spec.cellAreaM2();
-  result.report.seconds = secondsSince(tOcc);
+  result.report.seconds = elapsedSeconds(tOcc);
   log << "occlusion: " << std::scientific << std::setprecision(4) << result.report.final.totalM3() << std::defaultfloat << " m^3 of snow ("
       << fixed(result.report.seconds, 2) << " s)\n";
 }

@@ -54,7 +54,7 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
 
 void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const PrecomputeCache& cache,
                         Precomputed& pre, std::ostream& log) {
-  const auto t0 = BakeClock::now();
+  const auto t0 = WallClock::now();
   ExposureSettings es;
   es.quality = sunQuality(scene.sunQuality);
   es.latitudeDeg = terrain.latitudeDeg;
@@ -66,7 +66,7 @@ void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const Sn
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
   pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, log);
   log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", "
-      << pre.exposure->days.size() << " sample days) (" << fixed(secondsSince(t0), 2) << " s)\n";
+      << pre.exposure->days.size() << " sample days) (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
 }
 
 }  // namespace
@@ -95,7 +95,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   else
     log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
   pre.temperatureForDay(0, state, scene.params);
-  const auto t0 = BakeClock::now();
+  const auto t0 = WallClock::now();
   const WeatherTimeline calm;
   pre.wind.emplace(state.bedrockM, state.validCell, state.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
                    WindSolverOptions{}, &log);
@@ -104,7 +104,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   } else if (wind.hasWind()) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " (" << wind.computedStates()
         << " computed, " << wind.cachedStates() << " from the cache"
-        << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(secondsSince(t0), 2) << " s)\n";
+        << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   } else {
     log << "precompute: no wind in the season: wind field skipped\n";
   }

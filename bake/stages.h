@@ -14,6 +14,7 @@
 #include "bakers/output_writer.h"
 #include "core/backend.h"
 #include "core/season.h"
+#include "core/util.h"
 #include "core/ski.h"
 #include "precompute/cache.h"
 #include "precompute/exposure.h"
@@ -24,9 +25,6 @@
 #include "scene/layers.h"
 
 namespace snow {
-
-using BakeClock = std::chrono::steady_clock;
-inline double secondsSince(BakeClock::time_point t0) { return std::chrono::duration<double>(BakeClock::now() - t0).count(); }
 
 // stage_scene.cpp: the scene file with the command line's overrides (--terrain, --seed,
 // --threads, --backend) applied and checked.

@@ -8,16 +8,16 @@
 #include <openvdb/tools/VolumeToMesh.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
+#include "core/util.h"
 #include "vdb_file.h"
 
 namespace snow {
 
 MeshSnowBody buildMeshSnowBody(const FallenSnow& snow, const TriangleMesh& mesh, const MeshSnowBodyOptions& o, const std::string& vdbPath) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = WallClock::now();
   openvdb::initialize();
   if (!(snow.siteSpacingM > 0.0)) throw std::runtime_error(mesh.source + ": snow body: no placed snow");
   const double v = o.voxelSizeM > 0.0 ? o.voxelSizeM : 0.5 * snow.siteSpacingM;
@@ -92,7 +92,7 @@ MeshSnowBody buildMeshSnowBody(const FallenSnow& snow, const TriangleMesh& mesh,
     openvdb::GridPtrVec grids{sdf, fog};
     writeVdbGridsAtomically(vdbPath, grids);
   }
-  body.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  body.seconds = elapsedSeconds(t0);
   return body;
 }
 

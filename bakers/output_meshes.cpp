@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "core/format.h"
+#include "core/util.h"
 #include "mesh_snow_body.h"
 #include "mesh_writer.h"
 #include "output_writer.h"
@@ -17,10 +18,8 @@
 namespace snow {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 namespace {
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // The mean snow depth of the valid cells in a ring two cells wide round a mesh's footprint: how
 // deep snow lies on open flat ground near it.
@@ -70,7 +69,7 @@ void OutputWriter::writeOccluderSnow(const Day& d) {
       occluderNotes_ += "  " + name + ": no snow on the terrain round " + mesh.source + ": no snow body written\n";
       continue;
     }
-    auto tm = Clock::now();
+    auto tm = WallClock::now();
     FallenSnow snow = placeFallenSnow(mesh, ps);
     double buriedM3 = 0;
     for (SnowSite& site : snow.sites) {
@@ -82,7 +81,7 @@ void OutputWriter::writeOccluderSnow(const Day& d) {
     ss.seed = scene_.seed + k;
     const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, ss);
     const MeshSnowBody body = buildMeshSnowBody(snow, mesh, scene_.meshSnow.body);
-    currentSink().addSeconds("snow on the occluders", since(tm));
+    currentSink().addSeconds("snow on the occluders", elapsedSeconds(tm));
     // (Logged after the writers join: this runs beside the layers' thread.)
     occluderNotes_ += "  " + name + ": " + mesh.source + ", " + fixed(ps.depthM, 3) + " m as on the terrain round it (" +
                       std::to_string(ring) + " cells), " + std::to_string(snow.sites.size()) + " sites, " + fixed(snow.placedM3, 3) +
@@ -110,9 +109,9 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
   const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
   std::vector<const Grid<float>*> fields{&surface};
   if (body) fields.push_back(&s.bedrockM);
-  const auto tTri = Clock::now();
+  const auto tTri = WallClock::now();
   const RtinMesh triangulation = buildRtin(fields, s.validCell, out.meshMaxErrorM);
-  currentSink().addSeconds("mesh triangulation (adaptive)", since(tTri));
+  currentSink().addSeconds("mesh triangulation (adaptive)", elapsedSeconds(tTri));
   const std::string frameNote = " (adaptive triangulation, vertical error at most " + fixed(out.meshMaxErrorM, 3) +
                                 " m at every grid point; x east, y north from the south-west corner; UVs line up with the maps)";
   auto writeAll = [&](const std::string& stem, const MeshData& mesh, const std::string& what) {
@@ -126,9 +125,9 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
     }
   };
   auto writeSurface = [&] {
-    auto tm = Clock::now();
+    auto tm = WallClock::now();
     const MeshData mesh = surfaceMesh(triangulation, surface, s.spec);
-    currentSink().addSeconds("mesh building", since(tm));
+    currentSink().addSeconds("mesh building", elapsedSeconds(tm));
     const int tileCells = out.meshTileSizeM > 0.0 ? std::max(1, static_cast<int>(std::lround(out.meshTileSizeM / s.spec.cellSizeXM))) : 0;
     if (tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height)) return writeAll("snow_surface", mesh, "snow surface B+C+S+U+P");
     for (const MeshTile& t : splitIntoTiles(mesh, s.spec, tileCells))
@@ -137,9 +136,9 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
                    " (from the north) of " + std::to_string(tileCells) + " x " + std::to_string(tileCells) + " cells");
   };
   auto writeBody = [&] {
-    auto tm = Clock::now();
+    auto tm = WallClock::now();
     const MeshData mesh = snowBodyMesh(triangulation, s.bedrockM, findLayer("depth")->compute(LayerInputs{&s}), s.validCell, s.spec);
-    currentSink().addSeconds("mesh building", since(tm));
+    currentSink().addSeconds("mesh building", elapsedSeconds(tm));
     if (mesh.triangles.empty()) {
       log_ << "  snow_body" << d.dayTag << ": no snow, no mesh written\n";
       return;

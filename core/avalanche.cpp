@@ -1,15 +1,15 @@
 #include "avalanche.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <deque>
 #include <limits>
 
+#include "util.h"
+
 namespace snow {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 GridCrop crop(const Grid<float>& g, int x0, int y0, int x1, int y1) {
   GridCrop c;
@@ -20,7 +20,6 @@ GridCrop crop(const Grid<float>& g, int x0, int y0, int x1, int y1) {
     for (int x = x0; x < x1; ++x) c.grid(x - x0, y - y0) = g(x, y);
   return c;
 }
-using Clock = std::chrono::steady_clock;
 
 double surfaceAt(const SnowState& s, size_t i) {
   return static_cast<double>(s.bedrockM.values()[i]) + s.compactedM.values()[i] + s.stableM.values()[i] +
@@ -73,7 +72,7 @@ void AvalancheRun::beginRecord(int rx, int ry, double day, bool user) {
 }
 
 bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, double seaLevelTemperatureC, bool user) {
-  const auto t0 = Clock::now();
+  const auto t0 = WallClock::now();
   backend_.download(before_);
   const SnowState& s = before_;
   const int w = s.spec.width;
@@ -99,7 +98,7 @@ bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, dou
 }
 
 bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLevelTemperatureC, bool user) {
-  const auto t0 = Clock::now();
+  const auto t0 = WallClock::now();
   beginRecord(rx, ry, day, user);
   const SnowState& s = before_;
   const int w = s.spec.width, h = s.spec.height;
@@ -139,7 +138,7 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
   return true;
 }
 
-void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, Clock::time_point t0) {
+void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, WallClock::time_point t0) {
   const SnowState& s = before_;
   const int w = s.spec.width, h = s.spec.height;
   auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
@@ -176,12 +175,12 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
   }
   active_ = true;
   lastSpeed_ = 0.f;
-  wallSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
+  wallSeconds_ = elapsedSeconds(t0);
 }
 
 bool AvalancheRun::step() {
   if (!active_ || atRest_) return true;
-  const auto t0 = Clock::now();
+  const auto t0 = WallClock::now();
   const double stepS = p_.avalancheStepS;
   const double minCell = std::min(before_.spec.cellSizeXM, before_.spec.cellSizeYM);
   const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
@@ -212,7 +211,7 @@ bool AvalancheRun::step() {
   record_.simulatedS += stepS;
   lastSpeed_ = speed;
   record_.maxSpeedMps = std::max(record_.maxSpeedMps, speed);
-  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  const double seconds = elapsedSeconds(t0);
   wallSeconds_ += seconds;
   record_.stepSeconds += seconds;
   if (record_.maps && frameIntervalS_ > 0.0 && record_.simulatedS + 1e-9 >= nextFrameS_) {
@@ -248,7 +247,7 @@ void AvalancheRun::captureFrame() {
 
 AvalancheRecord AvalancheRun::settle() {
   if (!active_) return record_;
-  const auto t0 = Clock::now();
+  const auto t0 = WallClock::now();
   backend_.avalancheSettle(unionBox_);
   active_ = false;
   backend_.download(after_);
@@ -289,7 +288,7 @@ AvalancheRecord AvalancheRun::settle() {
     if (frameIntervalS_ > 0.0)
       record_.maps->frames.push_back({record_.simulatedS, crop(after.depthGrid(), unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
   }
-  wallSeconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
+  wallSeconds_ += elapsedSeconds(t0);
   record_.seconds = wallSeconds_;
   return record_;
 }

@@ -6,11 +6,11 @@
 #include <sstream>
 
 #include "rng.h"
+#include "util.h"
 
 namespace snow {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 double tanDeg(double d) { return std::tan(d * kPi / 180.0); }
 }  // namespace
 

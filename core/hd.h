@@ -16,8 +16,6 @@ namespace snow {
 SNOW_HD SNOW_INLINE float clampf(float v, float lo, float hi) { return v < lo ? lo : (v > hi ? hi : v); }
 SNOW_HD SNOW_INLINE float maxf(float a, float b) { return a > b ? a : b; }
 SNOW_HD SNOW_INLINE float minf(float a, float b) { return a < b ? a : b; }
-SNOW_HD SNOW_INLINE int minInt(int a, int b) { return a < b ? a : b; }
-SNOW_HD SNOW_INLINE int mini(int a, int b) { return a < b ? a : b; }
 SNOW_HD SNOW_INLINE int maxi(int a, int b) { return a > b ? a : b; }
 
 }  // namespace snow

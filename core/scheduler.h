@@ -21,7 +21,6 @@
 namespace snow {
 
 enum class EventKind { Start = 0, Step = 1, Stop = 2 };
-inline const char* eventKindName(EventKind k) { return k == EventKind::Start ? "start" : k == EventKind::Step ? "step" : "stop"; }
 
 struct EventContext {
   double day = 0;           // simulated time, days since the season start

@@ -7,12 +7,9 @@
 #include <stdexcept>
 
 #include "rng.h"
+#include "util.h"
 
 namespace snow {
-
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-}  // namespace
 
 Grid<float> routeMap(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec) {
   const int w = spec.width, h = spec.height;

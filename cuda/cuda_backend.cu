@@ -6,8 +6,6 @@
 
 namespace snow::cuda {
 
-bool compiledWithCuda() { return true; }
-
 DeviceInfo probeDevice() {
   DeviceInfo info;
   int count = 0;

@@ -14,7 +14,6 @@ struct DeviceInfo {
   std::string reason;       // why not, when unavailable
 };
 
-bool compiledWithCuda();
 // Never throws: any error from cudaGetDeviceCount (35 without a driver, 100 without a device)
 // means "no device", with the error text in `reason`.
 DeviceInfo probeDevice();

@@ -5,7 +5,6 @@
 
 namespace snow::cuda {
 
-bool compiledWithCuda() { return false; }
 DeviceInfo probeDevice() {
   DeviceInfo info;
   info.reason = "snowbake was built without CUDA (no nvcc at configure time)";

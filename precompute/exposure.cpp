@@ -5,21 +5,17 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 
 #include "core/bracket.h"
 #include "core/errors.h"
+#include "core/util.h"
 #include "horizon.h"
 #include "solar.h"
 
 namespace snow {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Rays start a little above the surface along the normal, so they do not hit their own cell.
 std::array<float, 3> rayOrigin(const RayScene& scene, int i, int j, const std::array<float, 3>& n, const GridSpec& spec) {
@@ -249,36 +245,36 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
                          const ModelParameters& p, const ExposureSettings& s) {
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
   Exposure e;
-  auto t0 = Clock::now();
+  auto t0 = WallClock::now();
   std::vector<Grid<float>> shadowHorizons;
   if (s.horizonSweep) {
     const auto skyHorizons = computeHorizonsBySweep(heights, valid, spec, s.quality.azimuths);
     shadowHorizons = computeHorizonsBySweep(heights, valid, spec, 4 * s.quality.azimuths);
-    e.timings.horizonSeconds = since(t0);
-    t0 = Clock::now();
+    e.timings.horizonSeconds = elapsedSeconds(t0);
+    t0 = WallClock::now();
     e.skyHours = skyFromHorizons(skyHorizons, valid, p.skyAmbientWeightHours);
   } else {
     e.skyHours = computeSkyExposure(*scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
                                     &e.timings.skyRays);
   }
-  e.timings.skySeconds = since(t0);
+  e.timings.skySeconds = elapsedSeconds(t0);
   const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
   for (DailyExposure day : exposureSampleDays(s)) {
-    t0 = Clock::now();
+    t0 = WallClock::now();
     day.sunHours = s.horizonSweep ? directSunFromHorizons(shadowHorizons, heights, valid, spec, s.latitudeDeg, day.dayOfYear,
                                                           s.quality.hourStep, p.directSunWeightHours)
                                   : computeDirectSun(*scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
                                                      p.directSunWeightHours, &e.timings.sunRays);
-    e.timings.sunSeconds += since(t0);
+    e.timings.sunSeconds += elapsedSeconds(t0);
     e.days.push_back(std::move(day));
   }
-  t0 = Clock::now();
+  t0 = WallClock::now();
   std::vector<const Grid<float>*> suns;
   for (const DailyExposure& day : e.days) suns.push_back(&day.sunHours);
   std::vector<Grid<float>> indirect = computeIndirectSunForDays(suns, heights, valid, spec, s.quality.indirectDirections,
                                                                 s.quality.indirectRings, s.quality.indirectRadiusM, kIndOverKSun);
   for (size_t k = 0; k < e.days.size(); ++k) e.days[k].indirectHours = std::move(indirect[k]);
-  e.timings.indirectSeconds = since(t0);
+  e.timings.indirectSeconds = elapsedSeconds(t0);
   return e;
 }
 

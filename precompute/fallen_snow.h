@@ -51,8 +51,9 @@
 //    pass (the thesis's 0.5 %; a steady stream down a face counts as moving), or at
 //    maxPassesPerRound (counted as unconverged).
 //
-// Not here yet (README "Snow on meshes"): deeper refinement levels, wind in the stability phase,
-// the snow body (SDF, meshing) and the bake mode.
+// The snow body (the level set and its mesh) is built from this stage's output in
+// bakers/mesh_snow_body.h, and `mode = "mesh"` bakes it. Not done (README "Snow on meshes"):
+// refinement beyond one level, wind in the stability phase.
 #pragma once
 #include <array>
 #include <cstdint>

@@ -6,13 +6,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/util.h"
 #include "exposure.h"
 #include "solar.h"
 
 namespace snow {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 // One azimuth: lines parallel to it, one sample per step of the major axis (a grid line of
 // vertices, so the sample lies on an edge of Embree's triangulation), heights interpolated

@@ -5,11 +5,11 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
 #include "core/errors.h"
+#include "core/util.h"
 #include "core/mesh_normals.h"
 #include "exposure.h"
 #include "solar.h"
@@ -17,10 +17,6 @@
 namespace snow {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // A 64-bit mix (splitmix64's finaliser): the per-point turn of the ray pattern.
 uint64_t mix64(uint64_t z) {
@@ -127,7 +123,7 @@ OcclusionSnow computeOcclusionSnow(const RayScene& scene, const std::vector<std:
   const int rays = s.aoRays;
 
   // Pass 1: ambient occlusion, 16-ray packets from one point.
-  auto t0 = Clock::now();
+  auto t0 = WallClock::now();
   std::atomic<unsigned long long> aoRays{0};
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
     unsigned long long local = 0;
@@ -167,11 +163,11 @@ OcclusionSnow computeOcclusionSnow(const RayScene& scene, const std::vector<std:
     }
     aoRays += local;
   });
-  out.aoSeconds = since(t0);
+  out.aoSeconds = elapsedSeconds(t0);
   out.aoRayCount = aoRays;
 
   // Pass 2: the sun trajectory, one packet per 16 points and sun position.
-  t0 = Clock::now();
+  t0 = WallClock::now();
   std::atomic<unsigned long long> sunRays{0};
   const float inf = std::numeric_limits<float>::infinity();
   if (!out.sun.empty())
@@ -204,7 +200,7 @@ OcclusionSnow computeOcclusionSnow(const RayScene& scene, const std::vector<std:
       }
       sunRays += local;
     });
-  out.sunSeconds = since(t0);
+  out.sunSeconds = elapsedSeconds(t0);
   out.sunRayCount = sunRays;
 
   for (size_t k = 0; k < n; ++k) {

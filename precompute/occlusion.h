@@ -1,5 +1,6 @@
-// Occlusion mode: the static snow cover of Foldes & Benes 2007 (shared/papers/003), the quick
-// option (no season) and the baseline the model paper compared against.
+// Occlusion mode: the static snow cover of Foldes & Benes 2007 ("Occlusion-Based Snow
+// Accumulation Simulation"), the quick option (no season) and the baseline the model paper
+// compared against.
 //
 // Two occlusion passes per point (terrain cell or mesh vertex), with Embree ray queries:
 //   a  ambient occlusion value, as the paper defines it: the cosine-weighted fraction of the

@@ -17,7 +17,8 @@ void throwOnError(RTCDevice device, const char* what) {
   const RTCError e = rtcGetDeviceError(device);
   if (e != RTC_ERROR_NONE) throw std::runtime_error(std::string("Embree error ") + std::to_string(static_cast<int>(e)) + " in " + what);
 }
-// Embree wants flush-to-zero and denormals-are-zero in every tracing thread (toolchain.md §6.11).
+// Embree wants flush-to-zero and denormals-are-zero in every tracing thread (its verbose mode
+// warns without them; tracing is about 5-10 % faster).
 void setFlushToZero() {
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);

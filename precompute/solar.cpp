@@ -3,10 +3,11 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/util.h"
+
 namespace snow {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
 }  // namespace
 

@@ -12,12 +12,12 @@
 #include <sstream>
 
 #include "core/errors.h"
+#include "core/util.h"
 #include "gdal_support.h"
 
 namespace snow {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 constexpr int kMinCellsPerSide = 3;
 // What a bake holds per cell: about 14 float fields and 2 byte fields, plus the frames and
 // writers' copies. A grid needing more than 80% of physical memory is refused up front.

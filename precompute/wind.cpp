@@ -5,14 +5,14 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
+
+#include "core/util.h"
 
 namespace snow {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kCalmMps = 1e-9;  // below this, W = 0: no shadow (the paper's special case)
 
 // The upwind discretisation of v . grad f at a cell: a_x (f - f_ux) + a_y (f - f_uy), with
@@ -206,7 +206,7 @@ WindSolveStats solveWindEffectSurface(const Grid<float>& altitude, const Grid<ui
                                       const Grid<float>& groundX, const Grid<float>& groundY, const Grid<float>& freeX,
                                       const Grid<float>& freeY, double c, const WindSolverOptions& o, Grid<float>& windEffectZ,
                                       Grid<float>& verticalSpeed) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = WallClock::now();
   WindSystem sys(altitude, valid, spec, groundX, groundY, freeX, freeY, c);
   std::vector<double> wz, wsz;
   sys.initialise(wz, wsz);
@@ -243,7 +243,7 @@ WindSolveStats solveWindEffectSurface(const Grid<float>& altitude, const Grid<ui
     windEffectZ.values()[i] = static_cast<float>(wz[i]);
     verticalSpeed.values()[i] = static_cast<float>(wsz[i]);
   }
-  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  stats.seconds = elapsedSeconds(t0);
   return stats;
 }
 

@@ -46,7 +46,6 @@ struct WindField {
   Grid<float> verticalSpeedMps;    // W_sz
   WindSolveStats stats;
   float speed(int x, int y) const;
-  float shadowDepthM(const Grid<float>& altitude, int x, int y) const { return windEffectZM(x, y) - altitude(x, y); }
 };
 
 // The dominant wind vector W_d (x east, y south) for a state.

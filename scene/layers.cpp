@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/season.h"
+#include "core/util.h"
 
 namespace snow {
 namespace {
@@ -68,7 +69,7 @@ const LayerInfo kLayers[] = {
     {"wind_direction", "deg", "direction the wind blows from, degrees clockwise from north", S, kNeedsWind, LayerKind::Float,
      [](const LayerInputs& in) {
        return windLayer(in, [](double wx, double wy, double) {
-         return wx == 0 && wy == 0 ? 0.f : static_cast<float>(std::fmod(std::atan2(-wx, wy) * 180.0 / M_PI + 360.0, 360.0));
+         return wx == 0 && wy == 0 ? 0.f : static_cast<float>(std::fmod(std::atan2(-wx, wy) * 180.0 / kPi + 360.0, 360.0));
        });
      }},
     {"wind_shadow_depth", "m", "wind shadow depth W_z - A (height of the wind-effect surface above the ground)", S, kNeedsWind,

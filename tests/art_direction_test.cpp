@@ -316,8 +316,8 @@ TEST(ArtDirection, InitialDepthRasterReadsBackFromTheFirstFrame) {
   fs::remove_all(bake.dir);
 }
 
-// The real slope: on tyrol_avaKot, "set the unstable depth to 1.25 m within a mask"
-// and, the same day, a masked release: the avalanche starts from exactly the masked cells, and
+// A real slope: on tyrol_avaKot, the unstable depth set to 1.25 m within a mask and, the same
+// day, a masked release: the avalanche starts from exactly the masked cells, and
 // the snow is conserved (the edit's volume is the only change to the total).
 TEST(ArtDirection, TyrolSetUnstableWithinMaskThenMaskedReleaseStartsFromExactlyTheMask) {
   const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaKot_5m.asc";

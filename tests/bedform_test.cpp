@@ -15,14 +15,13 @@
 #include "core/season.h"
 #include "core/serial_exec.h"
 #include "core/step_args.h"
+#include "core/util.h"
 #include "core/errors.h"
 #include "precompute/scene.h"
 #include "tests/bake_support.h"
 
 namespace snow {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // A test window and its rounds.
 struct Window {

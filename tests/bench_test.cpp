@@ -7,8 +7,8 @@
 
 #include "core/cpu_backend.h"
 #include "core/reference_scenario.h"
-#include "tools/bench_suite.h"
-#include "tools/plot.h"
+#include "bench/bench_suite.h"
+#include "bench/plot.h"
 
 namespace snow {
 namespace {

@@ -3,14 +3,13 @@
 
 #include <cmath>
 
+#include "core/util.h"
 #include "precompute/exposure.h"
 #include "precompute/solar.h"
 
 using namespace snow;
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 struct Field {
   Grid<float> heights;

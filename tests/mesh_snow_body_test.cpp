@@ -1,7 +1,7 @@
 // The snow body of snow on a mesh (bakers/mesh_snow_body.h): a closed mesh, a level set whose
 // zero crossing sits on the input surface (no gap) and at the snow top within a voxel, and a VDB
-// read back by OpenVDB (the issue's "watertight and sits on the input mesh without gaps larger
-// than one voxel").
+// read back by OpenVDB: the body must be watertight and sit on the input mesh without gaps larger
+// than one voxel.
 #include <gtest/gtest.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>

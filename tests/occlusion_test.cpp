@@ -16,6 +16,7 @@
 #include "bake_support.h"
 #include "core/errors.h"
 #include "core/mesh_normals.h"
+#include "core/util.h"
 #include "precompute/exposure.h"
 #include "precompute/mesh.h"
 #include "precompute/occlusion.h"
@@ -26,7 +27,6 @@ namespace snow {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kPi = 3.14159265358979323846;
 
 struct Field {
   Grid<float> heights;

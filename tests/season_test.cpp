@@ -112,7 +112,7 @@ TEST(Season, FramesArriveAtTheirDaysAndFixedSnowfallPeriodsAreHonoured) {
   EXPECT_EQ(r.phenomena[0].stops, 1u);
 }
 
-// A small stress sweep (the full 200-terrain sweep belongs to the season issue): rough terrains
+// A small stress sweep (the 200-terrain sweep is stress_test.cpp): rough terrains
 // with holes, cell sizes from 1 m to 100 m, warm and cold, long events. Never NaN or negative,
 // mass balance holds.
 TEST(Season, StressRoughTerrainsStayPhysical) {

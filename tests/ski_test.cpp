@@ -13,6 +13,7 @@
 #include "core/season.h"
 #include "core/ski.h"
 #include "core/reference_scenario.h"
+#include "core/util.h"
 #include "test_support.h"
 #include "bake_support.h"
 #include "bakers/grid_writer.h"
@@ -22,8 +23,6 @@
 
 namespace snow {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // The route map's device code path (ExecBackend::routeMapOnDevice: the paper's automaton,
 // iterated until it stops changing), run on a host executor dressed as a device.

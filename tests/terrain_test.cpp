@@ -1,4 +1,4 @@
-// Terrain input basics (the full set of formats and checks comes with the terrain-input issue).
+// Terrain input basics (every format and its checks: terrain_formats_test.cpp).
 #include <gtest/gtest.h>
 
 #include <filesystem>

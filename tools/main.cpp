@@ -2,9 +2,10 @@
 //   snowbake bake SCENE [--terrain FILE] [--out DIR] [--seed N] [--threads N] [--backend cpu|cuda|auto] [--set KEY=VALUE]...
 //                [--cache-dir DIR] [--no-cache] [--quiet]
 //   snowbake demo [--out DIR]
-//   snowbake info FILE [--json]
+//   snowbake info FILE [--json] [--set KEY=VALUE]...
 //   snowbake bench [--stage sun|wind|season|avalanche|occlusion|mesh|bedforms|skiers|meshsnow|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
-//                  [--csv-dir DIR] [--data DIR]
+//                  [--backend cpu|cuda|auto] [--sun-size N] [--csv-dir DIR] [--data DIR]
+//   snowbake --version | --help
 // Exit status: 0 success, 2 usage or input error (one line naming the file and the problem),
 // 1 any other failure.
 #include <CLI/CLI.hpp>
@@ -13,8 +14,8 @@
 #include <sstream>
 
 #include "core/errors.h"
-#include "tools/bench.h"
 #include "bake/bake.h"
+#include "bench/bench.h"
 #include "tools/info.h"
 
 int main(int argc, char** argv) {

@@ -22,6 +22,7 @@
 #include "../hd.h"
 #include "../rng.h"
 #include "../snow_state.h"
+#include "../util.h"
 #include "atomics.h"
 #include "powder_diffusion.h"
 
@@ -57,7 +58,6 @@ struct RouteMapStepKernel {
 };
 
 namespace skimath {
-constexpr double kPi = 3.14159265358979323846;
 // atan(t) for t >= 0 in + - * / only: reduced to |t| <= tan(pi/12) (1/t past 1, then the
 // addition formula at pi/6) and summed to t^25 (truncation below 1e-16; tested against std::atan).
 SNOW_HD SNOW_INLINE double atanPositive(double t) {

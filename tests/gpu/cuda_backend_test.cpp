@@ -9,7 +9,6 @@
 // tolerance here.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cstdio>
 
 #include "core/reference_scenario.h"
@@ -18,6 +17,7 @@
 #include "core/avalanche.h"
 #include "core/bedform.h"
 #include "core/season.h"
+#include "core/util.h"
 #include "core/ski.h"
 #include "core/serial_exec.h"
 #include "core/step_args.h"
@@ -93,7 +93,7 @@ TEST(CudaBackend, LongSequencesStayIdentical) {
 }
 
 // Not a benchmark (those live in the bench suite): prints the time of each step on a 1024^2 grid
-// so a GPU session records what it saw, and checks the steps finish without a CUDA error.
+// so a run on a GPU machine records what it saw, and checks the steps finish without a CUDA error.
 TEST(CudaBackend, StepTimesOn1024Squared) {
   SKIP_WITHOUT_CUDA();
   const SnowState initial = test::makeRoughState(1024, 1024, 3, 10.0, 10.0);
@@ -103,10 +103,10 @@ TEST(CudaBackend, StepTimesOn1024Squared) {
   for (const auto& step : registeredSteps(params(), warm())) {
     step.run(*gpu);  // warm-up
     const int repeats = 50;
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = WallClock::now();
     for (int i = 0; i < repeats; ++i) step.run(*gpu);
     gpu->totals();  // synchronises
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() / repeats;
+    const double ms = 1e3 * elapsedSeconds(t0) / repeats;
     std::printf("[ timing ] %-18s %8.3f ms per step (1024 x 1024, including its fixed-order reduction)\n", step.name.c_str(), ms);
     EXPECT_GT(ms, 0.0);
   }
@@ -141,9 +141,9 @@ TEST(CudaBackend, SeasonTimes) {
     const SeasonConfig c = referenceWinter(120);
     computeTemperatureBase(s, c.params);
     auto gpu = cuda::createCudaBackend();
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = WallClock::now();
     const SeasonReport r = runSeason(*gpu, s, c);
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds = elapsedSeconds(t0);
     std::printf("[ timing ] season 120 days, %d x %d: %.3f s total (%llu events; upload+download included)\n", size, size, seconds,
                 static_cast<unsigned long long>(r.events));
     for (const auto& p : r.phenomena)
@@ -339,9 +339,9 @@ TEST(CudaBackend, BedformRoundTimeOn1024Squared) {
   auto gpu = cuda::createCudaBackend();
   gpu->upload(w);
   gpu->bedformStep(makeBedformArgs(q, 0.0, 20, 0, 1, 0.0));
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = WallClock::now();
   const BedformStepReport r = gpu->bedformStep(makeBedformArgs(q, 0.0, 50, 20, 1, 0.0));
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double s = elapsedSeconds(t0);
   EXPECT_EQ(r.slabsBefore, r.slabsAfter);
   EXPECT_GT(r.slabsEroded, 0);
   std::printf("bedforms 1024^2 on %s: %.2f ms per round (%.2f ns per cell and round), %lld slabs lifted per round\n",

@@ -34,9 +34,9 @@ BatchResult runBatch(SnowBackend& b, const SnowState& s, int skiers) {
     if (run.pickStart((k + 0.5) / skiers, x, y)) starts.push_back({x, y, static_cast<uint64_t>(k), false});
   }
   BatchResult r;
-  const auto t0 = BenchClock::now();
+  const auto t0 = WallClock::now();
   r.records = run.descendTogether(starts, 1.0, 3);
-  r.seconds = benchSince(t0);
+  r.seconds = elapsedSeconds(t0);
   for (const SkierRecord& rec : r.records) {
     r.moves = std::max(r.moves, static_cast<int>(rec.path.size()) - 1);
     r.cells += rec.cells;

@@ -60,17 +60,17 @@ std::string meshSnowBench(const BenchOptions& o, std::ostream& log, int threads)
   ps.flutterMeanM = 0.02;
   ps.flutterSigmaM = 0.01;
   ps.swirlHeightM = 0.05;
-  const auto t0 = BenchClock::now();
+  const auto t0 = WallClock::now();
   FallenSnow snow = placeFallenSnow(mesh, ps);
-  const double placeS = benchSince(t0);
-  const auto t1 = BenchClock::now();
+  const double placeS = elapsedSeconds(t0);
+  const auto t1 = WallClock::now();
   const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, FallenSnowStability{});
-  const double stableS = benchSince(t1);
-  const auto t2 = BenchClock::now();
+  const double stableS = elapsedSeconds(t1);
+  const auto t2 = WallClock::now();
   MeshSnowBodyOptions bo;
   bo.voxelSizeM = 0.02;
   const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo);
-  const double bodyS = benchSince(t2);
+  const double bodyS = elapsedSeconds(t2);
   std::map<std::pair<uint32_t, uint32_t>, int> edges;
   for (const auto& t : body.mesh.triangles)
     for (int e = 0; e < 3; ++e) ++edges[{std::min(t[e], t[(e + 1) % 3]), std::max(t[e], t[(e + 1) % 3])}];

@@ -4,7 +4,6 @@
 #include <tbb/info.h>
 
 #include <algorithm>
-#include <chrono>
 #include <functional>
 #include <cstdio>
 #include <filesystem>
@@ -30,8 +29,6 @@
 namespace snow {
 
 namespace {
-using Clock = BenchClock;
-constexpr auto since = benchSince;
 constexpr auto format = benchFormat;
 }  // namespace
 
@@ -55,14 +52,14 @@ std::string runBench(const BenchOptions& o, std::ostream& log) {
   }
   if (std::find(stages.begin(), stages.end(), o.stage) == stages.end())
     throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all");
-  const auto t0 = Clock::now();
+  const auto t0 = WallClock::now();
   std::string out;
   auto run = [&](const char* name, const std::function<std::string()>& f) {
     if (o.stage != "all" && o.stage != name) return;
-    const auto ts = Clock::now();
+    const auto ts = WallClock::now();
     log << "bench: " << name << "\n";
     const std::string body = f();
-    out += "## " + std::string(name) + "\n\n" + body + "\n(stage time " + format("%.0f", since(ts)) + " s)\n\n";
+    out += "## " + std::string(name) + "\n\n" + body + "\n(stage time " + format("%.0f", elapsedSeconds(ts)) + " s)\n\n";
   };
   run("sun", [&] { return sunBench(o, log, threads); });
   run("wind", [&] { return windBench(o, log, threads) + "\n" + windAccuracyBench(o, log, threads); });
@@ -77,7 +74,7 @@ std::string runBench(const BenchOptions& o, std::ostream& log) {
   run("bandwidth", [&] { return bandwidthBench(o, log, threads); });
   run("agreement", [&] { return agreementBench(o, log, threads); });
   run("bake", [&] { return bakeBench(o, log, threads); });
-  out += "Total: " + format("%.0f", since(t0)) + " s on " + benchMachineDescription() + ", " + std::to_string(threads) + " threads.\n";
+  out += "Total: " + format("%.0f", elapsedSeconds(t0)) + " s on " + benchMachineDescription() + ", " + std::to_string(threads) + " threads.\n";
   if (!o.csvDir.empty()) {
     std::filesystem::create_directories(o.csvDir);
     writeTextAtomically((std::filesystem::path(o.csvDir) / "bench.md").string(), out);
@@ -113,9 +110,9 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
     es.startDayOfYear = startDoy;
     es.seasonDays = 120;
     es.horizonSweep = true;
-    const auto t0 = Clock::now();
+    const auto t0 = WallClock::now();
     const Exposure e = computeExposure(nullptr, tb.heightsM, tb.valid, tb.info.spec, p, es);
-    const auto t1 = Clock::now();
+    const auto t1 = WallClock::now();
     SnowState st;
     st.allocate(tb.info.spec);
     st.bedrockM = tb.heightsM;
@@ -123,8 +120,8 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
       st.exposureHours = e.totalAt(day);
       computeTemperatureBase(st, p);
     }
-    const double tempSeconds = since(t1);
-    const double total = since(t0);
+    const double tempSeconds = elapsedSeconds(t1);
+    const double total = elapsedSeconds(t0);
     table << "| " << name << " | horizon sweep | " << format("%.2f", e.timings.horizonSeconds) << " | " << format("%.2f", e.timings.skySeconds)
           << " | " << format("%.2f", e.timings.sunSeconds) << " | " << format("%.2f", e.timings.indirectSeconds) << " | "
           << format("%.2f", tempSeconds) << " | " << format("%.2f", total) << " |\n";
@@ -218,11 +215,11 @@ std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
   const WindState state{300.0, 12.0};
   for (const auto& c : cases) {
     for (WindOrdering ordering : {WindOrdering::UpwindSweep, WindOrdering::RedBlack}) {
-      const auto t0 = Clock::now();
+      const auto t0 = WallClock::now();
       Grid<float> wx, wy, fx, fy, wz, wsz;
       computeWindVectors(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, state, p, wx, wy);
       computeFreeStream(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, state, p, fx, fy);
-      const double fieldSeconds = since(t0);
+      const double fieldSeconds = elapsedSeconds(t0);
       WindSolverOptions so;
       so.ordering = ordering;
       const WindSolveStats st = solveWindEffectSurface(c.terrain.heightsM, c.terrain.valid, c.terrain.info.spec, wx, wy, fx, fy,
@@ -346,9 +343,9 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
         errSnow += std::abs(r.snowM[k] - ref.snowM[k]);
       }
       errSnow /= std::max(refSnow, 1e-12);
-      const auto t0 = Clock::now();
+      const auto t0 = WallClock::now();
       const OcclusionSnow b = computeOcclusionSnowOnTerrain(bigScene, tb.heightsM, tb.valid, tb.info.spec, s);
-      const double total = since(t0);
+      const double total = elapsedSeconds(t0);
       const double rate = (b.aoRayCount + b.sunRayCount) / std::max(b.aoSeconds + b.sunSeconds, 1e-9) / 1e6;
       table << "| " << q << " | " << s.aoRays << " | " << format("%.4f", errA) << " | " << format("%.4f", errSnow) << " | "
             << format("%.2f", b.aoSeconds) << " | " << format("%.2f", b.sunSeconds) << " | " << format("%.2f", total) << " | "
@@ -387,12 +384,12 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
           << "| quality | rays per vertex | Embree build (s) | AO (s) | sun (s) | total (s) | M rays/s |\n|---|---|---|---|---|---|---|\n";
     for (const char* q : {"draft", "production"}) {
       s.aoRays = occlusionRaysForQuality(q);
-      const auto t0 = Clock::now();
+      const auto t0 = WallClock::now();
       const Grid<float> none;
       const RayScene scene(none, GridSpec{}, {mesh});
-      const double build = since(t0);
+      const double build = elapsedSeconds(t0);
       const OcclusionSnow r = computeOcclusionSnowOnMesh(scene, mesh, s);
-      const double total = since(t0);
+      const double total = elapsedSeconds(t0);
       const double rate = (r.aoRayCount + r.sunRayCount) / std::max(r.aoSeconds + r.sunSeconds, 1e-9) / 1e6;
       table << "| " << q << " | " << s.aoRays << " | " << format("%.2f", build) << " | " << format("%.2f", r.aoSeconds) << " | "
             << format("%.2f", r.sunSeconds) << " | " << format("%.2f", total) << " | " << format("%.1f", rate) << " |\n";
@@ -426,15 +423,15 @@ std::string meshBench(const BenchOptions& o, std::ostream& log, int threads) {
   std::filesystem::create_directories(dir);
   PlotSeries meshSeries{"adaptive triangulation", {}};
   for (double bound : {0.0, 0.05, 0.1, 0.25, 0.5, 1.0, 2.0, 5.0}) {
-    const auto t0 = Clock::now();
+    const auto t0 = WallClock::now();
     const RtinMesh m = buildRtin({&t.heightsM}, t.valid, bound);
-    const double tri = since(t0);
+    const double tri = elapsedSeconds(t0);
     const double err = rtinMaxVerticalError(m, t.heightsM);
-    const auto t1 = Clock::now();
+    const auto t1 = WallClock::now();
     const MeshData mesh = surfaceMesh(m, t.heightsM, spec);
     const std::string path = (std::filesystem::path(dir) / "mesh_bench.glb").string();
     writeMesh(path, "glb", mesh);
-    const double glb = since(t1);
+    const double glb = elapsedSeconds(t1);
     const double mb = std::filesystem::file_size(path) / 1e6;
     table << "| " << format("%.2f", bound) << " | " << m.triangles.size() << " | " << format("%.3f", double(m.triangles.size()) / full) << " | "
           << format("%.3f", err) << " | " << format("%.2f", tri) << " | " << format("%.2f", glb) << " | " << format("%.1f", mb) << " |\n";

@@ -1,21 +1,19 @@
-// The benchmark suite's newer stages (tools/bench.cpp runs them): accuracy against time for the
+// The benchmark suite's newer stages (bench.cpp runs them): accuracy against time for the
 // wind-effect surface, the season and the avalanche step, scaling with the grid size (time per
 // stage and peak memory, each size in its own process), the machine limit (copy bandwidth and
 // the season kernels' achieved bandwidth) and CPU against CUDA agreement.
 #pragma once
-#include <chrono>
 #include <cstdio>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "bench.h"
+#include "core/util.h"
 #include "plot.h"
 
 namespace snow {
 
-using BenchClock = std::chrono::steady_clock;
-inline double benchSince(BenchClock::time_point t) { return std::chrono::duration<double>(BenchClock::now() - t).count(); }
 // printf-style formatting of one number.
 inline std::string benchFormat(const char* f, double v) {
   char buf[64];
@@ -45,7 +43,7 @@ std::string avalancheAccuracyBench(const BenchOptions& o, std::ostream& log, int
 std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string bandwidthBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string agreementBench(const BenchOptions& o, std::ostream& log, int threads);
-// Wind bedforms: time per round on 256²-1024² windows, and the exact references (tools/bench_bedforms.cpp).
+// Wind bedforms: time per round on 256²-1024² windows, and the exact references (bench_bedforms.cpp).
 std::string bedformBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string skierBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string meshSnowBench(const BenchOptions& o, std::ostream& log, int threads);

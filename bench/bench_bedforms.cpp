@@ -15,7 +15,6 @@
 namespace snow {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 struct Timing {
   double secondsPerRound = 0;
@@ -31,9 +30,9 @@ Timing timeRounds(SnowBackend& b, int n, int warmup, int rounds) {
   Timing t;
   BedformStepReport r = b.bedformStep(makeBedformArgs(p, 0.0, warmup, 0, 1, 0.0));
   t.ledgerExact = r.slabsBefore == r.slabsAfter;
-  const auto t0 = BenchClock::now();
+  const auto t0 = WallClock::now();
   r = b.bedformStep(makeBedformArgs(p, 0.0, rounds, static_cast<uint64_t>(warmup), 1, 0.0));
-  t.secondsPerRound = benchSince(t0) / rounds;
+  t.secondsPerRound = elapsedSeconds(t0) / rounds;
   t.slabsLifted = r.slabsEroded / rounds;
   t.ledgerExact = t.ledgerExact && r.slabsBefore == r.slabsAfter;
   return t;
@@ -75,12 +74,12 @@ std::string bedformBench(const BenchOptions& o, std::ostream& log, int threads) 
   auto cpu = createCpuBackend();
   serial->upload(ref);
   cpu->upload(par);
-  const auto t0 = BenchClock::now();
+  const auto t0 = WallClock::now();
   const BedformStepReport rs = serial->bedformStep(makeBedformArgs(p, 0.0, rounds, 0, 1, 0.0));
-  const double serialS = benchSince(t0);
-  const auto t1 = BenchClock::now();
+  const double serialS = elapsedSeconds(t0);
+  const auto t1 = WallClock::now();
   const BedformStepReport rp = cpu->bedformStep(makeBedformArgs(p, 0.0, rounds, 0, 1, 0.0));
-  const double parallelS = benchSince(t1);
+  const double parallelS = elapsedSeconds(t1);
   serial->download(ref);
   cpu->download(par);
   auto differing = [&](const SnowState& a) {

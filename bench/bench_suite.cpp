@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -36,8 +35,6 @@ namespace snow {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = BenchClock;
-constexpr auto since = benchSince;
 constexpr auto fmt = benchFormat;
 
 // The accuracy table shared by the stages: level, time, error, default marked; monotone check.
@@ -198,9 +195,9 @@ std::string seasonAccuracyBench(const BenchOptions& o, std::ostream& log, int th
     c.params.windTransportStepsPerDay *= factor;
     computeTemperatureBase(s, c.params);
     auto backend = createCpuBackend();
-    const auto t0 = Clock::now();
+    const auto t0 = WallClock::now();
     runSeason(*backend, s, c);
-    seconds = since(t0);
+    seconds = elapsedSeconds(t0);
     return s.depthGrid().values();
   };
   double refSeconds = 0;
@@ -238,10 +235,10 @@ std::string avalancheAccuracyBench(const BenchOptions& o, std::ostream& log, int
     ModelParameters p;
     p.avalancheStepS = stepS;
     AvalancheRun a(*backend, p, s);
-    const auto t0 = Clock::now();
+    const auto t0 = WallClock::now();
     if (!a.release(256, 256, 0.0, 0.0, true)) throw std::runtime_error("the benchmark avalanche did not release");
     rec = a.runToRest();
-    seconds = since(t0);
+    seconds = elapsedSeconds(t0);
     backend->download(s);
     return s.depthGrid().values();
   };
@@ -274,14 +271,14 @@ std::string avalancheAccuracyBench(const BenchOptions& o, std::ostream& log, int
 // ---- Scaling: each size in its own process (its peak memory is its own) ----
 
 std::string scalingChild(const BenchOptions& o, int size) {
-  const auto tAll = Clock::now();
-  auto t0 = Clock::now();
+  const auto tAll = WallClock::now();
+  auto t0 = WallClock::now();
   DefaultTerrainOptions d;
   d.size = size;
   d.cellSizeM = 10240.0 / size;
   const Terrain t = makeBuiltinTerrain(d);
-  const double terrainS = since(t0);
-  t0 = Clock::now();
+  const double terrainS = elapsedSeconds(t0);
+  t0 = WallClock::now();
   const ModelParameters p;
   ExposureSettings es;
   es.quality = sunQuality("draft");
@@ -290,29 +287,29 @@ std::string scalingChild(const BenchOptions& o, int size) {
   es.seasonDays = o.days;
   es.horizonSweep = true;
   const Exposure e = computeExposure(nullptr, t.heightsM, t.valid, t.info.spec, p, es);
-  const double sunS = since(t0);
-  t0 = Clock::now();
+  const double sunS = elapsedSeconds(t0);
+  t0 = WallClock::now();
   Grid<float> wx, wy, fx, fy, wz, wsz;
   computeWindVectors(t.heightsM, t.valid, t.info.spec, WindState{300.0, 12.0}, p, wx, wy);
   computeFreeStream(t.heightsM, t.valid, t.info.spec, WindState{300.0, 12.0}, p, fx, fy);
   solveWindEffectSurface(t.heightsM, t.valid, t.info.spec, wx, wy, fx, fy, p.windCapDecelerationMps2, WindSolverOptions{}, wz, wsz);
-  const double windS = since(t0);
-  t0 = Clock::now();
+  const double windS = elapsedSeconds(t0);
+  t0 = WallClock::now();
   SnowState s = referenceRangeState(size);
   s.exposureHours = e.totalAt(0);
   const SeasonConfig c = referenceWinter(o.days);
   computeTemperatureBase(s, c.params);
   auto backend = createCpuBackend();
   runSeason(*backend, s, c);
-  const double seasonS = since(t0);
-  t0 = Clock::now();
+  const double seasonS = elapsedSeconds(t0);
+  t0 = WallClock::now();
   const fs::path dir = fs::temp_directory_path() / ("snowbake_scaling_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   for (SnowLayer l : {SnowLayer::Compacted, SnowLayer::Stable, SnowLayer::Unstable, SnowLayer::Powder})
     writeFloatImage((dir / snowLayerName(l)).string(), "exr", s.layer(l), snowLayerName(l));
   writeFloatImage((dir / "depth").string(), "exr", s.depthGrid(), "depth");
   fs::remove_all(dir);
-  const double outputsS = since(t0);
+  const double outputsS = elapsedSeconds(t0);
   // The peak resident set of this process's own address space (VmHWM): the parent's rusage
   // would carry the spawning process's peak across the exec.
   double peakKiB = 0;
@@ -320,7 +317,7 @@ std::string scalingChild(const BenchOptions& o, int size) {
   for (std::string l; std::getline(status, l);)
     if (l.rfind("VmHWM:", 0) == 0) peakKiB = std::stod(l.substr(6));
   std::ostringstream line;
-  line << size << "," << terrainS << "," << sunS << "," << windS << "," << seasonS << "," << outputsS << "," << since(tAll) << "," << peakKiB;
+  line << size << "," << terrainS << "," << sunS << "," << windS << "," << seasonS << "," << outputsS << "," << elapsedSeconds(tAll) << "," << peakKiB;
   return line.str();
 }
 
@@ -336,14 +333,14 @@ std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads) 
   csv << "size,terrain_s,sun_s,wind_s,season_s,outputs_s,total_s,peak_mib\n";
   std::vector<double> cells, total, peak;
   std::vector<std::vector<double>> stages(5);
-  const auto start = Clock::now();
+  const auto start = WallClock::now();
   std::string skipped;
   for (int size : o.scalingSizes) {
     if (!total.empty()) {
       const double ratio = static_cast<double>(size) * size / cells.back();
       const double slope = total.size() >= 2 ? std::max(1.0, logSlope(cells, total)) : 1.5;
       const double predicted = total.back() * std::pow(ratio, slope);
-      if (since(start) + predicted > o.scalingBudgetS) {
+      if (elapsedSeconds(start) + predicted > o.scalingBudgetS) {
         skipped += "| " + std::to_string(size) + "² | skipped: predicted " + fmt("%.0f", predicted) + " s (growth n^" + fmt("%.2f", slope) +
                    ") would pass the budget | | | | | | |\n";
         continue;
@@ -440,11 +437,11 @@ double hostCopyBandwidthGBs(size_t floats) {
   std::vector<float> a(floats, 1.f), b(floats, 0.f);
   double best = 1e30;
   for (int rep = 0; rep < 5; ++rep) {
-    const auto t0 = Clock::now();
+    const auto t0 = WallClock::now();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, floats, 1 << 20), [&](const tbb::blocked_range<size_t>& r) {
       std::memcpy(b.data() + r.begin(), a.data() + r.begin(), (r.end() - r.begin()) * sizeof(float));
     });
-    best = std::min(best, since(t0));
+    best = std::min(best, elapsedSeconds(t0));
   }
   if (b[floats / 2] != 1.f) throw std::runtime_error("copy check failed");
   return 2.0 * floats * sizeof(float) / best / 1e9;
@@ -476,10 +473,10 @@ std::vector<double> kernelSeconds(SnowBackend& backend, const SnowState& s, int 
   auto time = [&](const std::function<void()>& f) {
     f();  // warm-up
     backend.maxTemperatureBaseC();
-    const auto t0 = Clock::now();
+    const auto t0 = WallClock::now();
     for (int r = 0; r < reps; ++r) f();
     backend.maxTemperatureBaseC();  // waits for queued device work
-    out.push_back(since(t0) / reps);
+    out.push_back(elapsedSeconds(t0) / reps);
   };
   time([&] { backend.snowfall(makeSnowfallArgs(p, 0.01, warm)); });
   time([&] { backend.melt(makeMeltArgs(p, 0.001, warm)); });
@@ -551,12 +548,12 @@ std::string agreementBench(const BenchOptions& o, std::ostream& log, int threads
   computeTemperatureBase(b, c.params);
   auto cpu = createCpuBackend();
   auto gpu = cuda::createCudaBackend();
-  auto t0 = Clock::now();
+  auto t0 = WallClock::now();
   runSeason(*cpu, a, c);
-  const double cpuS = since(t0);
-  t0 = Clock::now();
+  const double cpuS = elapsedSeconds(t0);
+  t0 = WallClock::now();
   runSeason(*gpu, b, c);
-  const double gpuS = since(t0);
+  const double gpuS = elapsedSeconds(t0);
   size_t differ = 0;
   double worst = 0;
   for (SnowLayer l : {SnowLayer::Compacted, SnowLayer::Stable, SnowLayer::Unstable, SnowLayer::Powder})
@@ -571,9 +568,9 @@ std::string agreementBench(const BenchOptions& o, std::ostream& log, int threads
     SnowState big = referenceRangeState(4096);
     computeTemperatureBase(big, c.params);
     auto gpuBig = cuda::createCudaBackend();
-    t0 = Clock::now();
+    t0 = WallClock::now();
     runSeason(*gpuBig, big, c);
-    table << "| " << info.description << " | 4096² | " << fmt("%.2f", since(t0)) << " |\n";
+    table << "| " << info.description << " | 4096² | " << fmt("%.2f", elapsedSeconds(t0)) << " |\n";
   }
   table << "\nLayer values that differ between the backends (" << o.agreementSize << "²): " << differ << " of " << 4 * a.spec.cellCount()
         << " (largest difference " << fmt("%.3g", worst) << " m).\n";
@@ -606,9 +603,9 @@ std::string bakeBench(const BenchOptions& o, std::ostream& log, int threads) {
     return u.ru_utime.tv_sec + u.ru_utime.tv_usec * 1e-6 + u.ru_stime.tv_sec + u.ru_stime.tv_usec * 1e-6;
   };
   const double cpu0 = cpuSeconds();
-  const auto t0 = Clock::now();
+  const auto t0 = WallClock::now();
   const BakeResult r = runBake(b, bakeLog);
-  const double total = since(t0);
+  const double total = elapsedSeconds(t0);
   const double cpu = cpuSeconds() - cpu0;
   uintmax_t bytes = 0;
   for (const auto& f : r.files) {
