@@ -3,8 +3,7 @@
 # refactoring can show it keeps the bytes: run it before and after, then diff the two lists.
 #   bash tools/hash-bakes.sh [SNOWBAKE_BINARY] [WORK_DIR] > hashes.txt
 # The scenes: the demo (preset:default); presets/art_direction.toml; presets/bedforms.toml;
-# occlusion mode on the builtin range with an occluder-free mesh terrain output; mesh mode on the
-# README's table (docs/pictures/mesh_snow_table.py); a real DEM from ../shared/data with every
+# occlusion mode on the builtin range; mesh mode on a block on the ground; a real DEM from ../shared/data with every
 # layer, encoding, mesh, VDB, displacement and frames (skipped with a message when absent).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -33,8 +32,50 @@ encodings = ["png16"]
 meshes = ["obj"]
 TOML
 bake occlusion "$work/occlusion.toml"
-/usr/bin/python3 "$root/docs/pictures/mesh_snow_table.py" obj "$work/table.obj"
-sed -e 's/^site_spacing_m = .*/site_spacing_m = 0.05/' "$root/docs/pictures/mesh_snow_table.toml" > "$work/mesh.toml"
+# A 2 m ground square with a 0.6 m block on it (the mesh-snow tests' block).
+cat > "$work/block.obj" <<'OBJ'
+v 0 0 0
+v 2 0 0
+v 2 2 0
+v 0 2 0
+v 0.7 0.7 0.5
+v 1.3 0.7 0.5
+v 1.3 1.3 0.5
+v 0.7 1.3 0.5
+v 0.7 0.7 0
+v 1.3 0.7 0
+v 1.3 1.3 0
+v 0.7 1.3 0
+f 1 2 3
+f 1 3 4
+f 5 6 7
+f 5 7 8
+f 9 10 6
+f 9 6 5
+f 10 11 7
+f 10 7 6
+f 11 12 8
+f 11 8 7
+f 12 9 5
+f 12 5 8
+OBJ
+cat > "$work/mesh.toml" <<'TOML'
+name = "hash-bakes: mesh mode"
+mode = "mesh"
+[terrain]
+file = "block.obj"
+[mesh_snow]
+depth_m = 0.3
+site_spacing_m = 0.04
+flutter_mean_m = 0.02
+flutter_sigma_m = 0.01
+smoothing_steps = 4
+[outputs]
+meshes = ["obj", "glb", "ply"]
+vdb = true
+[run]
+seed = 3
+TOML
 bake mesh "$work/mesh.toml"
 if [ -f "$data/dem/tyrol_avaWog_5m.asc" ]; then
   cat > "$work/dem.toml" <<TOML
@@ -74,5 +115,12 @@ TOML
 else
   echo "hash-bakes: $data absent: the real-DEM bake is skipped" >&2
 fi
+# Manifests name the scene and input files by path: hashed with the work folder and the checkout
+# written as WORK and ROOT, so two checkouts (or two work folders) compare.
 cd "$work"
-find . -mindepth 2 -type f | LC_ALL=C sort | xargs sha256sum
+find . -mindepth 2 -type f | LC_ALL=C sort | while read -r f; do
+  case "$f" in
+    */manifest.json) printf '%s  %s\n' "$(sed -e "s|$work|WORK|g" -e "s|$root|ROOT|g" "$f" | sha256sum | cut -d' ' -f1)" "$f" ;;
+    *) sha256sum "$f" ;;
+  esac
+done
