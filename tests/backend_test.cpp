@@ -10,6 +10,7 @@
 #include "core/cpu_backend.h"
 #include "core/kernel_registry.h"
 #include "core/kernels/powder_diffusion_rows.h"
+#include "gpu/backend_parity.h"
 #include "test_support.h"
 
 using namespace snow;
@@ -42,23 +43,13 @@ SnowState runAll(SnowBackend& backend, const SnowState& initial, std::vector<dou
 
 }  // namespace
 
-TEST(CpuBackend, EveryRegisteredStepMatchesSerialBitForBit) {
-  const SnowState initial = test::makeRoughState(97, 61, 5);  // odd sizes: partial colour rows
-  for (const auto& step : registeredSteps(testParameters(), warmWeather())) {
+// Every step the backend runs (tests/gpu/backend_parity.h, the table the GPU binary checks CUDA
+// with) gives the serial reference's bytes.
+TEST(CpuBackend, EveryBackendStepMatchesSerialBitForBit) {
+  for (const test::ParityCase& c : test::backendParityCases()) {
     auto serial = createSerialBackend();
     auto cpu = createCpuBackend();
-    SnowState a = initial, b = initial;
-    serial->upload(a);
-    cpu->upload(b);
-    const double la = step.run(*serial), lb = step.run(*cpu);
-    serial->download(a);
-    cpu->download(b);
-    SCOPED_TRACE(step.name);
-    EXPECT_EQ(la, lb);
-    test::expectSameBytes(a, b);
-    const bool changed = a.powderM.values() != initial.powderM.values() || a.stableM.values() != initial.stableM.values() ||
-                         a.unstableM.values() != initial.unstableM.values() || a.compactedM.values() != initial.compactedM.values();
-    EXPECT_TRUE(changed) << step.name << " did nothing on the fixture";
+    test::expectSameRun(c, *serial, *cpu);
   }
 }
 
