@@ -1,26 +1,14 @@
 #include "season.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-
-#include <deque>
-#include <functional>
 #include <memory>
-#include <optional>
 #include <utility>
 
-#include "rng.h"
-#include "scheduler.h"
+#include "season_run.h"
 #include "step_args.h"
 
 namespace snow {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-}  // namespace
 
 double SeasonReport::massBalanceRelativeError() const {
   const double expected = initial.totalM3() + snowfallAddedM3 - meltRemovedM3 + editsNetM3;
@@ -34,101 +22,27 @@ void computeTemperatureBase(SnowState& s, const ModelParameters& p) {
     s.temperatureBaseC.values()[i] = temperatureBaseC(p, s.bedrockM.values()[i], s.exposureHours.values()[i]);
 }
 
-namespace {
-
-// One season's run: the phenomena registered with the scheduler (each add* below, in the order
-// that fixes their slots and so the random draws), then the events fired until the last day.
-// The scheduler's events call back into this object: it stays where it is while they run.
-class SeasonRun {
- public:
-  SeasonRun(SnowBackend& backend, SnowState& state, const SeasonConfig& cfg, const ProgressCallback& progress,
-            const FrameCallback& onFrame)
-      : backend_(backend), state_(state), cfg_(cfg), p_(cfg.params), progress_(progress), onFrame_(onFrame),
-        scheduler_(cfg.seed) {}
-  SeasonRun(const SeasonRun&) = delete;
-  SeasonRun& operator=(const SeasonRun&) = delete;
-
-  SeasonReport run() {
-    const auto t0 = Clock::now();
-    if (cfg_.updateStaticFields) cfg_.updateStaticFields(0, state_);
-    leaveNoSnowCells();
-    backend_.upload(state_);
-    report_.initial = backend_.totals();
-    maxTemperatureBase_ = backend_.maxTemperatureBaseC();
-    addSnowfall();
-    addStateChanges();
-    addBedforms();
-    addTransport();
-    addEdits();
-    addAvalanches();
-    addSkiers();
-    addStaticFieldRefresh();
-    addFrames();
-    runEvents();
-    finish();
-    report_.seconds = secondsSince(t0);
-    return std::move(report_);
-  }
-
- private:
-  // A body run at a step of phenomenon `slot`, over `dt` days since its previous step.
-  using ContinuousBody = std::function<void(int slot, double day, double dt)>;
-
-  void leaveNoSnowCells();
-  int addPhenomenon(PhenomenonSpec spec);
-  template <class Body>
-  void timed(int slot, Body&& body);
-  double sinceLast(int slot, double day);
-  void snowfallOver(int slot, double day);
-  void addSnowfallPhenomenon(PhenomenonSpec s);
-  void addSnowfall();
-  void addContinuous(const char* name, double stepsPerDay, ContinuousBody body);
-  void addStateChanges();
-  void bedformStep(int slot, double day, double dt);
-  void addBedforms();
-  void addTransport();
-  void addEdits();
-  void releaseUser(const UserAvalanche& u, double day, double seaLevelTemperatureC);
-  void startAvalanche(int slot, const EventContext& e);
-  void stopAvalanche(int slot);
-  void addAvalanches();
-  void runSkiers(std::vector<SkierStart> starts, double day);
-  std::vector<SkierStart> automaticSkierStarts(const EventContext& e);
-  void addUserSkiers();
-  void addSkiers();
-  void addStaticFieldRefresh();
-  void addFrames();
-  void runEvents();
-  void finish();
-
-  SnowBackend& backend_;
-  SnowState& state_;
-  const SeasonConfig& cfg_;
-  const ModelParameters& p_;
-  const ProgressCallback& progress_;
-  const FrameCallback& onFrame_;
-  SeasonReport report_;
-  PoissonScheduler scheduler_;
-  std::vector<PhenomenonReport> reports_;  // by scheduler slot
-  std::vector<double> lastStep_;           // by slot: the day of its previous step
-  std::vector<std::function<void(double day)>> catchUp_;  // continuous phenomena, run at the end
-  float maxTemperatureBase_ = 0.f;
-  // No-snow cells: the terrain's own valid cells, given back to the frames and the final state.
-  bool noSnow_ = false;
-  Grid<uint8_t> terrainValid_;
-  // The domain's strongest wind (squared) for the bedforms, scanned again only after the daily
-  // static-field refresh changed the wind (-1: to scan), not at every hourly step.
-  double bedformWindiest_ = -1.0;
-  bool bedformsMasked_ = false;  // state.bedformMask is painted: the bedforms run inside it only
-  double bedformRoundCarry_ = 0.0;  // the fraction of a polling round owed to the next step
-  uint64_t bedformRoundBase_ = 0;
-  std::optional<AvalancheRun> avalanche_;
-  std::deque<UserAvalanche> pendingAvalanches_;
-  int avalancheId_ = -1;
-  bool skiing_ = false;
-  std::optional<SkiRun> ski_;
-  uint64_t skierId_ = 0;
-};
+SeasonReport SeasonRun::run() {
+  const auto t0 = Clock::now();
+  if (cfg_.updateStaticFields) cfg_.updateStaticFields(0, state_);
+  leaveNoSnowCells();
+  backend_.upload(state_);
+  report_.initial = backend_.totals();
+  maxTemperatureBase_ = backend_.maxTemperatureBaseC();
+  addSnowfall();
+  addStateChanges();
+  addBedforms();
+  addTransport();
+  addEdits();
+  addAvalanches();
+  addSkiers();
+  addStaticFieldRefresh();
+  addFrames();
+  runEvents();
+  finish();
+  report_.seconds = secondsSince(t0);
+  return std::move(report_);
+}
 
 // No-snow cells leave the snow domain for the season: their snow goes, and the backend (and the
 // avalanche and skier runners, built from the state later) see them as outside the terrain.
@@ -155,12 +69,6 @@ int SeasonRun::addPhenomenon(PhenomenonSpec spec) {
   return scheduler_.add(std::move(spec));
 }
 
-template <class Body>
-void SeasonRun::timed(int slot, Body&& body) {
-  const auto start = Clock::now();
-  body();
-  reports_[slot].seconds += secondsSince(start);
-}
 
 // Each step acts over the time since the phenomenon's previous step (or its start), not over
 // the nominal 1 / stepsPerDay: the Poisson clock decides when steps happen, but a storm of
@@ -316,175 +224,6 @@ void SeasonRun::addEdits() {
   }
 }
 
-void SeasonRun::releaseUser(const UserAvalanche& u, double day, double seaLevelTemperatureC) {
-  if (u.zone) avalanche_->releaseZone(*u.zone, day, seaLevelTemperatureC, !u.bySkier);
-  else avalanche_->release(u.x, u.y, day, seaLevelTemperatureC, !u.bySkier);
-}
-
-// An avalanche's start: the first pending user (or skier) release, else a spontaneous try.
-void SeasonRun::startAvalanche(int slot, const EventContext& e) {
-  timed(slot, [&] {
-    const double t0 = cfg_.weather.at(e.day).seaLevelTemperatureC;
-    if (!pendingAvalanches_.empty()) {
-      const UserAvalanche u = pendingAvalanches_.front();
-      pendingAvalanches_.pop_front();
-      releaseUser(u, e.day, t0);
-      if (!avalanche_->active()) report_.avalanches.push_back(avalanche_->record());
-    } else {
-      const RandomKey key{cfg_.seed};
-      const Philox4x32 r = key.draw(e.eventIndex, 0, RngStream::Avalanche);
-      ++report_.avalancheTries;
-      avalanche_->trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), uniformOpenDouble(r.v[2], r.v[3]), e.day, t0);
-    }
-  });
-}
-
-// An avalanche's stop: it settles, then the user releases that came while it ran, one after the
-// other.
-void SeasonRun::stopAvalanche(int slot) {
-  if (avalanche_->active()) timed(slot, [&] { report_.avalanches.push_back(avalanche_->settle()); });
-  while (!pendingAvalanches_.empty()) {
-    const UserAvalanche u = pendingAvalanches_.front();
-    pendingAvalanches_.pop_front();
-    timed(slot, [&] {
-      releaseUser(u, u.day, cfg_.weather.at(u.day).seaLevelTemperatureC);
-      report_.avalanches.push_back(avalanche_->runToRest());
-    });
-  }
-}
-
-// Avalanches (§6.1): spontaneous release tries at about one a week per km^2 (each at a random
-// cell, released with a probability from its unstable depth and slope above the rest angle),
-// and the scene's user releases. A zoomed phenomenon: while one runs, its steps of 0.1 s are
-// the only events (§3.1's temporal zoom). The runner (which keeps host copies of the state)
-// exists only when the season can have avalanches.
-void SeasonRun::addAvalanches() {
-  skiing_ = (p_.skiersPerHour > 0.0 && p_.skiHoursPerDay > 0.0) || !cfg_.userSkiers.empty();
-  double validCells = 0;
-  for (uint8_t v : state_.validCell.values()) validCells += v;
-  const double areaKm2 = validCells * state_.spec.cellAreaM2() * 1e-6;
-  const double startsPerDay = p_.avalancheRatePerKm2PerDay * areaKm2;
-  if (startsPerDay > 0.0 || !cfg_.userAvalanches.empty() || (skiing_ && p_.skiTriggerFactor > 0.0)) {
-    avalanche_.emplace(backend_, p_, state_);
-    avalanche_->keepMaps(cfg_.avalancheMaps, cfg_.avalancheFrameIntervalS);
-    PhenomenonSpec s;
-    s.name = "avalanche";
-    s.zoomed = true;
-    s.startsPerDay = startsPerDay;
-    s.stepsPerDay = 86400.0 / p_.avalancheStepS;
-    const int slot = static_cast<int>(reports_.size());
-    s.onStart = [this, slot](const EventContext& e) { startAvalanche(slot, e); };
-    s.onStep = [this, slot](const EventContext&) {
-      if (avalanche_->active()) timed(slot, [&] { avalanche_->step(); });
-    };
-    s.finished = [this] { return !avalanche_->active() || avalanche_->atRest(); };
-    s.onStop = [this, slot](const EventContext&) { stopAvalanche(slot); };
-    avalancheId_ = addPhenomenon(std::move(s));
-  }
-  for (const UserAvalanche& u : cfg_.userAvalanches) {
-    if (u.day < 0.0 || u.day > cfg_.days) continue;
-    scheduler_.addAction(u.day, [this, u](double) {
-      pendingAvalanches_.push_back(u);
-      scheduler_.start(avalancheId_);
-    });
-  }
-}
-
-// A batch of skiers moved together to the end of their descents; the avalanches they trigger
-// start after the batch, in skier order.
-void SeasonRun::runSkiers(std::vector<SkierStart> starts, double day) {
-  if (starts.empty()) return;
-  for (SkierStart& st : starts) st.id = skierId_++;
-  std::vector<SkierRecord> records = ski_->descendTogether(starts, day, cfg_.seed);
-  for (SkierRecord& r : records) {
-    if (r.triggered && avalancheId_ >= 0) {
-      pendingAvalanches_.push_back({day, r.triggerX, r.triggerY, true, nullptr});
-      scheduler_.start(avalancheId_);
-    }
-    if (!r.user) r.path.clear();  // keep the records small; user skiers keep their paths
-    report_.skiers.push_back(std::move(r));
-  }
-}
-
-// An hour's automatic skiers: a Poisson number, each skier's cell drawn by the route map until
-// one has snow enough to ski (at most 16 draws).
-std::vector<SkierStart> SeasonRun::automaticSkierStarts(const EventContext& e) {
-  const RandomKey key{cfg_.seed};
-  const int count = poissonCount(p_.skiersPerHour, [&](uint32_t k) {
-    const Philox4x32 r = key.draw(e.eventIndex, k, RngStream::SkierCount);
-    return uniformOpenDouble(r.v[0], r.v[1]);
-  });
-  std::vector<SkierStart> starts;
-  for (int k = 0; k < count; ++k)
-    for (uint32_t attempt = 0; attempt < 16; ++attempt) {
-      const Philox4x32 r = key.draw(e.eventIndex, static_cast<uint32_t>(k) * 16u + attempt, RngStream::Skier);
-      int x = 0, y = 0;
-      if (!ski_->pickStart(uniformOpenDouble(r.v[0], r.v[1]), x, y)) break;
-      if (!ski_->canStart(x, y)) continue;
-      starts.push_back({x, y, 0, false});
-      break;
-    }
-  return starts;
-}
-
-// The scene's user skiers (a group starts together): from their cell, or from a start mask, each
-// skier's start cell drawn by the mask's weights (valid cells only), redrawn (up to 16 times)
-// until it has snow enough to ski.
-void SeasonRun::addUserSkiers() {
-  uint64_t maskedSkierDraws = 0;
-  for (const UserSkier& u : cfg_.userSkiers) {
-    if (u.day < 0.0 || u.day > cfg_.days) continue;
-    if (!u.startWeights) {
-      scheduler_.addAction(u.day, [this, u](double now) {
-        runSkiers(std::vector<SkierStart>(static_cast<size_t>(u.count), SkierStart{u.x, u.y, 0, true}), now);
-      });
-      continue;
-    }
-    auto cumulative = std::make_shared<std::vector<double>>(u.startWeights->size());
-    double sum = 0.0;
-    for (size_t i = 0; i < cumulative->size(); ++i)
-      (*cumulative)[i] = (sum += state_.validCell.values()[i] ? std::max(0.f, (*u.startWeights)[i]) : 0.f);
-    const uint64_t stream = maskedSkierDraws++;
-    scheduler_.addAction(u.day, [this, u, cumulative, stream](double now) {
-      const RandomKey key{cfg_.seed};
-      std::vector<SkierStart> starts;
-      for (int k = 0; k < u.count; ++k)
-        for (uint32_t attempt = 0; attempt < 16; ++attempt) {
-          const Philox4x32 r = key.draw(stream, static_cast<uint32_t>(k) * 16u + attempt, RngStream::SkierStartMask);
-          const long long i = pickByCumulativeWeight(*cumulative, uniformOpenDouble(r.v[0], r.v[1]));
-          if (i < 0) break;
-          const int x = static_cast<int>(i % state_.spec.width), y = static_cast<int>(i / state_.spec.width);
-          if (!ski_->canStart(x, y)) continue;
-          starts.push_back({x, y, 0, true});
-          break;
-        }
-      runSkiers(std::move(starts), now);
-    });
-  }
-}
-
-// Skiers (§6.2, §7.3): automatic ones, about skiers_per_hour in each of the day's
-// ski_hours_per_day hours (an hour's skiers start together from cells drawn by the route map),
-// and the scene's user skiers. The skiers of a batch move together on the backend, one move of
-// each at a time (kernels/ski.h); the bake has no real-time display, so a batch runs to its end
-// at its event.
-void SeasonRun::addSkiers() {
-  if (!skiing_) return;
-  ski_.emplace(backend_, p_, state_, cfg_.skiTracks);
-  if (p_.skiersPerHour > 0.0 && p_.skiHoursPerDay > 0.0) {
-    PhenomenonSpec s;
-    s.name = "skier";
-    s.alwaysActive = true;
-    s.stepsPerDay = p_.skiHoursPerDay;
-    const int slot = static_cast<int>(reports_.size());
-    s.onStep = [this, slot](const EventContext& e) {
-      timed(slot, [&] { runSkiers(automaticSkierStarts(e), e.day); });
-    };
-    addPhenomenon(std::move(s));
-  }
-  addUserSkiers();
-}
-
 // Per-day static fields: refilled at the start of every day after the first, and uploaded.
 void SeasonRun::addStaticFieldRefresh() {
   if (!cfg_.updateStaticFields) return;
@@ -539,8 +278,6 @@ void SeasonRun::finish() {
   report_.phenomena = std::move(reports_);
   report_.events = scheduler_.eventsFired();
 }
-
-}  // namespace
 
 SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfig& cfg,
                        const ProgressCallback& progress, const FrameCallback& onFrame) {
