@@ -99,21 +99,11 @@ class ExecBackend final : public SnowBackend {
 
   BedformStepReport bedformStep(const BedformArgs& args) override {
     const int w = spec_.width, h = spec_.height;
-    const size_t n = spec_.cellCount();
     if (args.periodic && (w % 2 != 0 || h % 2 != 0))  // the repose edge families need even sizes to wrap
       throw std::invalid_argument("bedforms: a periodic grid needs an even width and height");
     if (!(args.slabM > 0.f) || args.batches < 1 || args.rounds < 0)
       throw std::invalid_argument("bedforms: slab thickness, batches and rounds must be positive");
-    if (!bedformFieldsReady_) {  // allocated on the first bedform step only
-      std::vector<float> powder;
-      exec_.download(powderM_, powder);  // the snow already there is not fresh
-#define SNOW_MAKE_BEDFORM_FIELD(member, Element, start)                                        \
-  if constexpr (BedformStart::start == BedformStart::Zero) exec_.upload(bed_.member, std::vector<Element>(n)); \
-  else if constexpr (BedformStart::start == BedformStart::Powder) exec_.upload(bed_.member, powder);
-      SNOW_BEDFORM_FIELDS(SNOW_MAKE_BEDFORM_FIELD)
-#undef SNOW_MAKE_BEDFORM_FIELD
-      bedformFieldsReady_ = true;
-    }
+    if (!bedformFieldsReady_) makeBedformFields();  // on the first bedform step only
     exec_.upload(bed_.counters, std::vector<unsigned long long>(4, 0ull));
     const SnowFieldsView v = view();
     const BedformFields f = bedformFields();
@@ -123,49 +113,13 @@ class ExecBackend final : public SnowBackend {
     const double cells = exec_.sum(v.surfaceSlope, v.valid, w, h);
     report.domainCells = static_cast<long long>(cells);
     a.meanSlabs = cells > 0 ? static_cast<float>(exec_.sum(v.delta, v.valid, w, h) / cells) : 0.f;
-    auto slabTotal = [&] {
-      std::vector<int> slabs, exported;
-      exec_.download(bed_.slabs, slabs);
-      exec_.download(bed_.exported, exported);
-      long long total = 0;
-      for (size_t i = 0; i < slabs.size(); ++i) total += static_cast<long long>(slabs[i]) + exported[i];
-      return total;
-    };
-    report.slabsBefore = slabTotal();
+    report.slabsBefore = bedformSlabTotal();
     unsigned long long relaxed = 0;
-    // Relaxation sweeps over the four edge families until no edge moves (at most maxSweeps).
-    auto relax = [&](int maxSweeps) {
-      for (int sweep = 0; sweep < maxSweeps; ++sweep) {
-        for (int family = 0; family < 4; ++family) {
-          a.family = family;
-          if (family < 2) exec_.forEachCell((w + 1) / 2, h, BedformReposeKernel{v, f, a});
-          else exec_.forEachCell(w, (h + 1) / 2, BedformReposeKernel{v, f, a});
-        }
-        unsigned long long now = 0;
-        exec_.downloadRange(bed_.counters, 1, 1, &now);
-        if (now == relaxed) return true;
-        relaxed = now;
-      }
-      return false;
-    };
     if (report.domainCells > 0) {
-      for (int r = 0; r < args.rounds; ++r) {
-        a.round = args.roundBase + static_cast<uint64_t>(r);
-        for (int b = 0; b < args.batches; ++b) {
-          a.batch = b;
-          exec_.forEachCell(w, h, BedformSnapshotKernel{v, f, a.slabM, v.surfaceSlope});
-          a.maxSurface = exec_.maxValue(v.surfaceSlope, v.valid, w, h);
-          exec_.forEachCell(w, h, BedformShadowKernel{v, f, a});
-          exec_.forEachCell(w, h, BedformSaltationKernel{v, f, a});
-          relax(16);
-        }
-        BedformArgs c = a;
-        c.dtDays = args.dtDays / static_cast<float>(args.rounds);
-        exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
-      }
-      report.reposeConverged = relax(1 << 16);
+      for (int r = 0; r < args.rounds; ++r) bedformRound(v, f, args, r, a, relaxed);
+      report.reposeConverged = relaxBedforms(v, f, a, 1 << 16, relaxed);
     }
-    report.slabsAfter = slabTotal();
+    report.slabsAfter = bedformSlabTotal();
     BedformArgs c = a;
     c.dtDays = args.rounds > 0 ? 0.f : args.dtDays;  // the rest of the arrivals; sintering if no round ran
     exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
@@ -350,6 +304,66 @@ class ExecBackend final : public SnowBackend {
     SNOW_SCRATCH_FIELDS(SNOW_VIEW_OF_SCRATCH)
 #undef SNOW_VIEW_OF_SCRATCH
     return v;
+  }
+
+  // The bedforms' storage (kernels/bedform.h), each field as its `start` says.
+  void makeBedformFields() {
+    const size_t n = spec_.cellCount();
+    std::vector<float> powder;
+    exec_.download(powderM_, powder);  // the snow already there is not fresh
+#define SNOW_MAKE_BEDFORM_FIELD(member, Element, start)                                                          \
+  if constexpr (BedformStart::start == BedformStart::Zero) exec_.upload(bed_.member, std::vector<Element>(n)); \
+  else if constexpr (BedformStart::start == BedformStart::Powder) exec_.upload(bed_.member, powder);
+    SNOW_BEDFORM_FIELDS(SNOW_MAKE_BEDFORM_FIELD)
+#undef SNOW_MAKE_BEDFORM_FIELD
+    bedformFieldsReady_ = true;
+  }
+
+  // Slabs in the domain and those that left it: conserved by a step.
+  long long bedformSlabTotal() {
+    std::vector<int> slabs, exported;
+    exec_.download(bed_.slabs, slabs);
+    exec_.download(bed_.exported, exported);
+    long long total = 0;
+    for (size_t i = 0; i < slabs.size(); ++i) total += static_cast<long long>(slabs[i]) + exported[i];
+    return total;
+  }
+
+  // Relaxation sweeps over the four edge families until no edge moves (true), at most maxSweeps;
+  // `relaxed` carries the relaxation's move counter from sweep to sweep.
+  bool relaxBedforms(const SnowFieldsView& v, const BedformFields& f, BedformArgs& a, int maxSweeps, unsigned long long& relaxed) {
+    const int w = spec_.width, h = spec_.height;
+    for (int sweep = 0; sweep < maxSweeps; ++sweep) {
+      for (int family = 0; family < 4; ++family) {
+        a.family = family;
+        if (family < 2) exec_.forEachCell((w + 1) / 2, h, BedformReposeKernel{v, f, a});
+        else exec_.forEachCell(w, (h + 1) / 2, BedformReposeKernel{v, f, a});
+      }
+      unsigned long long now = 0;
+      exec_.downloadRange(bed_.counters, 1, 1, &now);
+      if (now == relaxed) return true;
+      relaxed = now;
+    }
+    return false;
+  }
+
+  // Polling round r of a step: its batches (snapshot, shadow, saltation, relaxation), then the
+  // round's share of the cohesion.
+  void bedformRound(const SnowFieldsView& v, const BedformFields& f, const BedformArgs& args, int r, BedformArgs& a,
+                    unsigned long long& relaxed) {
+    const int w = spec_.width, h = spec_.height;
+    a.round = args.roundBase + static_cast<uint64_t>(r);
+    for (int b = 0; b < args.batches; ++b) {
+      a.batch = b;
+      exec_.forEachCell(w, h, BedformSnapshotKernel{v, f, a.slabM, v.surfaceSlope});
+      a.maxSurface = exec_.maxValue(v.surfaceSlope, v.valid, w, h);
+      exec_.forEachCell(w, h, BedformShadowKernel{v, f, a});
+      exec_.forEachCell(w, h, BedformSaltationKernel{v, f, a});
+      relaxBedforms(v, f, a, 16, relaxed);
+    }
+    BedformArgs c = a;
+    c.dtDays = args.dtDays / static_cast<float>(args.rounds);
+    exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
   }
 
   // Zeroed scratch fields: those made with the state (withState), or at the first avalanche.
