@@ -389,7 +389,8 @@ class ExecBackend final : public SnowBackend {
   template <FieldRole role, class T>
   void uploadField(Buffer<T>& buffer, const Grid<T>& grid) {
     const bool present = !optionalField(role) || (grid.size() == spec_.cellCount() && grid.size() > 0);
-    exec_.upload(buffer, present ? grid.values() : std::vector<T>());
+    if (present) exec_.upload(buffer, grid.values());
+    else exec_.upload(buffer, std::vector<T>());
   }
 
   Exec exec_;

@@ -30,7 +30,7 @@ constexpr bool uploadedWithStaticFields(FieldRole r) { return r == FieldRole::St
 constexpr bool downloadedWithState(FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; }
 // The backend keeps a buffer of the field's own.
 constexpr bool heldByBackend(FieldRole r) { return uploadedWithState(r) || uploadedWithStaticFields(r); }
-// SnowState::allocate leaves the field empty (absent until the scene or a model fills it).
+// SnowState::allocate leaves the field as it is (absent until the scene or a model fills it).
 constexpr bool optionalField(FieldRole r) {
   return r == FieldRole::ArtDirection || r == FieldRole::HostOnly || r == FieldRole::BedformResult;
 }
