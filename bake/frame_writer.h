@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "bakers/output_writer.h"
-#include "core/ski.h"
+#include "core/ski_runs.h"
 
 namespace snow {
 

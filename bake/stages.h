@@ -15,7 +15,7 @@
 #include "core/backend.h"
 #include "core/season.h"
 #include "core/util.h"
-#include "core/ski.h"
+#include "core/ski_runs.h"
 #include "precompute/cache.h"
 #include "precompute/exposure.h"
 #include "precompute/mesh.h"

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "core/avalanche.h"
+#include "core/avalanche_runs.h"
 #include "core/snow_state.h"
 #include "output_sink.h"
 #include "precompute/exposure.h"

@@ -12,7 +12,7 @@
 #include <thread>
 
 #include "core/atomic_file.h"
-#include "core/avalanche.h"
+#include "core/avalanche_runs.h"
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/reference_scenario.h"

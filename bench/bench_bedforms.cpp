@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "bench_suite.h"
-#include "core/bedform.h"
+#include "core/bedform_runs.h"
 #include "core/cpu_backend.h"
 #include "cuda/cuda_backend.h"
 

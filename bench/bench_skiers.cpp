@@ -8,7 +8,7 @@
 #include "bench_suite.h"
 #include "core/cpu_backend.h"
 #include "core/reference_scenario.h"
-#include "core/ski.h"
+#include "core/ski_runs.h"
 #include "cuda/cuda_backend.h"
 
 namespace snow {

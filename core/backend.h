@@ -80,7 +80,7 @@ class SnowBackend {
   // The bedform cohesion per cell (false, and `out` untouched, before the first bedform step).
   virtual bool bedformCohesion(Grid<float>& out) = 0;
 
-  // Skiers (core/ski.h). The route map of the bedrock by the cellular automaton
+  // Skiers (core/ski_runs.h). The route map of the bedrock by the cellular automaton
   // (RouteMapStepKernel) on the backend's device; false on host backends, where a one-pass sort
   // over the cells gives the same bytes faster.
   virtual bool routeMapOnDevice(Grid<float>& out) {
@@ -95,7 +95,7 @@ class SnowBackend {
   // too) turns args.compactionM of U into S, or of S into C where U runs short (conserves mass).
   virtual void skierBatch(const SkierArgs& args, std::vector<SkierAgent>& agents, std::vector<std::vector<double>>& paths) = 0;
 
-  // Avalanches (kernels/avalanche.h; the host loop is core/avalanche.h). Release: `moving` (one
+  // Avalanches (kernels/avalanche.h; the host loop is core/avalanche_runs.h). Release: `moving` (one
   // byte per cell) marks the released cells; records U + P and joins their powder to U.
   virtual void avalancheRelease(const std::vector<uint8_t>& moving) = 0;
   // `substeps` substeps of args.dtS, the box dilated by one cell before each (snow moves at most

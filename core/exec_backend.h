@@ -8,6 +8,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -25,47 +26,27 @@ class ExecBackend final : public SnowBackend {
 
   std::string name() const override { return exec_.name(); }
 
+  // The state's fields by their roles (snow_fields.h); the scratch fields made with the state
+  // zeroed; the avalanche's and the bedforms' fields made again at their first step.
   void upload(const SnowState& s) override {
     spec_ = s.spec;
-    exec_.upload(bedrock_, s.bedrockM.values());
-    exec_.upload(compacted_, s.compactedM.values());
-    exec_.upload(stable_, s.stableM.values());
-    exec_.upload(unstable_, s.unstableM.values());
-    exec_.upload(powder_, s.powderM.values());
-    exec_.upload(moving_, s.snowMoving.values());
-    exec_.upload(windScour_, s.windScourM.values());
-    exec_.upload(windDeposit_, s.windDepositM.values());
-    exec_.upload(melted_, s.meltedM.values());
-    exec_.upload(avalancheScour_, s.avalancheScourM.values());
-    exec_.upload(avalancheDeposit_, s.avalancheDepositM.values());
+#define SNOW_UPLOAD_WITH_STATE(member, view, Element, role, access, fill) \
+  if constexpr (uploadedWithState(FieldRole::role)) exec_.upload(member##_, s.member.values());
+    SNOW_STATE_FIELDS(SNOW_UPLOAD_WITH_STATE)
+#undef SNOW_UPLOAD_WITH_STATE
     avalancheFieldsReady_ = false;
     bedformFieldsReady_ = false;
-    exec_.upload(valid_, s.validCell.values());
-    exec_.upload(delta_, std::vector<float>(s.spec.cellCount(), 0.f));
-    exec_.upload(surfaceSlope_, std::vector<float>(s.spec.cellCount(), 0.f));
-    exec_.upload(scratchSurface_, std::vector<float>(s.spec.cellCount(), 0.f));
-    exec_.upload(scratchPowder_, std::vector<float>(s.spec.cellCount(), 0.f));
-    // Five shares a cell, unless the executor keeps them in row buffers (the TBB one).
-    if constexpr (Exec::kPowderSharesInRows)
-      exec_.upload(powderFlow_, std::vector<float>());
-    else
-      exec_.upload(powderFlow_, std::vector<float>(5 * s.spec.cellCount(), 0.f));
+    makeScratch(true);
     uploadStaticFields(s);
   }
 
+  // Static fields, and the art-direction ones the scene paints (empty buffers otherwise: null in
+  // the kernels).
   void uploadStaticFields(const SnowState& s) override {
-    exec_.upload(exposure_, s.exposureHours.values());
-    exec_.upload(temperatureBase_, s.temperatureBaseC.values());
-    exec_.upload(windX_, s.windXMps.values());
-    exec_.upload(windY_, s.windYMps.values());
-    exec_.upload(windEffectZ_, s.windEffectZM.values());
-    exec_.upload(windLoading_, s.windLoadingMps2.values());
-    // Art-direction factors: uploaded when the scene paints them, null in the kernels otherwise.
-    hasSnowfallFactor_ = uploadOptional(snowfallFactor_, s.snowfallFactor);
-    hasMeltFactor_ = uploadOptional(meltFactor_, s.meltFactor);
-    hasWindErosionFactor_ = uploadOptional(windErosionFactor_, s.windErosionFactor);
-    hasBedformMask_ = s.bedformMask.size() == spec_.cellCount() && s.bedformMask.size() > 0;
-    exec_.upload(bedformMask_, hasBedformMask_ ? s.bedformMask.values() : std::vector<uint8_t>());
+#define SNOW_UPLOAD_STATIC(member, view, Element, role, access, fill) \
+  if constexpr (uploadedWithStaticFields(FieldRole::role)) uploadField<FieldRole::role>(member##_, s.member);
+    SNOW_STATE_FIELDS(SNOW_UPLOAD_STATIC)
+#undef SNOW_UPLOAD_STATIC
   }
 
   double applyEdit(const EditArgs& a, const std::vector<float>& weights) override {
@@ -79,19 +60,13 @@ class ExecBackend final : public SnowBackend {
   }
 
   void download(SnowState& s) override {
-    exec_.download(compacted_, s.compactedM.values());
-    exec_.download(stable_, s.stableM.values());
-    exec_.download(unstable_, s.unstableM.values());
-    exec_.download(powder_, s.powderM.values());
-    exec_.download(moving_, s.snowMoving.values());
-    exec_.download(windScour_, s.windScourM.values());
-    exec_.download(windDeposit_, s.windDepositM.values());
-    exec_.download(melted_, s.meltedM.values());
-    exec_.download(avalancheScour_, s.avalancheScourM.values());
-    exec_.download(avalancheDeposit_, s.avalancheDepositM.values());
+#define SNOW_DOWNLOAD(member, view, Element, role, access, fill) \
+  if constexpr (downloadedWithState(FieldRole::role)) exec_.download(member##_, s.member.values());
+    SNOW_STATE_FIELDS(SNOW_DOWNLOAD)
+#undef SNOW_DOWNLOAD
     if (bedformFieldsReady_) {
       s.bedformCohesion.resize(spec_.width, spec_.height, 0.f);
-      exec_.download(bedCohesion_, s.bedformCohesion.values());
+      exec_.download(bed_.cohesion, s.bedformCohesion.values());
     }
   }
 
@@ -114,34 +89,22 @@ class ExecBackend final : public SnowBackend {
     for (int r = 0; r < rows; ++r) {
       const size_t offset = static_cast<size_t>(y0 + r) * spec_.width + x0;
       float* d = &depth[static_cast<size_t>(r) * cols];
-      for (auto* layer : {&compacted_, &stable_, &unstable_, &powder_}) {
+      for (auto* layer : {&compactedM_, &stableM_, &unstableM_, &powderM_}) {
         exec_.downloadRange(*layer, offset, static_cast<size_t>(cols), row.data());
         for (int c = 0; c < cols; ++c) d[c] += row[c];
-        if (layer == &unstable_) std::copy(row.begin(), row.end(), unstable.begin() + static_cast<size_t>(r) * cols);
+        if (layer == &unstableM_) std::copy(row.begin(), row.end(), unstable.begin() + static_cast<size_t>(r) * cols);
       }
     }
   }
 
   BedformStepReport bedformStep(const BedformArgs& args) override {
     const int w = spec_.width, h = spec_.height;
-    const size_t n = spec_.cellCount();
     if (args.periodic && (w % 2 != 0 || h % 2 != 0))  // the repose edge families need even sizes to wrap
       throw std::invalid_argument("bedforms: a periodic grid needs an even width and height");
     if (!(args.slabM > 0.f) || args.batches < 1 || args.rounds < 0)
       throw std::invalid_argument("bedforms: slab thickness, batches and rounds must be positive");
-    if (!bedformFieldsReady_) {  // allocated on the first bedform step only
-      const std::vector<int> zeroInts(n, 0);
-      const std::vector<float> zeroFloats(n, 0.f);
-      const std::vector<uint8_t> zeroBytes(n, 0);
-      for (auto* b : {&bedSlabs_, &bedSnapshot_, &bedExported_, &bedArrived_, &bedArrivedCohesion_, &bedInitial_}) exec_.upload(*b, zeroInts);
-      for (auto* b : {&bedCohesion_, &bedBase_}) exec_.upload(*b, zeroFloats);
-      for (auto* b : {&bedShadow_, &bedActive_}) exec_.upload(*b, zeroBytes);
-      std::vector<float> powder;
-      exec_.download(powder_, powder);
-      exec_.upload(bedLastPowder_, powder);  // the snow already there is not fresh
-      bedformFieldsReady_ = true;
-    }
-    exec_.upload(bedCounters_, std::vector<unsigned long long>(4, 0ull));
+    if (!bedformFieldsReady_) makeBedformFields();  // on the first bedform step only
+    exec_.upload(bed_.counters, std::vector<unsigned long long>(4, 0ull));
     const SnowFieldsView v = view();
     const BedformFields f = bedformFields();
     BedformArgs a = args;
@@ -150,55 +113,19 @@ class ExecBackend final : public SnowBackend {
     const double cells = exec_.sum(v.surfaceSlope, v.valid, w, h);
     report.domainCells = static_cast<long long>(cells);
     a.meanSlabs = cells > 0 ? static_cast<float>(exec_.sum(v.delta, v.valid, w, h) / cells) : 0.f;
-    auto slabTotal = [&] {
-      std::vector<int> slabs, exported;
-      exec_.download(bedSlabs_, slabs);
-      exec_.download(bedExported_, exported);
-      long long total = 0;
-      for (size_t i = 0; i < slabs.size(); ++i) total += static_cast<long long>(slabs[i]) + exported[i];
-      return total;
-    };
-    report.slabsBefore = slabTotal();
+    report.slabsBefore = bedformSlabTotal();
     unsigned long long relaxed = 0;
-    // Relaxation sweeps over the four edge families until no edge moves (at most maxSweeps).
-    auto relax = [&](int maxSweeps) {
-      for (int sweep = 0; sweep < maxSweeps; ++sweep) {
-        for (int family = 0; family < 4; ++family) {
-          a.family = family;
-          if (family < 2) exec_.forEachCell((w + 1) / 2, h, BedformReposeKernel{v, f, a});
-          else exec_.forEachCell(w, (h + 1) / 2, BedformReposeKernel{v, f, a});
-        }
-        unsigned long long now = 0;
-        exec_.downloadRange(bedCounters_, 1, 1, &now);
-        if (now == relaxed) return true;
-        relaxed = now;
-      }
-      return false;
-    };
     if (report.domainCells > 0) {
-      for (int r = 0; r < args.rounds; ++r) {
-        a.round = args.roundBase + static_cast<uint64_t>(r);
-        for (int b = 0; b < args.batches; ++b) {
-          a.batch = b;
-          exec_.forEachCell(w, h, BedformSnapshotKernel{v, f, a.slabM, v.surfaceSlope});
-          a.maxSurface = exec_.maxValue(v.surfaceSlope, v.valid, w, h);
-          exec_.forEachCell(w, h, BedformShadowKernel{v, f, a});
-          exec_.forEachCell(w, h, BedformSaltationKernel{v, f, a});
-          relax(16);
-        }
-        BedformArgs c = a;
-        c.dtDays = args.dtDays / static_cast<float>(args.rounds);
-        exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
-      }
-      report.reposeConverged = relax(1 << 16);
+      for (int r = 0; r < args.rounds; ++r) bedformRound(v, f, args, r, a, relaxed);
+      report.reposeConverged = relaxBedforms(v, f, a, 1 << 16, relaxed);
     }
-    report.slabsAfter = slabTotal();
+    report.slabsAfter = bedformSlabTotal();
     BedformArgs c = a;
     c.dtDays = args.rounds > 0 ? 0.f : args.dtDays;  // the rest of the arrivals; sintering if no round ran
     exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
     exec_.forEachCell(w, h, BedformFinishKernel{v, f, a});
     unsigned long long counters[2] = {0, 0};
-    exec_.downloadRange(bedCounters_, 0, 2, counters);
+    exec_.downloadRange(bed_.counters, 0, 2, counters);
     exec_.finish();
     report.slabsEroded = static_cast<long long>(counters[0]);
     report.slabsAvalanched = static_cast<long long>(counters[1]);
@@ -208,7 +135,7 @@ class ExecBackend final : public SnowBackend {
   bool bedformCohesion(Grid<float>& out) override {
     if (!bedformFieldsReady_) return false;
     out = Grid<float>(spec_.width, spec_.height, 0.f);
-    exec_.download(bedCohesion_, out.values());
+    exec_.download(bed_.cohesion, out.values());
     return true;
   }
 
@@ -228,7 +155,7 @@ class ExecBackend final : public SnowBackend {
       for (size_t it = 1;; ++it) {
         auto& in = it % 2 ? a : b;
         auto& result = it % 2 ? b : a;
-        exec_.forEachCell(w, h, RouteMapStepKernel{bedrock_.data(), valid_.data(), in.data(), result.data(), w, h, dx, dy,
+        exec_.forEachCell(w, h, RouteMapStepKernel{bedrockM_.data(), validCell_.data(), in.data(), result.data(), w, h, dx, dy,
                                                    std::sqrt(dx * dx + dy * dy)});
         if (it % 16 == 0 || it > spec_.cellCount()) {
           exec_.download(in, previous);
@@ -310,13 +237,10 @@ class ExecBackend final : public SnowBackend {
 
   void avalancheRelease(const std::vector<uint8_t>& moving) override {
     if (!avalancheFieldsReady_) {  // allocated on the first avalanche only
-      exec_.upload(flows_, std::vector<float>(4 * spec_.cellCount(), 0.f));
-      exec_.upload(avalancheBefore_, std::vector<float>(spec_.cellCount(), 0.f));
-      exec_.upload(avalancheU_, std::vector<double>(spec_.cellCount(), 0.0));
-      exec_.upload(rowStats_, std::vector<float>(4 * static_cast<size_t>(spec_.height), 0.f));
+      makeScratch(false);
       avalancheFieldsReady_ = true;
     }
-    exec_.upload(moving_, moving);
+    exec_.upload(snowMoving_, moving);
     exec_.forEachCell(spec_.width, spec_.height, AvalancheReleaseKernel{view()});
     exec_.finish();
   }
@@ -342,15 +266,15 @@ class ExecBackend final : public SnowBackend {
     const double area = spec_.cellAreaM2();
     const int w = spec_.width, h = spec_.height;
     LayerTotals t;
-    t.compactedM3 = exec_.sum(compacted_.data(), valid_.data(), w, h) * area;
-    t.stableM3 = exec_.sum(stable_.data(), valid_.data(), w, h) * area;
-    t.unstableM3 = exec_.sum(unstable_.data(), valid_.data(), w, h) * area;
-    t.powderM3 = exec_.sum(powder_.data(), valid_.data(), w, h) * area;
+    t.compactedM3 = exec_.sum(compactedM_.data(), validCell_.data(), w, h) * area;
+    t.stableM3 = exec_.sum(stableM_.data(), validCell_.data(), w, h) * area;
+    t.unstableM3 = exec_.sum(unstableM_.data(), validCell_.data(), w, h) * area;
+    t.powderM3 = exec_.sum(powderM_.data(), validCell_.data(), w, h) * area;
     return t;
   }
 
   float maxTemperatureBaseC() override {
-    return exec_.maxValue(temperatureBase_.data(), valid_.data(), spec_.width, spec_.height);
+    return exec_.maxValue(temperatureBaseC_.data(), validCell_.data(), spec_.width, spec_.height);
   }
 
   Exec& exec() { return exec_; }
@@ -358,19 +282,10 @@ class ExecBackend final : public SnowBackend {
  private:
   BedformFields bedformFields() {
     BedformFields f;
-    f.slabs = bedSlabs_.data();
-    f.snapshot = bedSnapshot_.data();
-    f.exported = bedExported_.data();
-    f.arrived = bedArrived_.data();
-    f.arrivedCohesion = bedArrivedCohesion_.data();
-    f.counters = bedCounters_.data();
-    f.cohesion = bedCohesion_.data();
-    f.lastPowder = bedLastPowder_.data();
-    f.base = bedBase_.data();
-    f.initial = bedInitial_.data();
-    f.shadow = bedShadow_.data();
-    f.active = bedActive_.data();
-    f.mask = hasBedformMask_ ? bedformMask_.data() : nullptr;
+#define SNOW_BEDFORM_POINTER(member, Element, start) f.member = bed_.member.data();
+    SNOW_BEDFORM_FIELDS(SNOW_BEDFORM_POINTER)
+#undef SNOW_BEDFORM_POINTER
+    f.mask = dataIfPresent(bedformMask_);
     return f;
   }
 
@@ -380,66 +295,124 @@ class ExecBackend final : public SnowBackend {
     v.height = spec_.height;
     v.cellSizeXM = static_cast<float>(spec_.cellSizeXM);
     v.cellSizeYM = static_cast<float>(spec_.cellSizeYM);
-    v.bedrock = bedrock_.data();
-    v.compacted = compacted_.data();
-    v.stable = stable_.data();
-    v.unstable = unstable_.data();
-    v.powder = powder_.data();
-    v.moving = moving_.data();
-    v.valid = valid_.data();
-    v.exposure = exposure_.data();
-    v.temperatureBase = temperatureBase_.data();
-    v.windX = windX_.data();
-    v.windY = windY_.data();
-    v.windEffectZ = windEffectZ_.data();
-    v.windLoading = windLoading_.data();
-    v.windScour = windScour_.data();
-    v.windDeposit = windDeposit_.data();
-    v.melted = melted_.data();
-    v.snowfallFactor = hasSnowfallFactor_ ? snowfallFactor_.data() : nullptr;
-    v.meltFactor = hasMeltFactor_ ? meltFactor_.data() : nullptr;
-    v.windErosionFactor = hasWindErosionFactor_ ? windErosionFactor_.data() : nullptr;
-    v.bedformActive = bedformFieldsReady_ ? bedActive_.data() : nullptr;
-    v.delta = delta_.data();
-    v.surfaceSlope = surfaceSlope_.data();
-    v.scratchSurface = scratchSurface_.data();
-    v.scratchPowder = scratchPowder_.data();
-    v.powderFlow = powderFlow_.data();
-    v.flows = flows_.data();
-    v.avalancheBefore = avalancheBefore_.data();
-    v.avalancheU = avalancheU_.data();
-    v.avalancheScour = avalancheScour_.data();
-    v.avalancheDeposit = avalancheDeposit_.data();
-    v.rowStats = rowStats_.data();
+#define SNOW_VIEW_OF_FIELD(member, view, Element, role, access, fill) \
+  SNOW_IF_VIEW(access, v.view = optionalField(FieldRole::role) ? dataIfPresent(member##_) : member##_.data();)
+    SNOW_STATE_FIELDS(SNOW_VIEW_OF_FIELD)
+#undef SNOW_VIEW_OF_FIELD
+    v.bedformActive = bedformFieldsReady_ ? bed_.active.data() : nullptr;
+#define SNOW_VIEW_OF_SCRATCH(view, Element, extent) v.view = view##_.data();
+    SNOW_SCRATCH_FIELDS(SNOW_VIEW_OF_SCRATCH)
+#undef SNOW_VIEW_OF_SCRATCH
     return v;
+  }
+
+  // The bedforms' storage (kernels/bedform.h), each field as its `start` says.
+  void makeBedformFields() {
+    const size_t n = spec_.cellCount();
+    std::vector<float> powder;
+    exec_.download(powderM_, powder);  // the snow already there is not fresh
+#define SNOW_MAKE_BEDFORM_FIELD(member, Element, start)                                                          \
+  if constexpr (BedformStart::start == BedformStart::Zero) exec_.upload(bed_.member, std::vector<Element>(n)); \
+  else if constexpr (BedformStart::start == BedformStart::Powder) exec_.upload(bed_.member, powder);
+    SNOW_BEDFORM_FIELDS(SNOW_MAKE_BEDFORM_FIELD)
+#undef SNOW_MAKE_BEDFORM_FIELD
+    bedformFieldsReady_ = true;
+  }
+
+  // Slabs in the domain and those that left it: conserved by a step.
+  long long bedformSlabTotal() {
+    std::vector<int> slabs, exported;
+    exec_.download(bed_.slabs, slabs);
+    exec_.download(bed_.exported, exported);
+    long long total = 0;
+    for (size_t i = 0; i < slabs.size(); ++i) total += static_cast<long long>(slabs[i]) + exported[i];
+    return total;
+  }
+
+  // Relaxation sweeps over the four edge families until no edge moves (true), at most maxSweeps;
+  // `relaxed` carries the relaxation's move counter from sweep to sweep.
+  bool relaxBedforms(const SnowFieldsView& v, const BedformFields& f, BedformArgs& a, int maxSweeps, unsigned long long& relaxed) {
+    const int w = spec_.width, h = spec_.height;
+    for (int sweep = 0; sweep < maxSweeps; ++sweep) {
+      for (int family = 0; family < 4; ++family) {
+        a.family = family;
+        if (family < 2) exec_.forEachCell((w + 1) / 2, h, BedformReposeKernel{v, f, a});
+        else exec_.forEachCell(w, (h + 1) / 2, BedformReposeKernel{v, f, a});
+      }
+      unsigned long long now = 0;
+      exec_.downloadRange(bed_.counters, 1, 1, &now);
+      if (now == relaxed) return true;
+      relaxed = now;
+    }
+    return false;
+  }
+
+  // Polling round r of a step: its batches (snapshot, shadow, saltation, relaxation), then the
+  // round's share of the cohesion.
+  void bedformRound(const SnowFieldsView& v, const BedformFields& f, const BedformArgs& args, int r, BedformArgs& a,
+                    unsigned long long& relaxed) {
+    const int w = spec_.width, h = spec_.height;
+    a.round = args.roundBase + static_cast<uint64_t>(r);
+    for (int b = 0; b < args.batches; ++b) {
+      a.batch = b;
+      exec_.forEachCell(w, h, BedformSnapshotKernel{v, f, a.slabM, v.surfaceSlope});
+      a.maxSurface = exec_.maxValue(v.surfaceSlope, v.valid, w, h);
+      exec_.forEachCell(w, h, BedformShadowKernel{v, f, a});
+      exec_.forEachCell(w, h, BedformSaltationKernel{v, f, a});
+      relaxBedforms(v, f, a, 16, relaxed);
+    }
+    BedformArgs c = a;
+    c.dtDays = args.dtDays / static_cast<float>(args.rounds);
+    exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
+  }
+
+  // Zeroed scratch fields: those made with the state (withState), or at the first avalanche.
+  void makeScratch(bool withState) {
+    const size_t cells = spec_.cellCount(), rows = static_cast<size_t>(spec_.height);
+#define SNOW_MAKE_SCRATCH(view, Element, extent)                                                               \
+  if (madeWithState(ScratchExtent::extent) == withState)                                                       \
+    exec_.upload(view##_, std::vector<Element>(                                                                \
+                              scratchCount(ScratchExtent::extent, cells, rows, Exec::kPowderSharesInRows)));
+    SNOW_SCRATCH_FIELDS(SNOW_MAKE_SCRATCH)
+#undef SNOW_MAKE_SCRATCH
+  }
+
+  template <class T>
+  using Buffer = typename Exec::template Buffer<T>;
+  struct NoBuffer {};  // a field the backend does not hold (host only, or in the bedforms' storage)
+  template <FieldRole role, class T>
+  using StateBuffer = std::conditional_t<heldByBackend(role), Buffer<T>, NoBuffer>;
+
+  template <class B>
+  static auto dataIfPresent(B& b) -> decltype(b.data()) { return b.size() > 0 ? b.data() : nullptr; }
+  // A static field as it is; an art-direction one when the scene paints it (else an empty buffer).
+  template <FieldRole role, class T>
+  void uploadField(Buffer<T>& buffer, const Grid<T>& grid) {
+    const bool present = !optionalField(role) || (grid.size() == spec_.cellCount() && grid.size() > 0);
+    if (present) exec_.upload(buffer, grid.values());
+    else exec_.upload(buffer, std::vector<T>());
   }
 
   Exec exec_;
   GridSpec spec_;
-  typename Exec::template Buffer<float> bedrock_, compacted_, stable_, unstable_, powder_;
-  typename Exec::template Buffer<uint8_t> moving_, valid_;
-  typename Exec::template Buffer<float> exposure_, temperatureBase_, windX_, windY_, windEffectZ_, delta_, surfaceSlope_, scratchSurface_, scratchPowder_;
-  typename Exec::template Buffer<float> windLoading_, windScour_, windDeposit_, melted_, powderFlow_;
-  typename Exec::template Buffer<float> flows_, avalancheBefore_, avalancheScour_, avalancheDeposit_, rowStats_;
-  typename Exec::template Buffer<double> avalancheU_;
-  typename Exec::template Buffer<float> snowfallFactor_, meltFactor_, windErosionFactor_, editWeight_;
-  bool hasSnowfallFactor_ = false, hasMeltFactor_ = false, hasWindErosionFactor_ = false;
+#define SNOW_STATE_BUFFER(member, view, Element, role, access, fill) StateBuffer<FieldRole::role, Element> member##_;
+  SNOW_STATE_FIELDS(SNOW_STATE_BUFFER)
+#undef SNOW_STATE_BUFFER
+#define SNOW_SCRATCH_BUFFER(view, Element, extent) Buffer<Element> view##_;
+  SNOW_SCRATCH_FIELDS(SNOW_SCRATCH_BUFFER)
+#undef SNOW_SCRATCH_BUFFER
+  Buffer<float> editWeight_;
   bool avalancheFieldsReady_ = false;
-  typename Exec::template Buffer<int> bedSlabs_, bedSnapshot_, bedExported_, bedArrived_, bedArrivedCohesion_, bedInitial_;
-  typename Exec::template Buffer<unsigned long long> bedCounters_;
-  typename Exec::template Buffer<SkierAgent> skierAgents_;
-  typename Exec::template Buffer<double> skierPath_;
-  typename Exec::template Buffer<float> skierRoute_;
-  typename Exec::template Buffer<int> skierClaim_, skierCounters_;
-  typename Exec::template Buffer<float> bedCohesion_, bedLastPowder_, bedBase_;
-  typename Exec::template Buffer<uint8_t> bedShadow_, bedActive_, bedformMask_;
-  bool bedformFieldsReady_ = false, hasBedformMask_ = false;
-
-  bool uploadOptional(typename Exec::template Buffer<float>& buffer, const Grid<float>& grid) {
-    const bool present = grid.size() == spec_.cellCount() && grid.size() > 0;
-    exec_.upload(buffer, present ? grid.values() : std::vector<float>());
-    return present;
-  }
+  struct BedformBuffers {
+#define SNOW_BEDFORM_BUFFER(member, Element, start) Buffer<Element> member;
+    SNOW_BEDFORM_FIELDS(SNOW_BEDFORM_BUFFER)
+#undef SNOW_BEDFORM_BUFFER
+  } bed_;
+  bool bedformFieldsReady_ = false;
+  Buffer<SkierAgent> skierAgents_;
+  Buffer<double> skierPath_;
+  Buffer<float> skierRoute_;
+  Buffer<int> skierClaim_, skierCounters_;
 };
 
 }  // namespace snow

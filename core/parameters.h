@@ -51,7 +51,7 @@ struct ModelParameters {
   // --- §6.2 ski tracks
   double skierTargetSlopeDeg = 30.0;         // s_t
   double trackAmplitudeM = 5.0;              // a
-  double trackFrequencyPerM = 0.01;          // f: the lowest turn frequency where the terrain is steeper than s_t (see ski.h)
+  double trackFrequencyPerM = 0.01;          // f: the lowest turn frequency where the terrain is steeper than s_t (see ski_runs.h)
   // --- §6.2 skiers, beyond Table 2
   double skiersPerHour = 1.0;                // automatic skiers while skiing happens (the paper: about one an hour)
   double skiHoursPerDay = 7.0;               // hours of skiing a day

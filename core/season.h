@@ -8,10 +8,10 @@
 #include <string>
 #include <vector>
 
-#include "avalanche.h"
-#include "bedform.h"
+#include "avalanche_runs.h"
+#include "bedform_runs.h"
 #include "backend.h"
-#include "ski.h"
+#include "ski_runs.h"
 #include "parameters.h"
 #include "weather.h"
 

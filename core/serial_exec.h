@@ -18,6 +18,7 @@ class HostBuffer {
   T* data() { return values_.data(); }
   const T* data() const { return values_.data(); }
   std::vector<T>& values() { return values_; }
+  size_t size() const { return values_.size(); }
 
  private:
   std::vector<T> values_;

@@ -7,15 +7,16 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "core/errors.h"
 #include "core/rng.h"
+#include "core/util.h"
 #include "ray_scene.h"
 
 namespace snow {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 // Just above a surface point at height z: 0.1 mm, or 8 float steps where those are larger (a
 // mesh at 4000 m has 0.24 mm steps: a 0.1 mm lift rounded back onto the face, and every flake
@@ -40,154 +41,163 @@ bool insideEdge(double e, const std::array<float, 3>& P, const std::array<float,
 }
 }  // namespace
 
-FallenSnow placeFallenSnow(const TriangleMesh& mesh, const FallenSnowSettings& st) {
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
+
+// The mesh's bounds (the world box's floor and top), the site spacing and the sky bucket side in
+// sites: what the sites and the flakes are placed by.
+struct PlacementFrame {
+  std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  double s = 0;  // site spacing (level 0)
+  int k = 1;     // sky bucket side in sites
+};
+
+PlacementFrame placementFrame(const TriangleMesh& mesh, const FallenSnowSettings& st) {
   if (!(st.siteSpacingM > 0.0) || st.skyCellSites < 1 || st.flakesPerSite < 1 || !(st.swirlHeightM > 0.0) ||
       !(st.flutterMeanM >= 0.0) || !(st.flutterSigmaM >= 0.0) || !(st.depthM >= 0.0) || !(st.skyClearanceM >= 0.0))
     throw InputError(mesh.source + ": snow on meshes: site spacing, sky cell, flakes and swirl height must be positive, flutter and depth at least 0");
-  FallenSnow out;
-  float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  PlacementFrame frame;
   for (const auto& p : mesh.positions)
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-  if (mesh.triangles.empty() || !(hi[0] > lo[0]) || !(hi[1] > lo[1]))
+    for (int k = 0; k < 3; ++k) frame.lo[k] = std::min(frame.lo[k], p[k]), frame.hi[k] = std::max(frame.hi[k], p[k]);
+  if (mesh.triangles.empty() || !(frame.hi[0] > frame.lo[0]) || !(frame.hi[1] > frame.lo[1]))
     throw InputError(mesh.source + ": snow on meshes: the mesh has no extent in x and y");
-  const double s = st.siteSpacingM;
-  out.columns = static_cast<int>(std::ceil((hi[0] - lo[0]) / s - 1e-9));
-  out.rows = static_cast<int>(std::ceil((hi[1] - lo[1]) / s - 1e-9));
-  out.originX = lo[0];
-  out.originY = hi[1];
-  const int k = st.skyCellSites;
-  out.bucketColumns = (out.columns + k - 1) / k;
-  out.bucketRows = (out.rows + k - 1) / k;
-  const size_t buckets = static_cast<size_t>(out.bucketColumns) * out.bucketRows;
-  if (!st.skyMask.empty() && st.skyMask.size() != buckets)
-    throw InputError(mesh.source + ": snow on meshes: the sky mask has " + std::to_string(st.skyMask.size()) + " values for " +
-                     std::to_string(buckets) + " sky buckets");
+  frame.s = st.siteSpacingM;
+  frame.k = st.skyCellSites;
+  return frame;
+}
 
-  // Sites: lattice points over every upward-facing triangle, in triangle order. Level 1: the
-  // quarter points of the lattice cells `refined` marks (one byte a cell).
-  auto makeSites = [&](int level, const std::vector<uint8_t>* refined) {
-    std::vector<SnowSite> sites;
-    const double sl = s / (1 << level);
-    const int cols = out.columns << level, rows = out.rows << level;
-    for (uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-      const auto& a = mesh.positions[mesh.triangles[t][0]];
-      const auto& b = mesh.positions[mesh.triangles[t][1]];
-      const auto& c = mesh.positions[mesh.triangles[t][2]];
-      const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2], vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
-      const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-      const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
-      if (!(len > 0.0) || nz / len <= 1e-6) continue;  // downward, vertical or degenerate: no snow
-      const int i0 = std::max(0, static_cast<int>(std::ceil((std::min({a[0], b[0], c[0]}) - lo[0]) / sl - 0.5)));
-      const int i1 = std::min(cols - 1, static_cast<int>(std::floor((std::max({a[0], b[0], c[0]}) - lo[0]) / sl - 0.5)));
-      const int j0 = std::max(0, static_cast<int>(std::ceil((hi[1] - std::max({a[1], b[1], c[1]})) / sl - 0.5)));
-      const int j1 = std::min(rows - 1, static_cast<int>(std::floor((hi[1] - std::min({a[1], b[1], c[1]})) / sl - 0.5)));
-      for (int j = j0; j <= j1; ++j)
-        for (int i = i0; i <= i1; ++i) {
-          const bool split = refined && (*refined)[static_cast<size_t>(j >> level) * out.columns + (i >> level)];
-          if (level == 0 ? split : !split) continue;
-          const double px = lo[0] + (i + 0.5) * sl, py = hi[1] - (j + 0.5) * sl;
-          // In the xy projection (counter-clockwise: the face looks up).
-          const double eab = edgeFunction(a, b, px, py), ebc = edgeFunction(b, c, px, py), eca = edgeFunction(c, a, px, py);
-          if (!insideEdge(eab, a, b) || !insideEdge(ebc, b, c) || !insideEdge(eca, c, a)) continue;
-          const double z = (ebc * a[2] + eca * b[2] + eab * c[2]) / (eab + ebc + eca);
-          SnowSite site;
-          site.position = {static_cast<float>(px), static_cast<float>(py), static_cast<float>(z)};
-          site.face = t;
-          site.level = level;
-          site.column = i;
-          site.row = j;
-          site.footprintM2 = static_cast<float>(sl * sl);
-          sites.push_back(site);
-        }
+// The sites of triangle t (index t of `mesh`) at `level` on the lattice of `out`: the lattice
+// points over it when it faces up, those of the cells `refined` marks (one byte a cell) left out
+// at level 0 and the only ones kept at level 1.
+void addTriangleSites(const TriangleMesh& mesh, uint32_t t, const PlacementFrame& fr, const FallenSnow& out, int level,
+                      const std::vector<uint8_t>* refined, std::vector<SnowSite>& sites) {
+  const auto& lo = fr.lo;
+  const auto& hi = fr.hi;
+  const double sl = fr.s / (1 << level);
+  const int cols = out.columns << level, rows = out.rows << level;
+  const auto& a = mesh.positions[mesh.triangles[t][0]];
+  const auto& b = mesh.positions[mesh.triangles[t][1]];
+  const auto& c = mesh.positions[mesh.triangles[t][2]];
+  const double ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2], vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
+  const double nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(len > 0.0) || nz / len <= 1e-6) return;  // downward, vertical or degenerate: no snow
+  const int i0 = std::max(0, static_cast<int>(std::ceil((std::min({a[0], b[0], c[0]}) - lo[0]) / sl - 0.5)));
+  const int i1 = std::min(cols - 1, static_cast<int>(std::floor((std::max({a[0], b[0], c[0]}) - lo[0]) / sl - 0.5)));
+  const int j0 = std::max(0, static_cast<int>(std::ceil((hi[1] - std::max({a[1], b[1], c[1]})) / sl - 0.5)));
+  const int j1 = std::min(rows - 1, static_cast<int>(std::floor((hi[1] - std::min({a[1], b[1], c[1]})) / sl - 0.5)));
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      const bool split = refined && (*refined)[static_cast<size_t>(j >> level) * out.columns + (i >> level)];
+      if (level == 0 ? split : !split) continue;
+      const double px = lo[0] + (i + 0.5) * sl, py = hi[1] - (j + 0.5) * sl;
+      // In the xy projection (counter-clockwise: the face looks up).
+      const double eab = edgeFunction(a, b, px, py), ebc = edgeFunction(b, c, px, py), eca = edgeFunction(c, a, px, py);
+      if (!insideEdge(eab, a, b) || !insideEdge(ebc, b, c) || !insideEdge(eca, c, a)) continue;
+      const double z = (ebc * a[2] + eca * b[2] + eab * c[2]) / (eab + ebc + eca);
+      SnowSite site;
+      site.position = {static_cast<float>(px), static_cast<float>(py), static_cast<float>(z)};
+      site.face = t;
+      site.level = level;
+      site.column = i;
+      site.row = j;
+      site.footprintM2 = static_cast<float>(sl * sl);
+      sites.push_back(site);
     }
-    return sites;
-  };
+}
 
-  // Flakes, site by site in parallel (each site's draws depend on its index only): the bucket
-  // each flake reached, -1 blocked, -2 left the world.
-  const Grid<float> noTerrain;  // the scene keeps a reference
-  const RayScene rays(noTerrain, GridSpec{}, {mesh});
-  const double skyZ = hi[2] + std::max(1e-3, st.skyClearanceM);
-  const int flakes = st.flakesPerSite;
-  const RandomKey key{st.seed};
-  auto trace = [&](const std::vector<SnowSite>& sites, uint64_t pass) {
-    std::vector<int> bucketOf(sites.size() * static_cast<size_t>(flakes), -1);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, sites.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t si = range.begin(); si < range.end(); ++si) {
-        const SnowSite& site = sites[si];
-        for (int f = 0; f < flakes; ++f) {
-          std::array<float, 3> p{site.position[0], site.position[1], lifted(site.position[2])};
-          int result = -1;
-          for (uint32_t step = 0;; ++step) {
-            double r = 0.0, phi = 0.0;
-            if (st.flutterMeanM > 0.0 || st.flutterSigmaM > 0.0) {
-              const Philox4x32 d = key.draw(pass << 40 | si, static_cast<uint32_t>(f) << 20 | (step & 0xFFFFF), RngStream::FallenSnowFlake);
-              const double u1 = uniformOpenDouble(d.v[0], d.v[1]), u2 = uniformFloat(d.v[2]), u3 = uniformFloat(d.v[3]);
-              const double normal = std::clamp(std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2), -3.0, 3.0);
-              r = std::max(0.0, st.flutterMeanM + st.flutterSigmaM * normal);
-              phi = 2.0 * kPi * u3;
-            }
-            const std::array<float, 3> q{static_cast<float>(p[0] + r * std::cos(phi)), static_cast<float>(p[1] + r * std::sin(phi)),
-                                         static_cast<float>(p[2] + st.swirlHeightM)};
-            const float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
-            const float length = std::sqrt(dx * dx + dy * dy + dz * dz);
-            if (rays.occluded(p, {dx / length, dy / length, dz / length}, length)) break;  // blocked
-            if (q[2] >= skyZ) {
-              const int bi = static_cast<int>(std::floor((q[0] - lo[0]) / (k * s))), bj = static_cast<int>(std::floor((hi[1] - q[1]) / (k * s)));
-              result = bi >= 0 && bj >= 0 && bi < out.bucketColumns && bj < out.bucketRows ? bj * out.bucketColumns + bi : -2;
-              break;
-            }
-            p = q;
-          }
-          bucketOf[si * flakes + static_cast<size_t>(f)] = result;
-        }
+// Sites: lattice points over every upward-facing triangle, in triangle order.
+std::vector<SnowSite> makeSites(const TriangleMesh& mesh, const PlacementFrame& fr, const FallenSnow& out, int level,
+                                const std::vector<uint8_t>* refined) {
+  std::vector<SnowSite> sites;
+  for (uint32_t t = 0; t < mesh.triangles.size(); ++t) addTriangleSites(mesh, t, fr, out, level, refined, sites);
+  return sites;
+}
+
+// The flakes' random walks up to the sky.
+struct FlakeTracer {
+  const RayScene& rays;
+  const FallenSnowSettings& st;
+  const PlacementFrame& fr;
+  const FallenSnow& out;
+  double skyZ;  // the sky plane
+
+  // Flake f of site si (in trace pass `pass`): the bucket it reached, -1 blocked, -2 left the world.
+  int traceFlake(const SnowSite& site, size_t si, int f, uint64_t pass) const {
+    const RandomKey key{st.seed};
+    std::array<float, 3> p{site.position[0], site.position[1], lifted(site.position[2])};
+    for (uint32_t step = 0;; ++step) {
+      double r = 0.0, phi = 0.0;
+      if (st.flutterMeanM > 0.0 || st.flutterSigmaM > 0.0) {
+        const Philox4x32 d = key.draw(pass << 40 | si, static_cast<uint32_t>(f) << 20 | (step & 0xFFFFF), RngStream::FallenSnowFlake);
+        const double u1 = uniformOpenDouble(d.v[0], d.v[1]), u2 = uniformFloat(d.v[2]), u3 = uniformFloat(d.v[3]);
+        const double normal = std::clamp(std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * kPi * u2), -3.0, 3.0);
+        r = std::max(0.0, st.flutterMeanM + st.flutterSigmaM * normal);
+        phi = 2.0 * kPi * u3;
       }
-    });
-    return bucketOf;
-  };
-
-  out.sites = makeSites(0, nullptr);
-  std::vector<int> bucketOf = trace(out.sites, 0);
-  if (st.maxCoverageDiff < 1.0) {
-    // Coverage per site; a cell is split when one of its sites differs from the nearest-in-height
-    // site of a 4-neighbour cell by more than maxCoverageDiff (both cells are split).
-    std::vector<std::vector<size_t>> inCell(static_cast<size_t>(out.columns) * out.rows);
-    std::vector<double> coverage(out.sites.size());
-    for (size_t si = 0; si < out.sites.size(); ++si) {
-      int reached = 0;
-      for (int f = 0; f < flakes; ++f) reached += bucketOf[si * flakes + static_cast<size_t>(f)] >= 0;
-      coverage[si] = static_cast<double>(reached) / flakes;
-      inCell[static_cast<size_t>(out.sites[si].row) * out.columns + out.sites[si].column].push_back(si);
-    }
-    std::vector<uint8_t> refined(inCell.size(), 0);
-    for (size_t si = 0; si < out.sites.size(); ++si) {
-      const SnowSite& a = out.sites[si];
-      const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
-      for (int n = 0; n < 4; ++n) {
-        const int ni = a.column + di[n], nj = a.row + dj[n];
-        if (ni < 0 || nj < 0 || ni >= out.columns || nj >= out.rows) continue;
-        const auto& others = inCell[static_cast<size_t>(nj) * out.columns + ni];
-        long long nearest = -1;
-        for (size_t o : others)
-          if (nearest < 0 || std::abs(out.sites[o].position[2] - a.position[2]) < std::abs(out.sites[static_cast<size_t>(nearest)].position[2] - a.position[2]))
-            nearest = static_cast<long long>(o);
-        if (nearest >= 0 && std::abs(coverage[si] - coverage[static_cast<size_t>(nearest)]) > st.maxCoverageDiff)
-          refined[static_cast<size_t>(a.row) * out.columns + a.column] = refined[static_cast<size_t>(nj) * out.columns + ni] = 1;
+      const std::array<float, 3> q{static_cast<float>(p[0] + r * std::cos(phi)), static_cast<float>(p[1] + r * std::sin(phi)),
+                                   static_cast<float>(p[2] + st.swirlHeightM)};
+      const float dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+      const float length = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (rays.occluded(p, {dx / length, dy / length, dz / length}, length)) return -1;  // blocked
+      if (q[2] >= skyZ) {
+        const int bi = static_cast<int>(std::floor((q[0] - fr.lo[0]) / (fr.k * fr.s)));
+        const int bj = static_cast<int>(std::floor((fr.hi[1] - q[1]) / (fr.k * fr.s)));
+        return bi >= 0 && bj >= 0 && bi < out.bucketColumns && bj < out.bucketRows ? bj * out.bucketColumns + bi : -2;
       }
-    }
-    for (uint8_t r : refined) out.refinedCells += r;
-    if (out.refinedCells > 0) {
-      std::vector<SnowSite> sites = makeSites(0, &refined), quarter = makeSites(1, &refined);
-      sites.insert(sites.end(), quarter.begin(), quarter.end());
-      out.sites = std::move(sites);
-      bucketOf = trace(out.sites, 1);
+      p = q;
     }
   }
 
-  // Each bucket's snow shared among the flakes that reached it, by weight (in site order).
-  // A flake's weight: its site's footprint over the flakes a site (in site order, so the sums
-  // are the same on any thread count).
+  // Every flake, site by site in parallel (each site's draws depend on its index only).
+  std::vector<int> trace(const std::vector<SnowSite>& sites, uint64_t pass) const {
+    const int flakes = st.flakesPerSite;
+    std::vector<int> bucketOf(sites.size() * static_cast<size_t>(flakes), -1);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, sites.size(), 64), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t si = range.begin(); si < range.end(); ++si)
+        for (int f = 0; f < flakes; ++f) bucketOf[si * flakes + static_cast<size_t>(f)] = traceFlake(sites[si], si, f, pass);
+    });
+    return bucketOf;
+  }
+};
+
+// Adaptive sampling: coverage per site; a cell is split when one of its sites differs from the
+// nearest-in-height site of a 4-neighbour cell by more than maxCoverageDiff (both cells are split).
+std::vector<uint8_t> cellsToRefine(const FallenSnow& out, const std::vector<int>& bucketOf, const FallenSnowSettings& st) {
+  const int flakes = st.flakesPerSite;
+  std::vector<std::vector<size_t>> inCell(static_cast<size_t>(out.columns) * out.rows);
+  std::vector<double> coverage(out.sites.size());
+  for (size_t si = 0; si < out.sites.size(); ++si) {
+    int reached = 0;
+    for (int f = 0; f < flakes; ++f) reached += bucketOf[si * flakes + static_cast<size_t>(f)] >= 0;
+    coverage[si] = static_cast<double>(reached) / flakes;
+    inCell[static_cast<size_t>(out.sites[si].row) * out.columns + out.sites[si].column].push_back(si);
+  }
+  std::vector<uint8_t> refined(inCell.size(), 0);
+  for (size_t si = 0; si < out.sites.size(); ++si) {
+    const SnowSite& a = out.sites[si];
+    const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
+    for (int n = 0; n < 4; ++n) {
+      const int ni = a.column + di[n], nj = a.row + dj[n];
+      if (ni < 0 || nj < 0 || ni >= out.columns || nj >= out.rows) continue;
+      const auto& others = inCell[static_cast<size_t>(nj) * out.columns + ni];
+      long long nearest = -1;
+      for (size_t o : others)
+        if (nearest < 0 || std::abs(out.sites[o].position[2] - a.position[2]) < std::abs(out.sites[static_cast<size_t>(nearest)].position[2] - a.position[2]))
+          nearest = static_cast<long long>(o);
+      if (nearest >= 0 && std::abs(coverage[si] - coverage[static_cast<size_t>(nearest)]) > st.maxCoverageDiff)
+        refined[static_cast<size_t>(a.row) * out.columns + a.column] = refined[static_cast<size_t>(nj) * out.columns + ni] = 1;
+    }
+  }
+  return refined;
+}
+
+// Each bucket's snow shared among the flakes that reached it, by weight (in site order). A
+// flake's weight: its site's footprint over the flakes a site (in site order, so the sums are the
+// same on any thread count).
+void shareBucketSnow(FallenSnow& out, const std::vector<int>& bucketOf, const FallenSnowSettings& st, const PlacementFrame& fr) {
+  const int flakes = st.flakesPerSite, k = fr.k;
+  const double s = fr.s;
+  const size_t buckets = static_cast<size_t>(out.bucketColumns) * out.bucketRows;
   auto weightOf = [&](size_t si) { return static_cast<double>(out.sites[si].footprintM2) / flakes; };
   std::vector<double> bucketWeight(buckets, 0.0);
   for (size_t si = 0; si < out.sites.size(); ++si)
@@ -216,60 +226,94 @@ FallenSnow placeFallenSnow(const TriangleMesh& mesh, const FallenSnowSettings& s
     out.sites[si].depthM = static_cast<float>(volume / out.sites[si].footprintM2);
     out.placedM3 += volume;
   }
-  out.siteSpacingM = s;
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+FallenSnow placeFallenSnow(const TriangleMesh& mesh, const FallenSnowSettings& st) {
+  const auto t0 = WallClock::now();
+  const PlacementFrame fr = placementFrame(mesh, st);
+  FallenSnow out;
+  out.columns = static_cast<int>(std::ceil((fr.hi[0] - fr.lo[0]) / fr.s - 1e-9));
+  out.rows = static_cast<int>(std::ceil((fr.hi[1] - fr.lo[1]) / fr.s - 1e-9));
+  out.originX = fr.lo[0];
+  out.originY = fr.hi[1];
+  out.bucketColumns = (out.columns + fr.k - 1) / fr.k;
+  out.bucketRows = (out.rows + fr.k - 1) / fr.k;
+  const size_t buckets = static_cast<size_t>(out.bucketColumns) * out.bucketRows;
+  if (!st.skyMask.empty() && st.skyMask.size() != buckets)
+    throw InputError(mesh.source + ": snow on meshes: the sky mask has " + std::to_string(st.skyMask.size()) + " values for " +
+                     std::to_string(buckets) + " sky buckets");
+  const Grid<float> noTerrain;  // the scene keeps a reference
+  const RayScene rays(noTerrain, GridSpec{}, {mesh});
+  const FlakeTracer tracer{rays, st, fr, out, fr.hi[2] + std::max(1e-3, st.skyClearanceM)};
+  out.sites = makeSites(mesh, fr, out, 0, nullptr);
+  std::vector<int> bucketOf = tracer.trace(out.sites, 0);
+  if (st.maxCoverageDiff < 1.0) {
+    const std::vector<uint8_t> refined = cellsToRefine(out, bucketOf, st);
+    for (uint8_t r : refined) out.refinedCells += r;
+    if (out.refinedCells > 0) {  // the refined cells' quarter sites, and every flake traced again
+      std::vector<SnowSite> sites = makeSites(mesh, fr, out, 0, &refined), quarter = makeSites(mesh, fr, out, 1, &refined);
+      sites.insert(sites.end(), quarter.begin(), quarter.end());
+      out.sites = std::move(sites);
+      bucketOf = tracer.trace(out.sites, 1);
+    }
+  }
+  shareBucketSnow(out, bucketOf, st, fr);
+  out.siteSpacingM = fr.s;
+  out.seconds = elapsedSeconds(t0);
   return out;
 }
 
-FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSnow& snow, const FallenSnowStability& st) {
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
+
+void checkStabilitySettings(const TriangleMesh& mesh, const FallenSnow& snow, const FallenSnowStability& st) {
   if (!(st.reposeAngleDeg >= 0.0 && st.reposeAngleDeg < 90.0) || !(st.transitionWidthDeg >= 0.0) || st.depositRounds < 1 ||
       !(st.stopFraction > 0.0) || st.maxPassesPerRound < 1 || !(st.connectAngleDeg > 0.0 && st.connectAngleDeg < 90.0) ||
       !(st.landingSpreadSpacings > 0.0))
     throw InputError(mesh.source + ": snow on meshes: repose angle in [0, 90), transition width >= 0, rounds and passes >= 1, "
                      "stop fraction and landing spread > 0, connect angle in (0, 90) degrees");
   if (!(snow.siteSpacingM > 0.0)) throw InputError(mesh.source + ": snow on meshes: stability needs placed snow (placeFallenSnow)");
-  FallenSnowStabilityReport rep;
-  std::vector<SnowSite>& sites = snow.sites;
-  const size_t n = sites.size();
-  const double s = snow.siteSpacingM, tanConnect = std::tan(st.connectAngleDeg * kPi / 180.0);
-  auto spacing = [&](size_t i) { return s / (1 << sites[i].level); };
-  auto xyDistance = [&](size_t a, size_t b) {
+}
+
+// The sites by level-0 lattice cell (a refined cell holds its quarters), for the sites near a point.
+class SiteLattice {
+ public:
+  explicit SiteLattice(const FallenSnow& snow)
+      : sites(snow.sites), spacingM(snow.siteSpacingM), snow_(snow), inCell_(static_cast<size_t>(snow.columns) * snow.rows) {
+    for (size_t i = 0; i < sites.size(); ++i)
+      inCell_[static_cast<size_t>(sites[i].row >> sites[i].level) * snow.columns + (sites[i].column >> sites[i].level)].push_back(
+          static_cast<uint32_t>(i));
+  }
+  double spacing(size_t i) const { return spacingM / (1 << sites[i].level); }
+  double xyDistance(size_t a, size_t b) const {
     const double dx = static_cast<double>(sites[a].position[0]) - sites[b].position[0];
     const double dy = static_cast<double>(sites[a].position[1]) - sites[b].position[1];
     return std::sqrt(dx * dx + dy * dy);
-  };
-  // Sites by lattice cell (level-0 cells; a refined cell holds its quarters).
-  std::vector<std::vector<uint32_t>> inCell(static_cast<size_t>(snow.columns) * snow.rows);
-  for (size_t i = 0; i < n; ++i)
-    inCell[static_cast<size_t>(sites[i].row >> sites[i].level) * snow.columns + (sites[i].column >> sites[i].level)].push_back(
-        static_cast<uint32_t>(i));
-  auto forSitesNear = [&](double x, double y, int reachCells, const auto& visit) {
-    const int ci = static_cast<int>(std::floor((x - snow.originX) / s)), cj = static_cast<int>(std::floor((snow.originY - y) / s));
-    for (int j = std::max(0, cj - reachCells); j <= std::min(snow.rows - 1, cj + reachCells); ++j)
-      for (int i = std::max(0, ci - reachCells); i <= std::min(snow.columns - 1, ci + reachCells); ++i)
-        for (uint32_t o : inCell[static_cast<size_t>(j) * snow.columns + i]) visit(o);
-  };
+  }
+  // visit(site) for every site within reachCells lattice cells of (x, y)'s cell.
+  template <class Visit>
+  void forSitesNear(double x, double y, int reachCells, const Visit& visit) const {
+    const double s = spacingM;
+    const int ci = static_cast<int>(std::floor((x - snow_.originX) / s)), cj = static_cast<int>(std::floor((snow_.originY - y) / s));
+    for (int j = std::max(0, cj - reachCells); j <= std::min(snow_.rows - 1, cj + reachCells); ++j)
+      for (int i = std::max(0, ci - reachCells); i <= std::min(snow_.columns - 1, ci + reachCells); ++i)
+        for (uint32_t o : inCell_[static_cast<size_t>(j) * snow_.columns + i]) visit(o);
+  }
 
-  // The graph: neighbours (CSR, with each link's reverse slot), then open directions.
-  const Grid<float> noTerrain;  // the scene keeps a reference
-  const RayScene rays(noTerrain, GridSpec{}, {mesh});
-  // Two sites are linked when their bases are within the connect slope and nothing stands between
-  // them: the segment between points lifted half their distance above the bases is clear (cast
-  // from the lower index, so both ends get the same answer).
-  auto clearBetween = [&](size_t a, size_t b, double d) {
-    const size_t lo = std::min(a, b), hi = std::max(a, b);
-    const auto& P = sites[lo].position;
-    const auto& Q = sites[hi].position;
-    const float lift = static_cast<float>(0.5 * d);
-    const std::array<float, 3> from{P[0], P[1], P[2] + lift};
-    const float ex = Q[0] - P[0], ey = Q[1] - P[1], ez = Q[2] - P[2], len = std::sqrt(ex * ex + ey * ey + ez * ez);
-    return !rays.occluded(from, {ex / len, ey / len, ez / len}, len);
-  };
-  // Buried sites: the first face above is hit from behind (an upward-facing face: the site is
-  // inside a closed solid, e.g. the ground under a block). They take no part (no links, no landings).
-  std::vector<uint8_t> buried(n, 0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
+  const std::vector<SnowSite>& sites;
+  const double spacingM;  // level 0's
+
+ private:
+  const FallenSnow& snow_;
+  std::vector<std::vector<uint32_t>> inCell_;
+};
+
+// Buried sites: the first face above is hit from behind (an upward-facing face: the site is
+// inside a closed solid, e.g. the ground under a block). They take no part (no links, no landings).
+std::vector<uint8_t> findBuriedSites(const TriangleMesh& mesh, const RayScene& rays, const std::vector<SnowSite>& sites) {
+  std::vector<uint8_t> buried(sites.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, sites.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t a = range.begin(); a < range.end(); ++a) {
       const auto& P = sites[a].position;
       float t = 0.f;
@@ -283,244 +327,363 @@ FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSn
       buried[a] = nz > 0.0;
     }
   });
-  for (uint8_t b : buried) rep.buriedSites += b;
-  std::vector<uint32_t> first(n + 1, 0), nbr;
-  std::vector<double> dist;
-  {
-    std::vector<std::vector<std::pair<uint32_t, double>>> lists(n);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
-      for (size_t a = range.begin(); a < range.end(); ++a)
-        forSitesNear(sites[a].position[0], sites[a].position[1], 2, [&](uint32_t b) {
-          if (b == a || buried[a] || buried[b]) return;
-          const double d = xyDistance(a, b);
-          if (!(d > 0.0) || d > 1.5 * std::max(spacing(a), spacing(b)) + 1e-9) return;
-          if (std::abs(static_cast<double>(sites[a].position[2]) - sites[b].position[2]) > d * tanConnect) return;
-          if (!clearBetween(a, b, d)) return;
-          lists[a].push_back({b, d});
-        });
-    });
-    for (size_t a = 0; a < n; ++a) {
-      std::sort(lists[a].begin(), lists[a].end());
-      first[a + 1] = first[a] + static_cast<uint32_t>(lists[a].size());
-      for (const auto& [b, d] : lists[a]) nbr.push_back(b), dist.push_back(d);
-    }
-  }
-  std::vector<uint32_t> reverse(nbr.size());
-  for (size_t a = 0; a < n; ++a)
-    for (uint32_t k = first[a]; k < first[a + 1]; ++k) {
-      const uint32_t b = nbr[k];
-      const auto it = std::lower_bound(nbr.begin() + first[b], nbr.begin() + first[b + 1], static_cast<uint32_t>(a));
-      if (it == nbr.begin() + first[b + 1] || *it != a) throw std::logic_error("stabilizeFallenSnow: the neighbour graph is not symmetric");
-      reverse[k] = static_cast<uint32_t>(it - nbr.begin());
-    }
-  rep.neighbourLinks = static_cast<long long>(nbr.size());
+  return buried;
+}
 
-  // Open directions: the lattice directions with no neighbour within 30 degrees.
-  //  - A wall: a stab from the base, rising at the connect angle to just past the footprint, hits
-  //    something (a face steeper than the connect slope): snow rests against it.
-  //  - Otherwise an edge, at the height z_e of the surface at the footprint's edge (the highest
-  //    within the connect slope; the site's own base where the surface has ended): snow whose top
-  //    stands above z_e by more than the repose slope goes over it, and falls straight down from
-  //    just past the footprint. Where it lands (a ray) it is spread over the sites near the
-  //    landing point (a Gaussian); where the surface simply goes on (no site there: a face with
-  //    none) the direction is ignored; a fall that meets nothing leaves the world.
-  struct Drop {
-    uint32_t site;
-    double distance;  // from the site to its footprint's edge
-    double edgeZ;     // z_e
-    std::vector<std::pair<uint32_t, double>> landing;
-  };
+// The sites' neighbours in CSR form (each site's sorted by index), with each link's reverse slot.
+struct NeighbourGraph {
+  std::vector<uint32_t> first, nbr, reverse;
+  std::vector<double> dist;  // xy distance of each link
+};
+
+// Two sites are linked when their bases are within the connect slope and nothing stands between
+// them: the segment between points lifted half their distance above the bases is clear (cast
+// from the lower index, so both ends get the same answer).
+bool clearBetween(const RayScene& rays, const std::vector<SnowSite>& sites, size_t a, size_t b, double d) {
+  const size_t lo = std::min(a, b), hi = std::max(a, b);
+  const auto& P = sites[lo].position;
+  const auto& Q = sites[hi].position;
+  const float lift = static_cast<float>(0.5 * d);
+  const std::array<float, 3> from{P[0], P[1], P[2] + lift};
+  const float ex = Q[0] - P[0], ey = Q[1] - P[1], ez = Q[2] - P[2], len = std::sqrt(ex * ex + ey * ey + ez * ez);
+  return !rays.occluded(from, {ex / len, ey / len, ez / len}, len);
+}
+
+NeighbourGraph linkNeighbours(const SiteLattice& lattice, const RayScene& rays, const std::vector<uint8_t>& buried, double tanConnect) {
+  const std::vector<SnowSite>& sites = lattice.sites;
+  const size_t n = sites.size();
+  NeighbourGraph g;
+  g.first.assign(n + 1, 0);
+  std::vector<std::vector<std::pair<uint32_t, double>>> lists(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
+    for (size_t a = range.begin(); a < range.end(); ++a)
+      lattice.forSitesNear(sites[a].position[0], sites[a].position[1], 2, [&](uint32_t b) {
+        if (b == a || buried[a] || buried[b]) return;
+        const double d = lattice.xyDistance(a, b);
+        if (!(d > 0.0) || d > 1.5 * std::max(lattice.spacing(a), lattice.spacing(b)) + 1e-9) return;
+        if (std::abs(static_cast<double>(sites[a].position[2]) - sites[b].position[2]) > d * tanConnect) return;
+        if (!clearBetween(rays, sites, a, b, d)) return;
+        lists[a].push_back({b, d});
+      });
+  });
+  for (size_t a = 0; a < n; ++a) {
+    std::sort(lists[a].begin(), lists[a].end());
+    g.first[a + 1] = g.first[a] + static_cast<uint32_t>(lists[a].size());
+    for (const auto& [b, d] : lists[a]) g.nbr.push_back(b), g.dist.push_back(d);
+  }
+  g.reverse.resize(g.nbr.size());
+  for (size_t a = 0; a < n; ++a)
+    for (uint32_t k = g.first[a]; k < g.first[a + 1]; ++k) {
+      const uint32_t b = g.nbr[k];
+      const auto it = std::lower_bound(g.nbr.begin() + g.first[b], g.nbr.begin() + g.first[b + 1], static_cast<uint32_t>(a));
+      if (it == g.nbr.begin() + g.first[b + 1] || *it != a)
+        throw std::logic_error("stabilizeFallenSnow: the neighbour graph is not symmetric");
+      g.reverse[k] = static_cast<uint32_t>(it - g.nbr.begin());
+    }
+  return g;
+}
+
+// An open direction where snow goes over an edge (stabilizeFallenSnow's comment in the header).
+struct Drop {
+  uint32_t site;
+  double distance;  // from the site to its footprint's edge
+  double edgeZ;     // z_e
+  std::vector<std::pair<uint32_t, double>> landing;  // sites and their shares (empty: off the world)
+};
+
+// The drops of every site (CSR by site), and the counts the report wants.
+struct OpenDirections {
+  std::vector<uint32_t> dropFirst;
+  std::vector<Drop> drops;
+  long long walls = 0, unlanded = 0;
+};
+
+// What the open directions are found with.
+struct DropFinder {
+  const SiteLattice& lattice;
+  const RayScene& rays;
+  const NeighbourGraph& graph;
+  const std::vector<uint8_t>& buried;
+  double tanConnect, cosConnect, sinConnect;
+  double sigma;  // of the landing splat, metres
+
+  // Lattice direction k (of 8) of site a has a neighbour within 30 degrees.
+  bool covered(size_t a, double ux, double uy) const {
+    const auto& P = lattice.sites[a].position;
+    for (uint32_t q = graph.first[a]; q < graph.first[a + 1]; ++q) {
+      const double ex = lattice.sites[graph.nbr[q]].position[0] - P[0], ey = lattice.sites[graph.nbr[q]].position[1] - P[1];
+      if (ex * ux + ey * uy >= std::cos(kPi / 6.0) * graph.dist[q] - 1e-12) return true;
+    }
+    return false;
+  }
+
+  // The sites near the landing point (hx, hy, hz), in sight of it and below where the snow fell
+  // from (`below`), with Gaussian shares summing to 1.
+  void spreadLanding(Drop& d, double hx, double hy, double hz, double below) const {
+    const std::vector<SnowSite>& sites = lattice.sites;
+    const double s = lattice.spacingM;
+    double total = 0.0;
+    lattice.forSitesNear(hx, hy, static_cast<int>(std::ceil(2.0 * sigma / s)) + 1, [&](uint32_t b) {
+      const double ex = sites[b].position[0] - hx, ey = sites[b].position[1] - hy, r2 = ex * ex + ey * ey;
+      if (r2 > 4.0 * sigma * sigma || buried[b]) return;
+      // Below where it fell from (a site near the edge it fell over must not catch it back: snow
+      // went round in that loop for ever).
+      if (!(sites[b].position[2] < below)) return;
+      if (std::abs(sites[b].position[2] - hz) > std::max(std::sqrt(r2), 0.5 * s) * tanConnect) return;
+      if (r2 > 0.0) {  // and in sight of the landing point (not behind a wall)
+        const float lift = static_cast<float>(0.5 * std::sqrt(r2));
+        const std::array<float, 3> at{static_cast<float>(hx), static_cast<float>(hy), static_cast<float>(hz + lift)};
+        const float fx = static_cast<float>(ex), fy = static_cast<float>(ey), fz = static_cast<float>(sites[b].position[2] - hz);
+        const float len = std::sqrt(fx * fx + fy * fy + fz * fz);
+        if (rays.occluded(at, {fx / len, fy / len, fz / len}, len)) return;
+      }
+      const double w = std::exp(-r2 / (2.0 * sigma * sigma));
+      d.landing.push_back({b, w});
+      total += w;
+    });
+    std::sort(d.landing.begin(), d.landing.end());
+    for (auto& l : d.landing) l.second /= total;
+  }
+
+  // Direction (ux, uy) of uncovered site a: a wall (true in `wall`), an edge with its drop
+  // (returned), or neither (the surface goes on).
+  std::optional<Drop> openDirection(size_t a, double ux, double uy, bool& wall) const {
+    const double h = lattice.spacing(a);
+    const auto& P = lattice.sites[a].position;
+    const std::array<float, 3> stabFrom{P[0], P[1], static_cast<float>(P[2] + 0.02 * h)};
+    const std::array<float, 3> stabDir{static_cast<float>(ux * cosConnect), static_cast<float>(uy * cosConnect), static_cast<float>(sinConnect)};
+    wall = rays.occluded(stabFrom, stabDir, static_cast<float>(0.75 * h / cosConnect));
+    if (wall) return std::nullopt;
+    const double reach = 0.45 * h * tanConnect;
+    const std::array<float, 3> edgeFrom{static_cast<float>(P[0] + 0.45 * h * ux), static_cast<float>(P[1] + 0.45 * h * uy),
+                                        static_cast<float>(P[2] + reach)};
+    const float te = rays.intersect(edgeFrom, {0.f, 0.f, -1.f}, static_cast<float>(2.0 * reach));
+    const double edgeZ = std::isfinite(te) ? edgeFrom[2] - te : P[2];
+    // Just past the footprint, from above the edge's level: a surface near that level goes on
+    // (no site on it: not an edge); the first one well below is where the snow lands.
+    const double band = 0.25 * h * tanConnect;
+    const std::array<float, 3> from{static_cast<float>(P[0] + 0.75 * h * ux), static_cast<float>(P[1] + 0.75 * h * uy),
+                                    static_cast<float>(std::max<double>(edgeZ, P[2]) + band)};
+    const float t = rays.intersect(from, {0.f, 0.f, -1.f}, INFINITY);
+    if (std::isfinite(t) && from[2] - t >= std::min<double>(edgeZ, P[2]) - band) return std::nullopt;
+    Drop d{static_cast<uint32_t>(a), 0.5 * h, edgeZ, {}};
+    if (std::isfinite(t)) spreadLanding(d, from[0], from[1], from[2] - t, std::min<double>(edgeZ, P[2]) - band);
+    return d;
+  }
+};
+
+// Open directions: the lattice directions with no neighbour within 30 degrees.
+//  - A wall: a stab from the base, rising at the connect angle to just past the footprint, hits
+//    something (a face steeper than the connect slope): snow rests against it.
+//  - Otherwise an edge, at the height z_e of the surface at the footprint's edge (the highest
+//    within the connect slope; the site's own base where the surface has ended): snow whose top
+//    stands above z_e by more than the repose slope goes over it, and falls straight down from
+//    just past the footprint. Where it lands (a ray) it is spread over the sites near the
+//    landing point (a Gaussian); where the surface simply goes on (no site there: a face with
+//    none) the direction is ignored; a fall that meets nothing leaves the world.
+OpenDirections findOpenDirections(const DropFinder& finder) {
+  const size_t n = finder.lattice.sites.size();
   std::vector<std::vector<Drop>> dropsOf(n);
   std::vector<long long> walls(n, 0);
-  const double sigma = st.landingSpreadSpacings * s;
-  const double cosConnect = std::cos(st.connectAngleDeg * kPi / 180.0), sinConnect = std::sin(st.connectAngleDeg * kPi / 180.0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t a = range.begin(); a < range.end(); ++a) {
-      if (buried[a]) continue;
-      const double h = spacing(a);
-      const auto& P = sites[a].position;
+      if (finder.buried[a]) continue;
       for (int k = 0; k < 8; ++k) {
         const double ang = k * kPi / 4.0, ux = std::cos(ang), uy = std::sin(ang);
-        bool covered = false;
-        for (uint32_t q = first[a]; q < first[a + 1] && !covered; ++q) {
-          const double ex = sites[nbr[q]].position[0] - P[0], ey = sites[nbr[q]].position[1] - P[1];
-          covered = ex * ux + ey * uy >= std::cos(kPi / 6.0) * dist[q] - 1e-12;
-        }
-        if (covered) continue;
-        const std::array<float, 3> stabFrom{P[0], P[1], static_cast<float>(P[2] + 0.02 * h)};
-        const std::array<float, 3> stabDir{static_cast<float>(ux * cosConnect), static_cast<float>(uy * cosConnect), static_cast<float>(sinConnect)};
-        if (rays.occluded(stabFrom, stabDir, static_cast<float>(0.75 * h / cosConnect))) {
-          ++walls[a];
-          continue;
-        }
-        const double reach = 0.45 * h * tanConnect;
-        const std::array<float, 3> edgeFrom{static_cast<float>(P[0] + 0.45 * h * ux), static_cast<float>(P[1] + 0.45 * h * uy),
-                                            static_cast<float>(P[2] + reach)};
-        const float te = rays.intersect(edgeFrom, {0.f, 0.f, -1.f}, static_cast<float>(2.0 * reach));
-        const double edgeZ = std::isfinite(te) ? edgeFrom[2] - te : P[2];
-        // Just past the footprint, from above the edge's level: a surface near that level goes on
-        // (no site on it: not an edge); the first one well below is where the snow lands.
-        const double band = 0.25 * h * tanConnect;
-        const std::array<float, 3> from{static_cast<float>(P[0] + 0.75 * h * ux), static_cast<float>(P[1] + 0.75 * h * uy),
-                                        static_cast<float>(std::max<double>(edgeZ, P[2]) + band)};
-        const float t = rays.intersect(from, {0.f, 0.f, -1.f}, INFINITY);
-        if (std::isfinite(t) && from[2] - t >= std::min<double>(edgeZ, P[2]) - band) continue;
-        Drop d{static_cast<uint32_t>(a), 0.5 * h, edgeZ, {}};
-        if (std::isfinite(t)) {
-          const double hx = from[0], hy = from[1], hz = from[2] - t;
-          double total = 0.0;
-          forSitesNear(hx, hy, static_cast<int>(std::ceil(2.0 * sigma / s)) + 1, [&](uint32_t b) {
-            const double ex = sites[b].position[0] - hx, ey = sites[b].position[1] - hy, r2 = ex * ex + ey * ey;
-            if (r2 > 4.0 * sigma * sigma || buried[b]) return;
-            // Below where it fell from (a site near the edge it fell over must not catch it
-            // back: snow went round in that loop for ever).
-            if (!(sites[b].position[2] < std::min<double>(edgeZ, P[2]) - band)) return;
-            if (std::abs(sites[b].position[2] - hz) > std::max(std::sqrt(r2), 0.5 * s) * tanConnect) return;
-            if (r2 > 0.0) {  // and in sight of the landing point (not behind a wall)
-              const float lift = static_cast<float>(0.5 * std::sqrt(r2));
-              const std::array<float, 3> at{static_cast<float>(hx), static_cast<float>(hy), static_cast<float>(hz + lift)};
-              const float fx = static_cast<float>(ex), fy = static_cast<float>(ey), fz = static_cast<float>(sites[b].position[2] - hz);
-              const float len = std::sqrt(fx * fx + fy * fy + fz * fz);
-              if (rays.occluded(at, {fx / len, fy / len, fz / len}, len)) return;
-            }
-            const double w = std::exp(-r2 / (2.0 * sigma * sigma));
-            d.landing.push_back({b, w});
-            total += w;
-          });
-          std::sort(d.landing.begin(), d.landing.end());
-          for (auto& l : d.landing) l.second /= total;
-        }
-        dropsOf[a].push_back(std::move(d));
+        if (finder.covered(a, ux, uy)) continue;
+        bool wall = false;
+        std::optional<Drop> d = finder.openDirection(a, ux, uy, wall);
+        walls[a] += wall;
+        if (d) dropsOf[a].push_back(std::move(*d));
       }
     }
   });
-  std::vector<uint32_t> dropFirst(n + 1, 0);
-  std::vector<Drop> drops;
+  OpenDirections open;
+  open.dropFirst.assign(n + 1, 0);
   for (size_t a = 0; a < n; ++a) {
-    rep.wallDirections += walls[a];
+    open.walls += walls[a];
     for (Drop& d : dropsOf[a]) {
-      rep.unlandedDrops += d.landing.empty();
-      drops.push_back(std::move(d));
+      open.unlanded += d.landing.empty();
+      open.drops.push_back(std::move(d));
     }
-    dropFirst[a + 1] = static_cast<uint32_t>(drops.size());
+    open.dropFirst[a + 1] = static_cast<uint32_t>(open.drops.size());
   }
-  rep.dropDirections = static_cast<long long>(drops.size());
+  return open;
+}
 
-  // Deposit rounds, each relaxed by Jacobi passes.
-  std::vector<double> area(n), base(n), placed(n), volume(n, 0.0), next(n), out(nbr.size()), dropOut(drops.size());
-  double totalArea = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    area[i] = sites[i].footprintM2;
-    base[i] = sites[i].position[2];
-    placed[i] = static_cast<double>(sites[i].depthM) * area[i];
-    rep.placedM3 += placed[i];
-    totalArea += area[i];
+// The deposit rounds, each relaxed by Jacobi passes over the graph and the drops (in double).
+class Relaxation {
+ public:
+  Relaxation(const std::vector<SnowSite>& sites, const NeighbourGraph& g, const OpenDirections& open,
+             const FallenSnowStability& st, FallenSnowStabilityReport& rep)
+      : g_(g), open_(open), st_(st), rep_(rep), n_(sites.size()), area_(n_), base_(n_), placed_(n_), volume_(n_, 0.0),
+        next_(n_), moved_(n_), out_(g.nbr.size()), dropOut_(open.drops.size()), allowedRise_(g.nbr.size() + open.drops.size()) {
+    for (size_t i = 0; i < n_; ++i) {
+      area_[i] = sites[i].footprintM2;
+      base_[i] = sites[i].position[2];
+      placed_[i] = static_cast<double>(sites[i].depthM) * area_[i];
+      rep_.placedM3 += placed_[i];
+      totalArea_ += area_[i];
+    }
   }
-  const double loDeg = std::max(0.0, st.reposeAngleDeg - 0.5 * st.transitionWidthDeg);
-  const double hiDeg = std::min(89.9, st.reposeAngleDeg + 0.5 * st.transitionWidthDeg);
-  const RandomKey key{st.seed};
-  std::vector<double> moved(n);
+
+  void run() {
+    for (int round = 0; round < st_.depositRounds; ++round) {
+      for (size_t i = 0; i < n_; ++i) volume_[i] += placed_[i] / st_.depositRounds;
+      drawAllowedRise(round);
+      if (!relaxRound()) ++rep_.unconvergedRounds;
+    }
+  }
+
+  // The sites' snow volumes (m^3).
+  const std::vector<double>& volume() const { return volume_; }
+  const std::vector<double>& area() const { return area_; }
+
+ private:
+  double top(size_t i) const { return base_[i] + volume_[i] / area_[i]; }
+
   // Per link (neighbours, then drops) the rise its snow tops may keep: distance x tan(theta*),
   // theta* drawn once per pair and round: a random threshold field the round settles into (a
   // draw per pass kept moving snow at slopes inside the curve, pass after pass).
-  std::vector<double> allowedRise(nbr.size() + drops.size());
-  for (int round = 0; round < st.depositRounds; ++round) {
-    for (size_t i = 0; i < n; ++i) volume[i] += placed[i] / st.depositRounds;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, allowedRise.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+  void drawAllowedRise(int round) {
+    const double loDeg = std::max(0.0, st_.reposeAngleDeg - 0.5 * st_.transitionWidthDeg);
+    const double hiDeg = std::min(89.9, st_.reposeAngleDeg + 0.5 * st_.transitionWidthDeg);
+    const RandomKey key{st_.seed};
+    const size_t links = g_.nbr.size();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, allowedRise_.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
       for (size_t slot = range.begin(); slot < range.end(); ++slot) {
         double tanTheta = std::tan(loDeg * kPi / 180.0);
         if (hiDeg > loDeg) {
           const Philox4x32 r = key.draw(static_cast<uint64_t>(round), static_cast<uint32_t>(slot), RngStream::FallenSnowStability);
           tanTheta = std::tan((loDeg + (hiDeg - loDeg) * uniformOpenDouble(r.v[0], r.v[1])) * kPi / 180.0);
         }
-        allowedRise[slot] = (slot < nbr.size() ? dist[slot] : drops[slot - nbr.size()].distance) * tanTheta;
+        allowedRise_[slot] = (slot < links ? g_.dist[slot] : open_.drops[slot - links].distance) * tanTheta;
       }
     });
-    const double stop = st.stopFraction * rep.placedM3 / st.depositRounds / std::max(totalArea, 1e-300);
-    ++rep.rounds;
-    bool converged = false;
-    for (int pass = 0; pass < st.maxPassesPerRound; ++pass) {
-      // Outflows from this pass's snow tops.
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t a = range.begin(); a < range.end(); ++a) {
-          const double v = volume[a];
-          const uint32_t k0 = first[a], k1 = first[a + 1], d0 = dropFirst[a], d1 = dropFirst[a + 1];
-          for (uint32_t k = k0; k < k1; ++k) out[k] = 0.0;
-          for (uint32_t d = d0; d < d1; ++d) dropOut[d] = 0.0;
-          if (!(v > 0.0)) continue;
-          const double top = base[a] + v / area[a];
-          // Each unstable pair's share: the volume that brings it to theta*, over the number of
-          // receivers + 1 (the receivers may take snow from other sites in the same pass).
-          int receivers = 0;
-          for (uint32_t k = k0; k < k1; ++k) {
-            const uint32_t b = nbr[k];
-            const double drop = top - (base[b] + volume[b] / area[b]);
-            if (!(drop > 0.0)) continue;
-            const double excess = drop - allowedRise[k];
-            if (!(excess > 0.0)) continue;
-            out[k] = excess / (1.0 / area[a] + 1.0 / area[b]);
-            ++receivers;
-          }
-          for (uint32_t d = d0; d < d1; ++d) {
-            // Over the edge, or onto the snow where it lands when that stands higher (an edge
-            // buried in the snow below is no edge: snow went round that loop for ever).
-            double floor = drops[d].edgeZ;
-            if (!drops[d].landing.empty()) {
-              double landingTop = 0.0;
-              for (const auto& [b, w] : drops[d].landing) landingTop += w * (base[b] + volume[b] / area[b]);
-              floor = std::max(floor, landingTop);
-            }
-            const double excess = top - floor - allowedRise[nbr.size() + d];
-            if (!(excess > 0.0)) continue;
-            dropOut[d] = excess * area[a];
-            ++receivers;
-          }
-          if (receivers == 0) continue;
-          const double shares = receivers + 1.0;
-          double total = 0.0;
-          for (uint32_t k = k0; k < k1; ++k) total += (out[k] /= shares);
-          for (uint32_t d = d0; d < d1; ++d) total += (dropOut[d] /= shares);
-          if (total > v) {
-            const double scale = v / total;
-            for (uint32_t k = k0; k < k1; ++k) out[k] *= scale;
-            for (uint32_t d = d0; d < d1; ++d) dropOut[d] *= scale;
-          }
-        }
+  }
+
+  // Passes until no site sheds more than the stop height (true), or maxPassesPerRound (false).
+  bool relaxRound() {
+    const double stop = st_.stopFraction * rep_.placedM3 / st_.depositRounds / std::max(totalArea_, 1e-300);
+    ++rep_.rounds;
+    for (int pass = 0; pass < st_.maxPassesPerRound; ++pass) {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n_, 256), [&](const tbb::blocked_range<size_t>& range) {
+        for (size_t a = range.begin(); a < range.end(); ++a) outflows(a);
       });
-      // Gather (each site: what it keeps plus what its neighbours sent it), then the landings.
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256), [&](const tbb::blocked_range<size_t>& range) {
-        for (size_t a = range.begin(); a < range.end(); ++a) {
-          double gave = 0.0, got = 0.0;
-          for (uint32_t k = first[a]; k < first[a + 1]; ++k) gave += out[k], got += out[reverse[k]];
-          for (uint32_t d = dropFirst[a]; d < dropFirst[a + 1]; ++d) gave += dropOut[d];
-          next[a] = std::max(0.0, volume[a] - gave) + got;
-          moved[a] = gave / area[a];
-        }
-      });
-      for (size_t d = 0; d < drops.size(); ++d) {
-        if (!(dropOut[d] > 0.0)) continue;
-        rep.overEdgesM3 += dropOut[d];
-        if (drops[d].landing.empty()) rep.leftTheWorldM3 += dropOut[d];
-        for (const auto& [b, w] : drops[d].landing) next[b] += dropOut[d] * w;
-      }
-      // The largest height that left a site this pass (a steady stream down a face counts).
-      double most = 0.0;
-      for (size_t i = 0; i < n; ++i) most = std::max(most, moved[i]);
-      volume.swap(next);
-      ++rep.passes;
-      rep.lastMovedM = most;
-      if (most < stop || most == 0.0) {
-        converged = true;
-        break;
-      }
+      const double most = gatherAndLand();
+      volume_.swap(next_);
+      ++rep_.passes;
+      rep_.lastMovedM = most;
+      if (most < stop || most == 0.0) return true;
     }
-    if (!converged) ++rep.unconvergedRounds;
+    return false;
   }
-  for (size_t i = 0; i < n; ++i) {
-    sites[i].depthM = static_cast<float>(volume[i] / area[i]);
-    rep.finalM3 += volume[i];
+
+  // Site a's outflows from this pass's snow tops. Each unstable pair's share: the volume that
+  // brings it to theta*, over the number of receivers + 1 (the receivers may take snow from
+  // other sites in the same pass); all scaled to the snow there.
+  void outflows(size_t a) {
+    const double v = volume_[a];
+    const uint32_t k0 = g_.first[a], k1 = g_.first[a + 1], d0 = open_.dropFirst[a], d1 = open_.dropFirst[a + 1];
+    for (uint32_t k = k0; k < k1; ++k) out_[k] = 0.0;
+    for (uint32_t d = d0; d < d1; ++d) dropOut_[d] = 0.0;
+    if (!(v > 0.0)) return;
+    const double topA = base_[a] + v / area_[a];
+    int receivers = 0;
+    for (uint32_t k = k0; k < k1; ++k) {
+      const uint32_t b = g_.nbr[k];
+      const double drop = topA - top(b);
+      if (!(drop > 0.0)) continue;
+      const double excess = drop - allowedRise_[k];
+      if (!(excess > 0.0)) continue;
+      out_[k] = excess / (1.0 / area_[a] + 1.0 / area_[b]);
+      ++receivers;
+    }
+    for (uint32_t d = d0; d < d1; ++d) {
+      // Over the edge, or onto the snow where it lands when that stands higher (an edge buried
+      // in the snow below is no edge: snow went round that loop for ever).
+      double floor = open_.drops[d].edgeZ;
+      if (!open_.drops[d].landing.empty()) {
+        double landingTop = 0.0;
+        for (const auto& [b, w] : open_.drops[d].landing) landingTop += w * top(b);
+        floor = std::max(floor, landingTop);
+      }
+      const double excess = topA - floor - allowedRise_[g_.nbr.size() + d];
+      if (!(excess > 0.0)) continue;
+      dropOut_[d] = excess * area_[a];
+      ++receivers;
+    }
+    if (receivers == 0) return;
+    const double shares = receivers + 1.0;
+    double total = 0.0;
+    for (uint32_t k = k0; k < k1; ++k) total += (out_[k] /= shares);
+    for (uint32_t d = d0; d < d1; ++d) total += (dropOut_[d] /= shares);
+    if (total > v) {
+      const double scale = v / total;
+      for (uint32_t k = k0; k < k1; ++k) out_[k] *= scale;
+      for (uint32_t d = d0; d < d1; ++d) dropOut_[d] *= scale;
+    }
   }
-  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Gather (each site: what it keeps plus what its neighbours sent it), then the landings.
+  // Returns the largest height that left a site this pass (a steady stream down a face counts).
+  double gatherAndLand() {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_, 256), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t a = range.begin(); a < range.end(); ++a) {
+        double gave = 0.0, got = 0.0;
+        for (uint32_t k = g_.first[a]; k < g_.first[a + 1]; ++k) gave += out_[k], got += out_[g_.reverse[k]];
+        for (uint32_t d = open_.dropFirst[a]; d < open_.dropFirst[a + 1]; ++d) gave += dropOut_[d];
+        next_[a] = std::max(0.0, volume_[a] - gave) + got;
+        moved_[a] = gave / area_[a];
+      }
+    });
+    for (size_t d = 0; d < open_.drops.size(); ++d) {
+      if (!(dropOut_[d] > 0.0)) continue;
+      rep_.overEdgesM3 += dropOut_[d];
+      if (open_.drops[d].landing.empty()) rep_.leftTheWorldM3 += dropOut_[d];
+      for (const auto& [b, w] : open_.drops[d].landing) next_[b] += dropOut_[d] * w;
+    }
+    double most = 0.0;
+    for (size_t i = 0; i < n_; ++i) most = std::max(most, moved_[i]);
+    return most;
+  }
+
+  const NeighbourGraph& g_;
+  const OpenDirections& open_;
+  const FallenSnowStability& st_;
+  FallenSnowStabilityReport& rep_;
+  const size_t n_;
+  std::vector<double> area_, base_, placed_, volume_, next_, moved_, out_, dropOut_, allowedRise_;
+  double totalArea_ = 0.0;
+};
+
+}  // namespace
+
+FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSnow& snow, const FallenSnowStability& st) {
+  const auto t0 = WallClock::now();
+  checkStabilitySettings(mesh, snow, st);
+  FallenSnowStabilityReport rep;
+  const SiteLattice lattice(snow);
+  const double tanConnect = std::tan(st.connectAngleDeg * kPi / 180.0);
+  const Grid<float> noTerrain;  // the scene keeps a reference
+  const RayScene rays(noTerrain, GridSpec{}, {mesh});
+  const std::vector<uint8_t> buried = findBuriedSites(mesh, rays, snow.sites);
+  for (uint8_t b : buried) rep.buriedSites += b;
+  const NeighbourGraph graph = linkNeighbours(lattice, rays, buried, tanConnect);
+  rep.neighbourLinks = static_cast<long long>(graph.nbr.size());
+  const DropFinder finder{lattice, rays, graph, buried, tanConnect, std::cos(st.connectAngleDeg * kPi / 180.0),
+                          std::sin(st.connectAngleDeg * kPi / 180.0), st.landingSpreadSpacings * snow.siteSpacingM};
+  const OpenDirections open = findOpenDirections(finder);
+  rep.wallDirections = open.walls;
+  rep.unlandedDrops = open.unlanded;
+  rep.dropDirections = static_cast<long long>(open.drops.size());
+  Relaxation relaxation(snow.sites, graph, open, st, rep);
+  relaxation.run();
+  for (size_t i = 0; i < snow.sites.size(); ++i) {
+    snow.sites[i].depthM = static_cast<float>(relaxation.volume()[i] / relaxation.area()[i]);
+    rep.finalM3 += relaxation.volume()[i];
+  }
+  rep.seconds = elapsedSeconds(t0);
   return rep;
 }
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/bedform.h"
+#include "core/bedform_runs.h"
 #include "core/default_terrain.h"
 #include "core/parameters.h"
 #include "core/weather.h"

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "core/avalanche.h"
+#include "core/avalanche_runs.h"
 #include "core/cpu_backend.h"
 #include "core/rng.h"
 #include "bakers/grid_writer.h"

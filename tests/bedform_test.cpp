@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "core/bedform.h"
+#include "core/bedform_runs.h"
 #include "core/cpu_backend.h"
 #include "core/season.h"
 #include "core/serial_exec.h"

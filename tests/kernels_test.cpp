@@ -19,28 +19,8 @@ SnowState plane(int w, int h, double cell, float slopeX, float base, float tempe
 SnowFieldsView viewOf(SnowState& s, std::vector<float>& delta) {
   // One buffer holds the four scratch fields (delta, slope, surface and powder snapshots) and
   // powder diffusion's five shares per cell.
-  SnowFieldsView v;
+  SnowFieldsView v = test::stateView(s);
   delta.assign(9 * s.spec.cellCount(), 0.f);
-  v.width = s.spec.width;
-  v.height = s.spec.height;
-  v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM);
-  v.cellSizeYM = static_cast<float>(s.spec.cellSizeYM);
-  v.bedrock = s.bedrockM.data();
-  v.compacted = s.compactedM.data();
-  v.stable = s.stableM.data();
-  v.unstable = s.unstableM.data();
-  v.powder = s.powderM.data();
-  v.moving = s.snowMoving.data();
-  v.valid = s.validCell.data();
-  v.exposure = s.exposureHours.data();
-  v.temperatureBase = s.temperatureBaseC.data();
-  v.windX = s.windXMps.data();
-  v.windY = s.windYMps.data();
-  v.windEffectZ = s.windEffectZM.data();
-  v.windLoading = s.windLoadingMps2.data();
-  v.windScour = s.windScourM.data();
-  v.windDeposit = s.windDepositM.data();
-  v.melted = s.meltedM.data();
   v.delta = delta.data();
   v.surfaceSlope = delta.data() + s.spec.cellCount();
   v.scratchSurface = delta.data() + 2 * s.spec.cellCount();

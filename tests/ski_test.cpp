@@ -1,4 +1,4 @@
-// Skiers (core/ski.h): the route map (automaton against the one-pass sort, an analytic plane),
+// Skiers (core/ski_runs.h): the route map (automaton against the one-pass sort, an analytic plane),
 // refined tracks (effective slope, continuity, straight running), dead ends, fading, the snow
 // interaction and the avalanche a skier sets off.
 #include <gtest/gtest.h>
@@ -11,7 +11,7 @@
 #include "core/exec_backend.h"
 #include "core/serial_exec.h"
 #include "core/season.h"
-#include "core/ski.h"
+#include "core/ski_runs.h"
 #include "core/reference_scenario.h"
 #include "core/util.h"
 #include "test_support.h"

@@ -13,7 +13,7 @@
 
 #include "core/cpu_backend.h"
 #include "core/rng.h"
-#include "core/bedform.h"
+#include "core/bedform_runs.h"
 #include "core/season.h"
 #include "precompute/wind.h"
 #include "precompute/wind_timeline.h"

@@ -67,18 +67,30 @@ inline SnowState makeRoughState(int w, int h, uint64_t seed, double cellSizeXM =
   return s;
 }
 
-// Every evolving field of two states is byte for byte the same (gtest expectations).
+// Every field that a backend's download fills (snow_fields.h: the evolved layers and the
+// records) is byte for byte the same in the two states (gtest expectations).
 inline void expectSameBytes(const SnowState& a, const SnowState& b) {
-  EXPECT_EQ(a.compactedM.values(), b.compactedM.values());
-  EXPECT_EQ(a.stableM.values(), b.stableM.values());
-  EXPECT_EQ(a.unstableM.values(), b.unstableM.values());
-  EXPECT_EQ(a.powderM.values(), b.powderM.values());
-  EXPECT_EQ(a.snowMoving.values(), b.snowMoving.values());
-  EXPECT_EQ(a.windScourM.values(), b.windScourM.values());
-  EXPECT_EQ(a.windDepositM.values(), b.windDepositM.values());
-  EXPECT_EQ(a.meltedM.values(), b.meltedM.values());
-  EXPECT_EQ(a.avalancheScourM.values(), b.avalancheScourM.values());
-  EXPECT_EQ(a.avalancheDepositM.values(), b.avalancheDepositM.values());
+#define SNOW_EXPECT_SAME_FIELD(member, view, Element, role, access, fill) \
+  if (downloadedWithState(FieldRole::role)) {                         \
+    EXPECT_EQ(a.member.values(), b.member.values()) << #member;          \
+  }
+  SNOW_STATE_FIELDS(SNOW_EXPECT_SAME_FIELD)
+#undef SNOW_EXPECT_SAME_FIELD
+}
+
+// The kernels' view of a host state: every field of snow_fields.h that has a view pointer (an
+// absent optional field null); no scratch fields (the caller gives those).
+inline SnowFieldsView stateView(SnowState& s) {
+  SnowFieldsView v;
+  v.width = s.spec.width;
+  v.height = s.spec.height;
+  v.cellSizeXM = static_cast<float>(s.spec.cellSizeXM);
+  v.cellSizeYM = static_cast<float>(s.spec.cellSizeYM);
+#define SNOW_STATE_VIEW(member, view, Element, role, access, fill) \
+  SNOW_IF_VIEW(access, v.view = optionalField(FieldRole::role) && s.member.size() == 0 ? nullptr : s.member.data();)
+  SNOW_STATE_FIELDS(SNOW_STATE_VIEW)
+#undef SNOW_STATE_VIEW
+  return v;
 }
 
 }  // namespace snow::test

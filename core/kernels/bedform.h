@@ -79,20 +79,30 @@ constexpr float kCohesionUnits = 4096.f;  // 12 bits: up to 524 287 slabs into o
 SNOW_HD SNOW_INLINE int cohesionUnits(float c) { return static_cast<int>(c * kCohesionUnits + 0.5f); }
 
 // The bedform model's own fields (device or host memory), beside the snow fields.
+enum class BedformStart { Zero, Powder, StepCounters };
+// SNOW_BEDFORM_FIELDS(X) calls X(member, Element, start) for each of them, `start` saying what
+// it holds when the backend makes it at the first bedform step: Zero, the powder layer then
+// (Powder), or StepCounters (four values, zeroed at every step).
+#define SNOW_BEDFORM_FIELDS(X)                                                                     \
+  X(slabs, int, Zero)           /* current slab counts */                                          \
+  X(snapshot, int, Zero)        /* slab counts at the batch's start */                             \
+  X(exported, int, Zero)        /* slabs that left the domain into this (non-domain) cell */       \
+  X(arrived, int, Zero)         /* slabs that arrived in this cell since the last cohesion pass */ \
+  X(arrivedCohesion, int, Zero) /* the sum of their cohesions, in units of 1 / kCohesionUnits */   \
+  /* [0] slabs eroded, [1] slab moves of the relaxation (a step's totals) */                       \
+  X(counters, unsigned long long, StepCounters)                                                    \
+  X(cohesion, float, Zero)      /* 0 loose .. 1 bonded (persistent) */                             \
+  X(lastPowder, float, Powder)  /* P at the end of the previous step (persistent): fresh snow since */ \
+  X(base, float, Zero)          /* surface altitude without the slabs (B + C + S + U + residual) */ \
+  /* slab counts at the step's start (the rest of the powder, under one slab, stays put) */       \
+  X(initial, int, Zero)                                                                            \
+  X(shadow, uint8_t, Zero)                                                                         \
+  X(active, uint8_t, Zero)      /* in the bedform domain this step */
 struct BedformFields {
-  int* slabs = nullptr;          // current slab counts
-  int* snapshot = nullptr;       // slab counts at the batch's start
-  int* exported = nullptr;       // slabs that left the domain into this (non-domain) cell
-  int* arrived = nullptr;        // slabs that arrived in this cell since the last cohesion pass
-  int* arrivedCohesion = nullptr;  // the sum of their cohesions, in units of 1 / kCohesionUnits
-  unsigned long long* counters = nullptr;  // [0] slabs eroded, [1] slab moves of the relaxation (a step's totals)
-  float* cohesion = nullptr;     // 0 loose .. 1 bonded (persistent)
-  float* lastPowder = nullptr;   // P at the end of the previous step (persistent): fresh snow since
-  float* base = nullptr;         // surface altitude without the slabs (B + C + S + U + residual)
-  int* initial = nullptr;        // slab counts at the step's start (the rest of the powder, under one slab, stays put)
-  uint8_t* shadow = nullptr;
-  uint8_t* active = nullptr;     // in the bedform domain this step
-  const uint8_t* mask = nullptr; // scene mask (null: whole terrain)
+#define SNOW_BEDFORM_MEMBER(member, Element, start) Element* member = nullptr;
+  SNOW_BEDFORM_FIELDS(SNOW_BEDFORM_MEMBER)
+#undef SNOW_BEDFORM_MEMBER
+  const uint8_t* mask = nullptr; // scene mask (SnowState::bedformMask; null: whole terrain)
 };
 
 namespace bedform {

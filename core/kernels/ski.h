@@ -1,4 +1,4 @@
-// The skiers' kernels (core/ski.h) for every executor: the route map's cellular automaton, and
+// The skiers' kernels (core/ski_runs.h) for every executor: the route map's cellular automaton, and
 // the agents of a batch of skiers moved together, one step of every skier at a time.
 //
 // A step of a batch (ExecBackend::skierBatch) is three kernels:
@@ -195,7 +195,7 @@ struct SkierStartKernel {
   }
 };
 
-// One move of every running skier (see the top of this file and core/ski.h).
+// One move of every running skier (see the top of this file and core/ski_runs.h).
 struct SkierMoveKernel {
   SnowFieldsView v;
   SkierFields f;

@@ -14,14 +14,15 @@
 #include "core/reference_scenario.h"
 #include "core/exec_backend.h"
 #include "core/kernel_registry.h"
-#include "core/avalanche.h"
-#include "core/bedform.h"
+#include "core/avalanche_runs.h"
+#include "core/bedform_runs.h"
 #include "core/season.h"
+#include "core/ski_runs.h"
 #include "core/util.h"
-#include "core/ski.h"
 #include "core/serial_exec.h"
 #include "core/step_args.h"
 #include "cuda/cuda_backend.h"
+#include "tests/gpu/backend_parity.h"
 #include "tests/test_support.h"
 
 using namespace snow;
@@ -55,23 +56,14 @@ TEST(CudaBackend, ReportsTheDevice) {
   EXPECT_NE(b->name().find("cuda"), std::string::npos);
 }
 
-TEST(CudaBackend, EveryRegisteredStepMatchesTheCpuBitForBit) {
+// Every step the backend runs (tests/gpu/backend_parity.h: the registered season steps, art
+// direction and edits, an avalanche, the bedforms, a skier batch) gives the CPU's bytes.
+TEST(CudaBackend, EveryBackendStepMatchesTheCpuBitForBit) {
   SKIP_WITHOUT_CUDA();
-  const SnowState initial = test::makeRoughState(203, 157, 17);  // odd sizes: partial blocks and colour rows
-  const auto steps = registeredSteps(params(), warm());
-  for (const auto& step : steps) {
+  for (const test::ParityCase& c : test::backendParityCases()) {
     ExecBackend<SerialExec> cpu;
     auto gpu = cuda::createCudaBackend();
-    SnowState a = initial, b = initial;
-    cpu.upload(a);
-    gpu->upload(b);
-    const double la = step.run(cpu), lb = step.run(*gpu);
-    cpu.download(a);
-    gpu->download(b);
-    SCOPED_TRACE(step.name);
-    EXPECT_EQ(la, lb);
-    test::expectSameBytes(a, b);
-    EXPECT_EQ(cpu.totals().totalM3(), gpu->totals().totalM3());
+    test::expectSameRun(c, cpu, *gpu);
   }
 }
 
@@ -165,27 +157,6 @@ AvalancheRecord avalancheOn(SnowBackend& backend, SnowState& s, int rx, int ry) 
 }
 }  // namespace
 
-// The avalanche kernels (flows, scaling, heights, row statistics, release, settle) on the GPU
-// give the CPU's bytes, step for step.
-TEST(CudaBackend, AvalancheMatchesTheCpuBitForBit) {
-  SKIP_WITHOUT_CUDA();
-  SnowState initial = test::makeRoughState(203, 157, 29);
-  for (int y = 0; y < 157; ++y)
-    for (int x = 0; x < 203; ++x)
-      if (initial.validCell(x, y)) initial.unstableM(x, y) = 1.5f;
-  int rx = 100, ry = 80;
-  while (!initial.validCell(rx, ry)) ++rx;
-  SnowState a = initial, b = initial;
-  ExecBackend<SerialExec> cpu;
-  auto gpu = cuda::createCudaBackend();
-  const AvalancheRecord ra = avalancheOn(cpu, a, rx, ry), rb = avalancheOn(*gpu, b, rx, ry);
-  ASSERT_TRUE(ra.released);
-  EXPECT_GT(ra.steps, 1);
-  EXPECT_EQ(ra.steps, rb.steps);
-  EXPECT_EQ(ra.runoutM, rb.runoutM);
-  test::expectSameBytes(a, b);
-}
-
 // Not a benchmark gate: the time per avalanche step of the same release on a 512^2 and a
 // 4096^2 terrain (the active box keeps it independent of the terrain size); printed for the notes.
 TEST(CudaBackend, AvalancheStepTimeDoesNotGrowWithTheTerrain) {
@@ -204,10 +175,8 @@ TEST(CudaBackend, AvalancheStepTimeDoesNotGrowWithTheTerrain) {
 }
 
 // The skiers' route map: the paper's cellular automaton on the GPU gives the host's one-pass
-// bytes; and a batch of skiers moved together on the device (kernels/ski.h: moves, then claim
-// rounds for the cells entered, several skiers sharing start cells) gives the serial executor's
-// paths, stops and layers, bit for bit.
-TEST(CudaBackend, RouteMapAndSkierBatchMatchTheCpu) {
+// bytes (the skier batch itself is in the parity table).
+TEST(CudaBackend, RouteMapMatchesTheHostsOnePass) {
   SKIP_WITHOUT_CUDA();
   SnowState s = test::makeRoughState(181, 143, 31);
   auto gpu = cuda::createCudaBackend();
@@ -215,119 +184,6 @@ TEST(CudaBackend, RouteMapAndSkierBatchMatchTheCpu) {
   Grid<float> onDevice;
   ASSERT_TRUE(gpu->routeMapOnDevice(onDevice));
   EXPECT_EQ(onDevice.values(), routeMap(s.bedrockM, s.validCell, s.spec).values());
-  ExecBackend<SerialExec> cpu;
-  cpu.upload(s);
-  ModelParameters p;
-  p.skiMinSnowM = 0.2;
-  p.skiTriggerFactor = 0.5;
-  p.skiLookaheadM = 20.0;
-  SkiRun onCpu(cpu, p, s, nullptr), onGpu(*gpu, p, s, nullptr);
-  std::vector<SkierStart> starts;
-  for (int k = 0; k < 48; ++k) starts.push_back({20 + (k % 6) * 3, 10 + (k / 6) * 15, static_cast<uint64_t>(k), k % 2 == 0});
-  for (int k = 0; k < 8; ++k) starts.push_back({40, 70, static_cast<uint64_t>(100 + k), true});  // one start cell
-  const auto a = onCpu.descendTogether(starts, 1.0, 11), b = onGpu.descendTogether(starts, 1.0, 11);
-  ASSERT_EQ(a.size(), b.size());
-  size_t moved = 0;
-  for (size_t k = 0; k < a.size(); ++k) {
-    EXPECT_EQ(a[k].why, b[k].why) << k;
-    EXPECT_EQ(a[k].cells, b[k].cells) << k;
-    EXPECT_EQ(a[k].lengthM, b[k].lengthM) << k;
-    EXPECT_EQ(a[k].path, b[k].path) << k;
-    EXPECT_EQ(a[k].triggered, b[k].triggered) << k;
-    moved += a[k].cells > 0;
-  }
-  EXPECT_GT(moved, 10u);
-  SnowState x = s, y = s;
-  cpu.download(x);
-  gpu->download(y);
-  test::expectSameBytes(x, y);
-}
-
-// Art direction on the device: snowfall, melt and wind transport with painted multipliers, then
-// the four timeline edits with a grey mask, give the CPU's bytes.
-TEST(CudaBackend, ArtDirectionMultipliersAndEditsMatchTheCpuBitForBit) {
-  SKIP_WITHOUT_CUDA();
-  SnowState s = test::makeRoughState(167, 131, 43);
-  s.snowfallFactor.resize(s.spec.width, s.spec.height, 0.f);
-  s.meltFactor.resize(s.spec.width, s.spec.height, 0.f);
-  s.windErosionFactor.resize(s.spec.width, s.spec.height, 0.f);
-  std::vector<float> weights(s.spec.cellCount());
-  for (int y = 0; y < s.spec.height; ++y)
-    for (int x = 0; x < s.spec.width; ++x) {
-      s.snowfallFactor(x, y) = static_cast<float>(x % 7) / 3.f;
-      s.meltFactor(x, y) = static_cast<float>(y % 5) / 2.f;
-      s.windErosionFactor(x, y) = (x + y) % 3 == 0 ? 0.f : 1.5f;
-      weights[static_cast<size_t>(y) * s.spec.width + x] = static_cast<float>((x * 3 + y) % 11) / 10.f;
-    }
-  ExecBackend<SerialExec> cpu;
-  auto gpu = cuda::createCudaBackend();
-  const ModelParameters p = params();
-  double cpuSum = 0, gpuSum = 0;
-  for (SnowBackend* b : {static_cast<SnowBackend*>(&cpu), gpu.get()}) {
-    b->upload(s);
-    double& sum = b == &cpu ? cpuSum : gpuSum;
-    sum += b->snowfall(makeSnowfallArgs(p, 0.5, WeatherState{}));
-    sum += b->melt(makeMeltArgs(p, 0.5, warm()));
-    b->windTransport(makeWindTransportArgs(p, 0.5));
-    for (EditOp op : {EditOp::Add, EditOp::Remove, EditOp::Set, EditOp::Move})
-      sum += b->applyEdit(EditArgs{op, static_cast<int>(SnowLayer::Unstable), static_cast<int>(SnowLayer::Stable), 0.7f, true}, weights);
-  }
-  EXPECT_EQ(cpuSum, gpuSum);
-  SnowState a = s, b = s;
-  cpu.download(a);
-  gpu->download(b);
-  test::expectSameBytes(a, b);
-}
-
-// Wind bedforms (kernels/bedform.h): saltation by integer atomics, so the device's order of
-// additions cannot change a count; the rest is +, -, *, /, sqrt, floor and ceil. Closed grid with
-// NODATA holes, a bedform mask and a wind turning with the row, then a periodic window.
-TEST(CudaBackend, BedformsMatchTheCpuBitForBit) {
-  SKIP_WITHOUT_CUDA();
-  SnowState s = makeBedformWindow(150, 122, 0.5, 0.08, 0.05, 8.f, 0.f, -6.f, 5);
-  s.bedformMask.resize(150, 122, 0);
-  for (int y = 0; y < 122; ++y)
-    for (int x = 0; x < 150; ++x) {
-      s.windYMps(x, y) = 4.f * std::sin(0.05f * static_cast<float>(y));
-      s.bedrockM(x, y) = 0.01f * static_cast<float>(x) + ((x / 20 + y / 20) % 4 == 0 ? 0.6f : 0.f);
-      s.bedformMask(x, y) = x < 120 ? 1 : 0;
-      if ((x - 75) * (x - 75) + (y - 40) * (y - 40) < 16) s.validCell(x, y) = 0;
-    }
-  BedformParameters p;
-  p.sinteringPerDay = 0.3;
-  p.speedupLinear = 1.2;
-  ExecBackend<SerialExec> cpu;
-  auto gpu = cuda::createCudaBackend();
-  BedformStepReport rc, rg;
-  for (SnowBackend* b : {static_cast<SnowBackend*>(&cpu), gpu.get()}) {
-    b->upload(s);
-    BedformStepReport& r = b == &cpu ? rc : rg;
-    for (int step = 0; step < 3; ++step) r = b->bedformStep(makeBedformArgs(p, 0.2, 15, 15 * step, 7, -2.0));
-  }
-  EXPECT_EQ(rc.slabsEroded, rg.slabsEroded);
-  EXPECT_EQ(rc.slabsAvalanched, rg.slabsAvalanched);
-  EXPECT_EQ(rg.slabsBefore, rg.slabsAfter);
-  SnowState a = s, b = s;
-  cpu.download(a);
-  gpu->download(b);
-  test::expectSameBytes(a, b);
-  Grid<float> ca, cb;
-  ASSERT_TRUE(cpu.bedformCohesion(ca));
-  ASSERT_TRUE(gpu->bedformCohesion(cb));
-  EXPECT_EQ(ca.values(), cb.values());
-
-  SnowState w = makeBarchanWindow(256), wa = w, wb = w;
-  BedformParameters q = periodicBedformParameters();
-  q.sinteringPerDay = 0.5;  // the cohesion too
-  ExecBackend<SerialExec> cpu2;
-  auto gpu2 = cuda::createCudaBackend();
-  cpu2.upload(w);
-  gpu2->upload(w);
-  cpu2.bedformStep(makeBedformArgs(q, 0.5, 40, 0, 1, 0.0));
-  gpu2->bedformStep(makeBedformArgs(q, 0.5, 40, 0, 1, 0.0));
-  cpu2.download(wa);
-  gpu2->download(wb);
-  test::expectSameBytes(wa, wb);
 }
 
 // Time per polling round of README's barchan set on a 1024² periodic window (printed; the bench's

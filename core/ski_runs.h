@@ -39,7 +39,7 @@
 //
 // Snow: each cell a skier enters turns ski_compaction_m of U into S, or of S into C where U runs
 // short, as it enters (later skiers of the batch, and the same skier coming back, see it). Crossing unstable snow on a slope above the avalanche rest
-// angle raises the cell's release probability (the spontaneous one, core/avalanche.h) by
+// angle raises the cell's release probability (the spontaneous one, core/avalanche_runs.h) by
 // ski_trigger_factor: when the draw releases, the skier stops there and an avalanche starts.
 #pragma once
 #include <array>

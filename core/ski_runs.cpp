@@ -1,4 +1,4 @@
-#include "ski.h"
+#include "ski_runs.h"
 
 #include <algorithm>
 #include <cmath>

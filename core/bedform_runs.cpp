@@ -1,4 +1,4 @@
-#include "bedform.h"
+#include "bedform_runs.h"
 
 #include <algorithm>
 #include <cmath>

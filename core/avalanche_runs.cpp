@@ -1,4 +1,4 @@
-#include "avalanche.h"
+#include "avalanche_runs.h"
 
 #include <algorithm>
 #include <cmath>
