@@ -159,20 +159,20 @@ ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terr
     const EditSpec& e = scene.edits[k];
     SeasonEdit edit;
     edit.day = e.day;
-    edit.args.op = e.op == "add" ? EditOp::Add : e.op == "remove" ? EditOp::Remove : e.op == "set" ? EditOp::Set : EditOp::Move;
+    edit.args.op = e.op;
     edit.args.layer = layerIndex(e.layer);
     edit.args.toLayer = e.to.empty() ? edit.args.layer : layerIndex(e.to);
     edit.args.hasDepth = e.depthM.has_value();
     edit.args.depthM = static_cast<float>(e.depthM.value_or(0.0));
     ManifestEdit rec;
-    rec.day = e.day, rec.op = e.op, rec.layer = e.layer, rec.to = e.to, rec.depthM = e.depthM.value_or(-1.0);
+    rec.day = e.day, rec.op = enumName(e.op), rec.layer = e.layer, rec.to = e.to, rec.depthM = e.depthM.value_or(-1.0);
     if (e.mask) {
       const std::string role = "edits[" + std::to_string(k) + "].mask";
       edit.weights = std::make_shared<const std::vector<float>>(rasters.get(*e.mask, RasterUse::Mask, role).values());
       rec.mask = e.mask->label();
     }
     std::ostringstream label;
-    label << "edit " << k + 1 << ": " << e.op << " " << e.layer;
+    label << "edit " << k + 1 << ": " << enumName(e.op) << " " << e.layer;
     if (!e.to.empty()) label << " to " << e.to;
     if (e.depthM) label << " " << num(*e.depthM) << " m";
     label << (e.mask ? " within " + e.mask->label() : std::string(" everywhere")) << " on day " << num(e.day);

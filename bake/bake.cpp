@@ -21,7 +21,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   log << "snowbake " << programVersion() << ": scene " << scene.sourceName << " (" << scene.name << "), seed " << scene.seed << ", "
       << threads << " thread" << (threads == 1 ? "" : "s") << "\n";
-  if (scene.mode == "mesh") return runMeshBake(scene, options, log, tStart);
+  if (scene.mode == SceneMode::Mesh) return runMeshBake(scene, options, log, tStart);
   return runGridBake(scene, options, threads, log, tStart);
 }
 

@@ -46,7 +46,7 @@ std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
-  const bool occlusionMode = scene.mode == "occlusion";
+  const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
 
   // Painted rasters first: a bad mask fails before any precompute runs; so do bedform parameters

@@ -6,10 +6,10 @@
 
 namespace snow {
 
-std::unique_ptr<SnowBackend> chooseBackend(const std::string& wanted, std::ostream& log) {
-  if (wanted == "cpu") return createCpuBackend();
+std::unique_ptr<SnowBackend> chooseBackend(BackendChoice wanted, std::ostream& log) {
+  if (wanted == BackendChoice::Cpu) return createCpuBackend();
   const cuda::DeviceInfo device = cuda::probeDevice();
-  if (wanted == "cuda") {
+  if (wanted == BackendChoice::Cuda) {
     if (!device.available) throw InputError("--backend cuda: no usable CUDA device: " + device.reason);
     return cuda::createCudaBackend();
   }

@@ -61,8 +61,8 @@ void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const Sn
   es.startDayOfYear = scene.startDayOfYear();
   es.seasonDays = scene.days;
   // The fast path where it is valid (a pure height field) unless the scene asks for rays.
-  es.horizonSweep = scene.sunMethod == "horizon" || (scene.sunMethod == "auto" && terrain.occluders.empty());
-  if (scene.sunMethod == "horizon" && !terrain.occluders.empty())
+  es.horizonSweep = scene.sunMethod == SunMethod::Horizon || (scene.sunMethod == SunMethod::Auto && terrain.occluders.empty());
+  if (scene.sunMethod == SunMethod::Horizon && !terrain.occluders.empty())
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
   pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, log);
   log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", "
@@ -87,7 +87,7 @@ void Precomputed::windForDay(int day, SnowState& s) const {
 Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
                           std::ostream& log) {
   Precomputed pre;
-  const bool occlusionMode = scene.mode == "occlusion";
+  const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode)
     log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
   else if (scene.sunExposure)

@@ -19,9 +19,9 @@ Scene resolveScene(const BakeOptions& options) {
   }
   if (options.seed) scene.seed = *options.seed;
   if (options.threads) scene.threads = *options.threads;
-  if (options.backend) scene.backend = *options.backend;
-  if (scene.backend != "cpu" && scene.backend != "cuda" && scene.backend != "auto")
-    throw InputError("--backend " + scene.backend + ": must be cpu, cuda or auto");
+  if (options.backend && !enumFromName<BackendChoice>(*options.backend))
+    throw InputError("--backend " + *options.backend + ": must be cpu, cuda or auto");
+  if (options.backend) scene.backend = *enumFromName<BackendChoice>(*options.backend);
   if (scene.threads < 0) throw InputError("--threads " + std::to_string(scene.threads) + ": must be 0 (all cores) or more");
   return scene;
 }

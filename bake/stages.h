@@ -53,7 +53,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
                           std::ostream& log);
 
 // stage_backend.cpp: the season's backend (--backend, run.backend: cpu, cuda or auto).
-std::unique_ptr<SnowBackend> chooseBackend(const std::string& wanted, std::ostream& log);
+std::unique_ptr<SnowBackend> chooseBackend(BackendChoice wanted, std::ostream& log);
 
 // stage_occlusion.cpp: mode = "occlusion" (Foldes & Benes 2007) in place of the season: the
 // four occlusion fields, the static cover in the state's stable layer, and on a mesh terrain the

@@ -49,7 +49,7 @@ Manifest assembleBakeManifest(const BakeManifestInputs& in) {
   m.coordinateSystem = terrain.info.coordinateSystem;
   m.seed = scene.seed;
   m.backend = in.backendName;
-  m.mode = scene.mode;
+  m.mode = enumName(scene.mode);
   for (const ParameterInfo& info : parameterTable()) m.parameters.push_back({info.key, scene.params.*(info.member)});
   m.occlusion = in.occlusion;
   m.grid = terrain.info.spec;

@@ -27,7 +27,7 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
         for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
       fs::create_directories((fs::path(src_.outDir) / rel).parent_path());
       const WrittenImage img =
-          writeFloatImage((fs::path(src_.outDir) / rel).string(), scene_.outputs.format, full, "value", scene_.outputs.compressionLevel);
+          writeFloatImage((fs::path(src_.outDir) / rel).string(), enumName(scene_.outputs.format), full, "value", scene_.outputs.compressionLevel);
       listFile(img.path, content, unit, floatImageFormat_, day, img.minValue, img.maxValue);
     };
     const Grid<float> zero(spec.width, spec.height, 0.f);

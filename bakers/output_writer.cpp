@@ -36,7 +36,7 @@ std::string OutputWriter::Day::base(const std::string& stem, const std::string& 
 }
 
 OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std::move(sources)), scene_(*src_.scene), log_(log) {
-  floatImageFormat_ = scene_.outputs.format == "exr"
+  floatImageFormat_ = scene_.outputs.format == ImageFormat::Exr
                           ? "OpenEXR, 1 channel float32 (" + exrCompressionName(scene_.outputs.compressionLevel) + "), linear"
                           : "TIFF, 1 channel float32 (zip), linear";
 }
@@ -139,7 +139,7 @@ void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<fl
   auto sized = [&] {
     if (ownSize) currentSink().files.back().width = grid.width(), currentSink().files.back().height = grid.height();
   };
-  const WrittenImage img = writeFloatImage(base, out.format, grid, layer.name, out.compressionLevel);
+  const WrittenImage img = writeFloatImage(base, enumName(out.format), grid, layer.name, out.compressionLevel);
   listFile(img.path, content, layer.unit, floatImageFormat_, d.day, img.minValue, img.maxValue);
   sized();
   for (const std::string& encoding : out.encodings) {
@@ -191,7 +191,7 @@ void OutputWriter::writeDisplacement(const Day& d) {
   for (const std::string what : {"depth", "surface"}) {
     const LayerInfo& layer = *findLayer(what);
     const Grid<float> g = resampleBilinear(layer.compute(LayerInputs{&d.s}), out.displacementWidth, out.displacementHeight);
-    const WrittenImage img = writeFloatImage(d.base("displacement_" + what, src_.outDir), out.format, g, what, out.compressionLevel);
+    const WrittenImage img = writeFloatImage(d.base("displacement_" + what, src_.outDir), enumName(out.format), g, what, out.compressionLevel);
     listFile(img.path,
              std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
                  " over the same extent",

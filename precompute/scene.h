@@ -1,6 +1,7 @@
 // A scene as snowbake understood it: what the scene file (TOML) and the command line asked for,
-// validated and in world units. Parsing lives in scene_file.cpp; the format is documented in
-// README.md ("Scene files").
+// validated and in world units. The keys, their bindings to these members and their documentation
+// are one table (scene_schema.cpp); scene_file.cpp loads and checks; docs/scene.md is generated
+// from the table (snowbake help scene --markdown).
 #pragma once
 #include <array>
 #include <cstdint>
@@ -15,13 +16,14 @@
 #include "core/weather.h"
 #include "fallen_snow.h"
 #include "raster_input.h"
+#include "scene_enums.h"
 #include "terrain_source.h"
 
 namespace snow {
 
 struct OutputRequest {
   std::vector<std::string> layers{"compacted", "stable", "unstable", "powder", "depth"};
-  std::string format = "exr";      // "exr" or "tiff": 32-bit float, one channel, metres
+  ImageFormat format = ImageFormat::Exr;  // 32-bit float, one channel, metres
   std::vector<double> frameDays;   // also write the layers at these days (0 = season start)
   std::vector<std::string> encodings;  // also each layer as png16 / png8 / r16, normalised to its range
   bool multichannelExr = false;        // also all layers as the channels of one EXR (layers.exr)
@@ -61,7 +63,7 @@ struct InitialSnowLayer {
 
 struct EditSpec {
   double day = 0;
-  std::string op;      // add | remove | set | move
+  EditOp op = EditOp::Add;
   std::string layer;   // compacted | stable | unstable | powder
   std::string to;      // move: the layer that receives
   std::optional<double> depthM;
@@ -95,7 +97,7 @@ struct Scene {
   std::string sourceName;   // the scene file path, or "preset:default"
   std::string baseDir;      // folder relative terrain paths are resolved against
   std::string name = "snowbake scene";
-  std::string mode = "season";  // season | occlusion | mesh
+  SceneMode mode = SceneMode::Season;
   OcclusionParameters occlusion;
   MeshSnowScene meshSnow;
   TerrainSource terrain;
@@ -128,9 +130,9 @@ struct Scene {
   OutputRequest outputs;
   bool sunExposure = true;             // precompute.sun: false skips the sun (temperature from altitude alone)
   std::string sunQuality = "draft";    // precompute.sun_quality: draft | production | reference
-  std::string sunMethod = "auto";      // precompute.sun_method: auto (horizon sweep unless occluders) | horizon | embree
+  SunMethod sunMethod = SunMethod::Auto;  // precompute.sun_method: auto = horizon sweep unless occluders
   uint64_t seed = 1;
-  std::string backend = "auto";  // cpu | cuda | auto
+  BackendChoice backend = BackendChoice::Auto;
   int threads = 0;               // 0 = all cores
   std::string canonicalToml;     // the merged, validated document (hashed into the manifest)
 

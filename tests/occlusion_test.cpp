@@ -397,7 +397,7 @@ TEST(Occlusion, SceneFilesKeepEachModesLayersApart) {
   EXPECT_THROW(loadSceneText("mode = \"occlusion\"\n" + t + "[occlusion]\nday = 500\n", "occ.toml", ""), InputError);
   EXPECT_THROW(loadSceneText("mode = \"fast\"\n" + t, "occ.toml", ""), InputError);
   const Scene s = loadSceneText("mode = \"occlusion\"\n" + t + "[occlusion]\ntau_ambient = 0.9\nsun_positions = 12\n", "occ.toml", "");
-  EXPECT_EQ(s.mode, "occlusion");
+  EXPECT_EQ(s.mode, SceneMode::Occlusion);
   EXPECT_DOUBLE_EQ(s.occlusion.tauAmbient, 0.9);
   EXPECT_EQ(s.occlusion.sunPositions, 12);
 }

@@ -104,10 +104,10 @@ TEST(SceneFile, ValidSceneIsUnderstood) {
   EXPECT_DOUBLE_EQ(s.params.meltRateMPerDayPerC, 0.02);
   EXPECT_DOUBLE_EQ(s.params.snowfallRatePerDay, 1e-4);  // untouched default
   EXPECT_EQ(s.outputs.layers, (std::vector<std::string>{"powder", "depth"}));
-  EXPECT_EQ(s.outputs.format, "tiff");
+  EXPECT_EQ(s.outputs.format, ImageFormat::Tiff);
   EXPECT_EQ(s.outputs.frameDays, (std::vector<double>{30, 60}));
   EXPECT_EQ(s.seed, 77u);
-  EXPECT_EQ(s.backend, "cpu");
+  EXPECT_EQ(s.backend, BackendChoice::Cpu);
 }
 
 TEST(SceneFile, UnknownKeyNamesFileLineAndKeyWithASuggestion) {
@@ -182,7 +182,7 @@ TEST(SceneFile, SetOverridesWithTheSameValidation) {
   const Scene s = loadSceneFile(path, {"season.days=30", "run.backend=auto", "parameters.snowfall_rate_per_day=2e-4",
                                        "outputs.frames_days=[10]"});
   EXPECT_DOUBLE_EQ(s.days, 30.0);
-  EXPECT_EQ(s.backend, "auto");  // a bare word is read as a string
+  EXPECT_EQ(s.backend, BackendChoice::Auto);  // a bare word is read as a string
   EXPECT_DOUBLE_EQ(s.params.snowfallRatePerDay, 2e-4);
   EXPECT_EQ(s.outputs.frameDays, (std::vector<double>{10}));
 

@@ -1,0 +1,72 @@
+// The scene's fixed-name settings as enums, each with one name table: the scene file's parser,
+// the error messages, the reference (snowbake help scene) and the manifest all take the names
+// from here, so a name is spelt once.
+#pragma once
+#include <array>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "core/kernels/edit.h"
+
+namespace snow {
+
+enum class SceneMode { Season, Occlusion, Mesh };             // mode
+enum class SunMethod { Auto, Horizon, Embree };               // precompute.sun_method
+enum class BackendChoice { Cpu, Cuda, Auto };                 // run.backend, --backend
+enum class ImageFormat { Exr, Tiff };                         // outputs.format
+
+// EnumNames<E>::table: every value of E with its name, in the order the reference lists them.
+template <class E>
+struct EnumNames;
+
+template <>
+struct EnumNames<SceneMode> {
+  static constexpr std::array<std::pair<SceneMode, std::string_view>, 3> table{
+      {{SceneMode::Season, "season"}, {SceneMode::Occlusion, "occlusion"}, {SceneMode::Mesh, "mesh"}}};
+};
+template <>
+struct EnumNames<SunMethod> {
+  static constexpr std::array<std::pair<SunMethod, std::string_view>, 3> table{
+      {{SunMethod::Auto, "auto"}, {SunMethod::Horizon, "horizon"}, {SunMethod::Embree, "embree"}}};
+};
+template <>
+struct EnumNames<BackendChoice> {
+  static constexpr std::array<std::pair<BackendChoice, std::string_view>, 3> table{
+      {{BackendChoice::Cpu, "cpu"}, {BackendChoice::Cuda, "cuda"}, {BackendChoice::Auto, "auto"}}};
+};
+template <>
+struct EnumNames<ImageFormat> {
+  static constexpr std::array<std::pair<ImageFormat, std::string_view>, 2> table{
+      {{ImageFormat::Exr, "exr"}, {ImageFormat::Tiff, "tiff"}}};
+};
+template <>
+struct EnumNames<EditOp> {  // edits.op (core/kernels/edit.h)
+  static constexpr std::array<std::pair<EditOp, std::string_view>, 4> table{
+      {{EditOp::Add, "add"}, {EditOp::Remove, "remove"}, {EditOp::Set, "set"}, {EditOp::Move, "move"}}};
+};
+
+template <class E>
+std::string enumName(E value) {
+  for (const auto& [v, name] : EnumNames<E>::table)
+    if (v == value) return std::string(name);
+  return "?";
+}
+
+template <class E>
+std::optional<E> enumFromName(std::string_view name) {
+  for (const auto& [v, n] : EnumNames<E>::table)
+    if (n == name) return v;
+  return std::nullopt;
+}
+
+template <class E>
+std::vector<std::string> enumNames() {
+  std::vector<std::string> names;
+  for (const auto& entry : EnumNames<E>::table) names.emplace_back(entry.second);
+  return names;
+}
+
+}  // namespace snow

@@ -1,0 +1,546 @@
+// The scene schema's table (see scene_schema.h). Each rule binds its key to a member (a chain of
+// member pointers into the Scene or an array element), or to a small setter where the value
+// needs converting; its doc string is what docs/scene.md says of the key.
+#include "scene_schema.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+#include <type_traits>
+
+#include "core/errors.h"
+#include "exposure.h"
+
+namespace snow {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// --- reading a checked value into a member, and printing a member's value
+void read(const toml::node& n, double& v) { v = n.value<double>().value(); }
+void read(const toml::node& n, std::optional<double>& v) { v = n.value<double>().value(); }
+void read(const toml::node& n, int& v) { v = static_cast<int>(n.value<int64_t>().value()); }
+void read(const toml::node& n, uint64_t& v) { v = static_cast<uint64_t>(n.value<int64_t>().value()); }
+void read(const toml::node& n, bool& v) { v = n.value<bool>().value(); }
+void read(const toml::node& n, std::string& v) { v = n.value<std::string>().value(); }
+template <class E>
+  requires std::is_enum_v<E>
+void read(const toml::node& n, E& v) {
+  v = enumFromName<E>(n.as_string()->get()).value();  // the rule's choices are the enum's names
+}
+void read(const toml::node& n, std::vector<std::string>& v) {
+  v.clear();
+  for (auto&& e : *n.as_array()) v.push_back(e.as_string()->get());
+}
+void read(const toml::node& n, std::vector<double>& v) {
+  v.clear();
+  for (auto&& e : *n.as_array()) v.push_back(e.value<double>().value());
+}
+
+std::string show(double v) { return numberText(v); }
+std::string show(const std::optional<double>& v) { return v ? show(*v) : "none"; }
+std::string show(int v) { return std::to_string(v); }
+std::string show(uint64_t v) { return std::to_string(v); }
+std::string show(bool v) { return v ? "true" : "false"; }
+std::string show(const std::string& v) { return "\"" + v + "\""; }
+template <class E>
+  requires std::is_enum_v<E>
+std::string show(E v) {
+  return show(enumName(v));
+}
+template <class V>
+std::string show(const std::vector<V>& v) {
+  std::string s = "[";
+  for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + show(v[i]);
+  return s + "]";
+}
+template <class V, size_t N>
+std::string show(const std::array<V, N>& v) {
+  return show(std::vector<V>(v.begin(), v.end()));
+}
+template <class V, size_t N>
+std::string show(const std::optional<std::array<V, N>>& v) {
+  return v ? show(*v) : "none";
+}
+
+// at<T>(&A::b, &B::c, ...): the member obj.*b.*c... of an object of type T.
+template <class T, class... M>
+Bind<T> at(M... members) {
+  return {[=](T& obj, const toml::node& n, const BindContext&) { read(n, (obj .* ... .* members)); },
+          [=](const T& obj) { return show((obj .* ... .* members)); }};
+}
+template <class T>
+Bind<T> custom(std::function<void(T&, const toml::node&, const BindContext&)> set, std::function<std::string(const T&)> show) {
+  return {std::move(set), std::move(show)};
+}
+
+// An array of exactly n numbers (the rule already checked each is a number in range).
+std::vector<double> numbersOf(const toml::node& node, size_t n, const BindContext& c, const std::string& what) {
+  std::vector<double> values;
+  for (auto&& e : *node.as_array()) values.push_back(e.value<double>().value());
+  if (values.size() != n) fail(c.source, node, c.path, what.empty() ? "needs " + std::to_string(n) + " numbers, has " + std::to_string(values.size()) : what);
+  return values;
+}
+bool whole(const std::vector<double>& v) {
+  for (double x : v)
+    if (x != std::floor(x)) return false;
+  return true;
+}
+
+// --- the setters that convert
+Bind<Scene> terrainFile() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext&) {
+        s.terrain.file = resolvePath(n.as_string()->get(), s.baseDir);
+        s.terrain.declaredAt = where(s.sourceName, n.source());
+      },
+      [](const Scene& s) { return show(s.terrain.file); });
+}
+Bind<Scene> terrainBuiltin() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext&) {
+        s.terrain.builtin = true;
+        s.terrain.declaredAt = where(s.sourceName, n.source());
+      },
+      [](const Scene& s) { return s.terrain.builtin ? show(std::string("ridged")) : "none"; });
+}
+Bind<Scene> heightRange() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        const auto r = numbersOf(n, 2, c, "");
+        if (!(r[1] > r[0])) fail(c.source, n, c.path, "needs [lowest, highest] with highest > lowest");
+        s.terrain.heightRangeM = std::array<double, 2>{r[0], r[1]};
+      },
+      [](const Scene& s) { return show(s.terrain.heightRangeM); });
+}
+Bind<Scene> cropWindow() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        const auto r = numbersOf(n, 4, c, "");
+        if (!(r[2] > r[0] && r[3] > r[1]))
+          fail(c.source, n, c.path, "needs [west, north, east, south] metres from the north-west corner, east > west and south > north");
+        s.terrain.cropM = std::array<double, 4>{r[0], r[1], r[2], r[3]};
+      },
+      [](const Scene& s) { return show(s.terrain.cropM); });
+}
+Bind<Scene> resampleSize() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        const auto r = numbersOf(n, 2, c, "");
+        if (!whole(r)) fail(c.source, n, c.path, "needs whole numbers [width, height]");
+        s.terrain.resampleSize = std::array<int, 2>{static_cast<int>(r[0]), static_cast<int>(r[1])};
+      },
+      [](const Scene& s) { return show(s.terrain.resampleSize); });
+}
+Bind<Scene> startDate() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext&) {
+        const auto date = n.is_date() ? std::optional<toml::date>(n.as_date()->get()) : parseDate(n.as_string()->get());
+        s.startYear = date->year, s.startMonth = date->month, s.startDay = date->day;
+      },
+      [](const Scene& s) {
+        char text[16];
+        std::snprintf(text, sizeof text, "%04d-%02d-%02d", s.startYear, s.startMonth, s.startDay);
+        return std::string(text);
+      });
+}
+Bind<Scene> meshParts() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        read(n, s.outputs.meshParts);
+        if (s.outputs.meshParts.empty()) fail(c.source, n, c.path, "needs \"surface\", \"body\" or both");
+      },
+      [](const Scene& s) { return show(s.outputs.meshParts); });
+}
+Bind<Scene> displacementSize() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        std::vector<double> a;
+        read(n, a);
+        if (a.size() != 2 || !whole(a)) fail(c.source, n, c.path, "needs whole numbers [width, height]");
+        s.outputs.displacementWidth = static_cast<int>(a[0]);
+        s.outputs.displacementHeight = static_cast<int>(a[1]);
+      },
+      [](const Scene& s) {
+        return s.outputs.displacementWidth > 0 ? show(std::vector<int>{s.outputs.displacementWidth, s.outputs.displacementHeight}) : "none";
+      });
+}
+Bind<Scene> bedformMask() {
+  return custom<Scene>([](Scene& s, const toml::node& n, const BindContext& c) { s.bedforms.mask = rasterRef(n, c.source, s, c.path); },
+                       [](const Scene& s) { return s.bedforms.mask ? s.bedforms.mask->label() : "none"; });
+}
+Bind<OccluderSource> occluderFile() {
+  return custom<OccluderSource>(
+      [](OccluderSource& o, const toml::node& n, const BindContext& c) {
+        o.file = resolvePath(n.as_string()->get(), c.scene.baseDir);
+        o.declaredAt = where(c.source, n.source());
+        std::error_code ec;
+        if (!std::filesystem::exists(o.file, ec)) fail(c.source, n, c.path, "occluder file '" + o.file + "' does not exist");
+      },
+      [](const OccluderSource& o) { return show(o.file); });
+}
+Bind<OccluderSource> occluderOffset() {
+  return custom<OccluderSource>(
+      [](OccluderSource& o, const toml::node& n, const BindContext& c) {
+        const auto v = numbersOf(n, 3, c, "needs 3 numbers [x, y, z]");
+        o.offsetM = {v[0], v[1], v[2]};
+      },
+      [](const OccluderSource& o) { return show(o.offsetM); });
+}
+template <class T>
+Bind<T> pair(std::optional<std::array<double, 2>> T::*member) {
+  return custom<T>(
+      [member](T& e, const toml::node& n, const BindContext& c) {
+        const auto v = numbersOf(n, 2, c, "needs two numbers");
+        e.*member = std::array<double, 2>{v[0], v[1]};
+      },
+      [member](const T& e) { return show(e.*member); });
+}
+template <class T>
+Bind<T> maskOf(std::optional<RasterRef> T::*member) {
+  return custom<T>([member](T& e, const toml::node& n, const BindContext& c) { e.*member = rasterRef(n, c.source, c.scene, c.path); },
+                   [member](const T& e) { return (e.*member) ? (e.*member)->label() : "none (everywhere)"; });
+}
+
+using S = Scene;
+using OP = OcclusionParameters;
+using MS = MeshSnowScene;
+using TS = TerrainSource;
+using OR = OutputRequest;
+using BF = BedformScene;
+using BP = BedformParameters;
+using KF = WeatherKeyframe;
+using WS = WeatherState;
+using ED = EditSpec;
+using EV = EventSpec;
+const std::vector<std::string> kSnowLayers = {"compacted", "stable", "unstable", "powder"};
+
+}  // namespace
+
+const char* kindName(Kind k) {
+  switch (k) {
+    case Kind::Table: return "a table";
+    case Kind::TableArray: return "an array of tables ([[...]])";
+    case Kind::String: return "a string";
+    case Kind::Number: return "a number";
+    case Kind::Integer: return "an integer";
+    case Kind::Bool: return "true or false";
+    case Kind::Date: return "a date (YYYY-MM-DD)";
+    case Kind::NumberArray: return "an array of numbers";
+    case Kind::StringArray: return "an array of strings";
+    case Kind::Any: return "a value";
+  }
+  return "?";
+}
+
+const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface",
+                                                "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
+                                                "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
+                                                "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit",
+                                                "avalanche_preview", "preview", "ambient_occlusion", "sun_visibility",
+                                                "occlusion_accumulation", "occlusion_dissipation", "ski_tracks", "ski_route_map",
+                                                "bedform_cohesion"};
+// Layers only occlusion mode has.
+const std::vector<std::string> kOcclusionLayers = {"ambient_occlusion", "sun_visibility", "occlusion_accumulation",
+                                                   "occlusion_dissipation"};
+
+namespace {
+
+void topLevelRules(std::vector<Rule>& r) {  // name and mode
+  // clang-format off
+  r.push_back({"name", Kind::String, -kInf, kInf, {}, "", "shown in the log and manifest", at<S>(&S::name)});
+  r.push_back({"mode", Kind::String, -kInf, kInf, enumNames<SceneMode>(), "",
+       "season: the paper's simulated season; occlusion: the static snow cover of Foldes & Benes 2007 instead of a season (README \"Occlusion mode\"); "
+       "mesh: snow on the mesh terrain.file itself, Fearing's model, no grid and no season (README \"Snow on meshes\")", at<S>(&S::mode)});
+  // clang-format on
+}
+
+void meshSnowRules(std::vector<Rule>& r) {  // [mesh_snow]
+  // clang-format off
+  r.push_back({"mesh_snow", Kind::Table, -kInf, kInf, {}, "",
+       "Fearing's snow on meshes: with mode = \"mesh\" on terrain.file; in a season on the [[occluders]] (depth_m is then the terrain's snow round each one; needs outputs.meshes)"});
+  r.push_back({"mesh_snow.depth_m", Kind::Number, 0, 100, {}, "m", "snowfall depth on open flat ground, metres of snow", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::depthM)});
+  r.push_back({"mesh_snow.site_spacing_m", Kind::Number, 1e-4, 100, {}, "m", "the launch-site lattice", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::siteSpacingM)});
+  r.push_back({"mesh_snow.sky_cell_sites", Kind::Integer, 1, 64, {}, "", "sky bucket side, in sites", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::skyCellSites)});
+  r.push_back({"mesh_snow.flakes_per_site", Kind::Integer, 1, 1024, {}, "", "flakes traced from each site", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::flakesPerSite)});
+  r.push_back({"mesh_snow.flutter_mean_m", Kind::Number, 0, 10, {}, "m", "mean of the flakes' sideways step per swirl, N(mean, sigma) truncated at +-3 sigma (the thesis: 1-7 cm)", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::flutterMeanM)});
+  r.push_back({"mesh_snow.flutter_sigma_m", Kind::Number, 0, 10, {}, "m", "sigma of the flakes' sideways step per swirl", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::flutterSigmaM)});
+  r.push_back({"mesh_snow.swirl_height_m", Kind::Number, 1e-4, 100, {}, "m", "a flake's rise per swirl", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::swirlHeightM)});
+  r.push_back({"mesh_snow.max_coverage_diff", Kind::Number, 0, 1, {}, "", "refine lattice cells whose sites' sky coverage differs from a neighbour's by more (1: never)", at<S>(&S::meshSnow, &MS::placement, &FallenSnowSettings::maxCoverageDiff)});
+  r.push_back({"mesh_snow.repose_angle_deg", Kind::Number, 0, 89, {}, "deg", "angle of repose of the snow tops (Kuroiwa's dry snow 40-50 deg, fresh dendritic snow up to 90 deg)", at<S>(&S::meshSnow, &MS::stability, &FallenSnowStability::reposeAngleDeg)});
+  r.push_back({"mesh_snow.transition_width_deg", Kind::Number, 0, 90, {}, "deg", "width of the stochastic transition curve around the repose angle (0: a sharp angle)", at<S>(&S::meshSnow, &MS::stability, &FallenSnowStability::transitionWidthDeg)});
+  r.push_back({"mesh_snow.deposit_rounds", Kind::Integer, 1, 100, {}, "", "the storm laid down in this many rounds, each relaxed", at<S>(&S::meshSnow, &MS::stability, &FallenSnowStability::depositRounds)});
+  r.push_back({"mesh_snow.stop_fraction", Kind::Number, 1e-7, 0.5, {}, "", "a round ends when no site sheds more than this share of its mean deposit in a pass", at<S>(&S::meshSnow, &MS::stability, &FallenSnowStability::stopFraction)});
+  r.push_back({"mesh_snow.max_passes_per_round", Kind::Integer, 1, 10000000, {}, "", "pass limit of a round (the log says when it is hit)", at<S>(&S::meshSnow, &MS::stability, &FallenSnowStability::maxPassesPerRound)});
+  r.push_back({"mesh_snow.connect_angle_deg", Kind::Number, 1, 89, {}, "deg", "steepest base-to-base slope that still joins two sites", at<S>(&S::meshSnow, &MS::stability, &FallenSnowStability::connectAngleDeg)});
+  r.push_back({"mesh_snow.voxel_size_m", Kind::Number, 0, 100, {}, "m", "the snow body's voxels (0: half the site spacing)", at<S>(&S::meshSnow, &MS::body, &MeshSnowBodyOptions::voxelSizeM)});
+  r.push_back({"mesh_snow.smoothing_steps", Kind::Integer, 0, 20, {}, "", "mean-curvature smoothing passes of the level set", at<S>(&S::meshSnow, &MS::body, &MeshSnowBodyOptions::smoothingSteps)});
+  r.push_back({"mesh_snow.adaptivity", Kind::Number, 0, 1, {}, "", "OpenVDB volume-to-mesh adaptivity (0-1: fewer triangles on flat snow)", at<S>(&S::meshSnow, &MS::body, &MeshSnowBodyOptions::adaptivity)});
+  r.push_back({"mesh_snow.density_kg_per_m3", Kind::Number, 1, 1000, {}, "kg/m^3", "density in the VDB's fog volume", at<S>(&S::meshSnow, &MS::body, &MeshSnowBodyOptions::densityKgPerM3)});
+  // clang-format on
+}
+
+void occlusionRules(std::vector<Rule>& r) {  // [occlusion]
+  // clang-format off
+  r.push_back({"occlusion", Kind::Table, -kInf, kInf, {}, "", "settings of mode = \"occlusion\" (Foldes & Benes 2007)"});
+  r.push_back({"occlusion.s_max_m", Kind::Number, 0, 1000, {}, "m", "s_max, the height scale of Eq. 1", at<S>(&S::occlusion, &OP::sMaxM)});
+  r.push_back({"occlusion.tau_ambient", Kind::Number, 0, 10, {}, "", "tau: snow where the ambient occlusion value a is below it (a = 1 on open ground, so above 1 open ground keeps s_max (tau - 1))", at<S>(&S::occlusion, &OP::tauAmbient)});
+  r.push_back({"occlusion.tau_sun", Kind::Number, 0, 10, {}, "", "tau_sun: the sun dissipates snow where it sees the point for more than this fraction of its (luminance-weighted) day; 1 or more: no dissipation", at<S>(&S::occlusion, &OP::tauSun)});
+  r.push_back({"occlusion.sun_positions", Kind::Integer, 0, 1000, {}, "", "sun positions along the day (the paper: about ten)", at<S>(&S::occlusion, &OP::sunPositions)});
+  r.push_back({"occlusion.ao_rays", Kind::Integer, 0, 65536, {}, "", "cosine-weighted rays per point (0: by precompute.sun_quality: 64, 256, 1024)", at<S>(&S::occlusion, &OP::aoRays)});
+  r.push_back({"occlusion.ao_radius_m", Kind::Number, 0, 1e7, {}, "m", "rays longer than this count as open, local occlusion only (0: unlimited)", at<S>(&S::occlusion, &OP::aoRadiusM)});
+  r.push_back({"occlusion.day", Kind::Number, 0, 3650, {}, "day", "the season day whose sun path dissipates the snow", at<S>(&S::occlusion, &OP::day), "the season's middle"});
+  r.push_back({"occlusion.turbidity", Kind::Number, 1.7, 10, {}, "", "clear-sky turbidity of the zenith luminance (2 very clear, 6 hazy)", at<S>(&S::occlusion, &OP::turbidity)});
+  // clang-format on
+}
+
+// [terrain] and [[occluders]] (the builtin terrain's keys after the occluders, where they always were)
+void terrainRules(std::vector<Rule>& r) {
+  // clang-format off
+  r.push_back({"terrain", Kind::Table, -kInf, kInf, {}, "", "the height field (README \"Terrain input\"): exactly one of terrain.file and terrain.builtin"});
+  r.push_back({"terrain.file", Kind::String, -kInf, kInf, {}, "", "a DEM, heightmap, raw file or mesh, relative to the scene file's folder", terrainFile(), "none"});
+  r.push_back({"terrain.builtin", Kind::String, -kInf, kInf, {"ridged"}, "", "the embedded generated range instead of a file", terrainBuiltin()});
+  r.push_back({"terrain.format", Kind::String, -kInf, kInf, {"auto", "dem", "heightmap", "raw", "mesh"}, "",
+       "how to read the file; auto goes by extension (.r16/.r32/.raw raw, .png/.exr heightmap, .obj/.gltf/.glb/.fbx/.ply mesh, anything else a DEM through GDAL; a .tif with heightmap keys is read as a heightmap)", at<S>(&S::terrain, &TS::format)});
+  r.push_back({"terrain.coordinates", Kind::String, -kInf, kInf, {"auto", "geographic", "metres"}, "", "for DEMs with no coordinate system: how to read the cell size", at<S>(&S::terrain, &TS::coordinates)});
+  r.push_back({"terrain.fill_nodata", Kind::Bool, -kInf, kInf, {}, "", "fill NODATA holes instead of masking them out", at<S>(&S::terrain, &TS::fillNodata)});
+  r.push_back({"terrain.height_range_m", Kind::NumberArray, -12000, 12000, {}, "m", "heightmaps and raw files: [low, high], pixel value 0 -> low, 1 -> high", heightRange()});
+  r.push_back({"terrain.height_scale_m", Kind::Number, -1e6, 1e6, {}, "m", "heightmaps and raw files: height = offset + scale x value (instead of a range; 1 when only the offset is given)", at<S>(&S::terrain, &TS::heightScaleM)});
+  r.push_back({"terrain.height_offset_m", Kind::Number, -1e6, 1e6, {}, "m", "heightmaps and raw files: the offset of height = offset + scale x value (0 when only the scale is given)", at<S>(&S::terrain, &TS::heightOffsetM)});
+  r.push_back({"terrain.raw_width", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: columns", at<S>(&S::terrain, &TS::rawWidth)});
+  r.push_back({"terrain.raw_height", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: rows", at<S>(&S::terrain, &TS::rawHeight)});
+  r.push_back({"terrain.byte_order", Kind::String, -kInf, kInf, {"little", "big"}, "", "raw files: byte order", at<S>(&S::terrain, &TS::byteOrder)});
+  r.push_back({"terrain.up_axis", Kind::String, -kInf, kInf, {"z", "y"}, "", "meshes: which axis is up (glTF is y-up)", at<S>(&S::terrain, &TS::upAxis)});
+  r.push_back({"terrain.resample_cell_size_m", Kind::Number, 0.01, 100000, {}, "m", "bake at another cell size (or give terrain.resample_size)", at<S>(&S::terrain, &TS::resampleCellSizeM)});
+  r.push_back({"terrain.crop_m", Kind::NumberArray, 0, 1e8, {}, "m",
+       "bake a window [west, north, east, south]: the cells whose centres lie in it, metres east and south of the grid's north-west corner (before any resampling)", cropWindow()});
+  r.push_back({"terrain.resample_size", Kind::NumberArray, 3, 1 << 20, {}, "cells", "bake at another grid size [width, height] (or give terrain.resample_cell_size_m)", resampleSize()});
+  r.push_back({"occluders", Kind::TableArray, -kInf, kInf, {}, "",
+       "meshes that block the sun (rocks, buildings), in the terrain's local frame: x east from the west edge, y north from the south edge, z altitude, metres; "
+       "with a [mesh_snow] table they get snow bodies of their own (README \"Snow on meshes\")"});
+  r.push_back({"occluders.file", Kind::String, -kInf, kInf, {}, "", "the mesh (OBJ, PLY, glTF/glb, FBX), relative to the scene file's folder", occluderFile(), "required"});
+  r.push_back({"occluders.up_axis", Kind::String, -kInf, kInf, {"z", "y"}, "", "which axis of the mesh is up", at<OccluderSource>(&OccluderSource::upAxis)});
+  r.push_back({"occluders.offset_m", Kind::NumberArray, -1e7, 1e7, {}, "m", "[x, y, z] added to the mesh's vertices (after scaling)", occluderOffset()});
+  r.push_back({"occluders.scale", Kind::Number, 1e-6, 1e6, {}, "", "the mesh's vertices are multiplied by it", at<OccluderSource>(&OccluderSource::scale)});
+  r.push_back({"terrain.size", Kind::Integer, 8, 16384, {}, "cells", "builtin: cells per side", at<S>(&S::terrain, &TS::builtinOptions, &DefaultTerrainOptions::size)});
+  r.push_back({"terrain.cell_size_m", Kind::Number, 0.01, 10000, {}, "m", "cell size of heightmaps, raw files, mesh rasters and the builtin terrain", at<S>(&S::terrain, &TS::cellSizeM),
+       "none (builtin: " + show(DefaultTerrainOptions{}.cellSizeM) + ")"});
+  r.push_back({"terrain.seed", Kind::Integer, 0, 4294967295.0, {}, "", "builtin: the shape of its ridges", at<S>(&S::terrain, &TS::builtinOptions, &DefaultTerrainOptions::seed)});
+  r.push_back({"terrain.min_altitude_m", Kind::Number, -500, 9000, {}, "m", "builtin: its lowest altitude", at<S>(&S::terrain, &TS::builtinOptions, &DefaultTerrainOptions::minAltitudeM)});
+  r.push_back({"terrain.max_altitude_m", Kind::Number, -500, 9000, {}, "m", "builtin: its highest altitude (above terrain.min_altitude_m)", at<S>(&S::terrain, &TS::builtinOptions, &DefaultTerrainOptions::maxAltitudeM)});
+  // clang-format on
+}
+
+void seasonRules(std::vector<Rule>& r) {  // [site], [season] and [weather]
+  // clang-format off
+  r.push_back({"site", Kind::Table, -kInf, kInf, {}, "", "where the terrain lies on the globe (the sun's path)"});
+  r.push_back({"site.latitude_deg", Kind::Number, -90, 90, {}, "deg", "site latitude", at<S>(&S::latitudeDeg), "the DEM's latitude when known, else 45"});
+  r.push_back({"site.longitude_deg", Kind::Number, -180, 180, {}, "deg", "site longitude", at<S>(&S::longitudeDeg)});
+  r.push_back({"season", Kind::Table, -kInf, kInf, {}, "", "when the season starts and how long it runs"});
+  r.push_back({"season.start_date", Kind::Date, -kInf, kInf, {}, "", "first day (a TOML date or \"YYYY-MM-DD\")", startDate()});
+  r.push_back({"season.days", Kind::Number, 0.01, 3650, {}, "day", "season length", at<S>(&S::days)});
+  r.push_back({"weather", Kind::Table, -kInf, kInf, {}, "", "the weather timeline: keyframes and fixed snowfall periods"});
+  r.push_back({"weather.keyframe", Kind::TableArray, -kInf, kInf, {}, "",
+       "weather keyframes in increasing day order, interpolated linearly (wind direction the short way round); an omitted value carries over from the previous keyframe"});
+  r.push_back({"weather.keyframe.day", Kind::Number, 0, 3650, {}, "day", "the keyframe's day", at<KF>(&KF::day), "required"});
+  r.push_back({"weather.keyframe.sea_level_temperature_c", Kind::Number, -80, 60, {}, "degC", "T0, the temperature at sea level", at<KF>(&KF::state, &WS::seaLevelTemperatureC)});
+  r.push_back({"weather.keyframe.wind_direction_deg", Kind::Number, 0, 360, {}, "deg", "where the wind blows from, clockwise from north (270: a westerly)", at<KF>(&KF::state, &WS::windDirectionDeg)});
+  r.push_back({"weather.keyframe.wind_speed_mps", Kind::Number, 0, 100, {}, "m/s", "wind speed at sea level", at<KF>(&KF::state, &WS::windSpeedMps)});
+  r.push_back({"weather.keyframe.snowfall_intensity", Kind::Number, 0, 100, {}, "", "multiplier on k_snow during snowfall", at<KF>(&KF::state, &WS::snowfallIntensity)});
+  r.push_back({"weather.snowfall", Kind::TableArray, -kInf, kInf, {}, "", "fixed snowfall periods; when given they replace the random (Poisson) snowfall starts"});
+  r.push_back({"weather.snowfall.start_day", Kind::Number, 0, 3650, {}, "day", "the snowfall's first day", at<SnowfallPeriod>(&SnowfallPeriod::startDay), "required"});
+  r.push_back({"weather.snowfall.end_day", Kind::Number, 0, 3650, {}, "day", "the snowfall's end (after start_day)", at<SnowfallPeriod>(&SnowfallPeriod::endDay), "required"});
+  // clang-format on
+}
+
+void eventRules(std::vector<Rule>& r) {  // [[events]]
+  // clang-format off
+  r.push_back({"events", Kind::TableArray, -kInf, kInf, {}, "",
+       "events on given days: a storm (type = \"snowfall\") in addition to the weather's snowfall; an avalanche released at a point or in every unstable cell of a mask; "
+       "skiers starting a descent from a point or from cells drawn from a mask (moved as one batch, README \"Skiers\")"});
+  r.push_back({"events.type", Kind::String, -kInf, kInf, {"snowfall", "avalanche", "skier"}, "", "what happens", at<EV>(&EV::type), "required"});
+  r.push_back({"events.count", Kind::Integer, 1, 10000, {}, "", "skiers: how many start together", at<EV>(&EV::count)});
+  r.push_back({"events.position_m", Kind::NumberArray, -1e7, 1e7, {}, "m",
+       "avalanche or skier: [x, y] metres east and south of the grid's north-west corner (a point outside the terrain or on NODATA is refused with the scene's line)", pair<EV>(&EV::positionM)});
+  r.push_back({"events.map_position", Kind::NumberArray, -1e9, 1e9, {}, "m", "avalanche or skier: [easting, northing] in the DEM's own projected coordinates (refused for geographic DEMs)", pair<EV>(&EV::mapPosition)});
+  r.push_back({"events.day", Kind::Number, 0, 3650, {}, "day", "the day it happens", at<EV>(&EV::day), "required"});
+  r.push_back({"events.duration_days", Kind::Number, 0.001, 365, {}, "day", "snowfall: how long the storm lasts (required for a snowfall)", at<EV>(&EV::durationDays)});
+  r.push_back({"events.mask", Kind::Any, -kInf, kInf, {}, "",
+       "avalanche or skier, instead of a point: release every unstable cell inside the mask, or draw each skier's start cell from it (README \"Art direction\")", maskOf<EV>(&EV::mask), "none"});
+  // clang-format on
+}
+
+void artDirectionRules(std::vector<Rule>& r) {  // [masks], [initial_snow], [multipliers] and [[edits]]
+  // clang-format off
+  r.push_back({"masks", Kind::Table, -kInf, kInf, {}, "", "named rasters ([masks.NAME]) that other keys refer to by NAME (README \"Art direction\")"});
+  r.push_back({"masks.*", Kind::Table, -kInf, kInf, {}, "", "a named raster; the name takes letters, digits, '_' and '-'"});
+  r.push_back({"masks.*.file", Kind::String, -kInf, kInf, {}, "", "the raster's path, relative to the scene file's folder", {}, "required"});
+  r.push_back({"masks.*.values", Kind::NumberArray, -1e30, 1e30, {}, "", "[value meaning 0, value meaning 1] of the file's values", {}, "the file's own range"});
+  r.push_back({"masks.*.range", Kind::NumberArray, -1e30, 1e30, {}, "", "[first, second]: what 0 and 1 become", {}, "[0, 1]"});
+  r.push_back({"masks.*.invert", Kind::Bool, -kInf, kInf, {}, "", "use 1 - value", {}, "false"});
+  r.push_back({"initial_snow", Kind::Table, -kInf, kInf, {}, "", "each layer's depth at day 0: metres, a depth raster, or { mask = ..., depth_m = ... } (the depth where the mask is 1)"});
+  for (const auto& layer : kSnowLayers)
+    r.push_back({"initial_snow." + layer, Kind::Any, -kInf, kInf, {}, "m", "the " + layer + " layer's depth at day 0", {}, "0"});
+  r.push_back({"multipliers", Kind::Table, -kInf, kInf, {}, "", "per-cell multiplier rasters over the season (a [masks] name, a file or a table)"});
+  r.push_back({"multipliers.snowfall", Kind::Any, -kInf, kInf, {}, "", "multiplies the snowfall", {}, "1 (none)"});
+  r.push_back({"multipliers.melt", Kind::Any, -kInf, kInf, {}, "", "multiplies the melt", {}, "1 (none)"});
+  r.push_back({"multipliers.wind_erosion", Kind::Any, -kInf, kInf, {}, "", "multiplies the wind erosion", {}, "1 (none)"});
+  r.push_back({"multipliers.avalanche_release", Kind::Any, -kInf, kInf, {}, "", "multiplies the avalanche release probability", {}, "1 (none)"});
+  r.push_back({"multipliers.skier_spawn", Kind::Any, -kInf, kInf, {}, "", "multiplies where automatic skiers start", {}, "1 (none)"});
+  r.push_back({"multipliers.no_snow", Kind::Any, -kInf, kInf, {}, "", "a mask: cells >= 0.5 stay bare", {}, "none"});
+  r.push_back({"edits", Kind::TableArray, -kInf, kInf, {}, "", "change a layer's depth on a given day (applied in day order)"});
+  r.push_back({"edits.day", Kind::Number, 0, 3650, {}, "day", "the day of the edit", at<ED>(&ED::day), "required"});
+  r.push_back({"edits.op", Kind::String, -kInf, kInf, enumNames<EditOp>(), "",
+       "add: L += w d; remove: L -= min(L, w d); set: L = (1 - w) L + w d; move: m = w min(L, d) (w L without depth_m) from layer to to (w: the mask's value)", at<ED>(&ED::op), "required"});
+  r.push_back({"edits.layer", Kind::String, -kInf, kInf, kSnowLayers, "", "the layer edited", at<ED>(&ED::layer), "required"});
+  r.push_back({"edits.to", Kind::String, -kInf, kInf, kSnowLayers, "", "op = \"move\": the layer that receives", at<ED>(&ED::to), "none"});
+  r.push_back({"edits.depth_m", Kind::Number, 0, 10000, {}, "m", "d, the depth (every op but \"move\" needs it)", at<ED>(&ED::depthM)});
+  r.push_back({"edits.mask", Kind::Any, -kInf, kInf, {}, "", "weights w in [0, 1] of the edit", maskOf<ED>(&ED::mask)});
+  // clang-format on
+}
+
+void bedformRules(std::vector<Rule>& r) {  // [bedforms]
+  // clang-format off
+  r.push_back({"bedforms", Kind::Table, -kInf, kInf, {}, "",
+       "the slab-saltation wind-bedform model over the terrain or inside a mask, in place of the layered wind transport there (README \"Wind bedforms\")"});
+  r.push_back({"bedforms.enabled", Kind::Bool, -kInf, kInf, {}, "", "run the bedform model", at<S>(&S::bedforms, &BF::enabled), "true when [bedforms] is given"});
+  r.push_back({"bedforms.mask", Kind::Any, -kInf, kInf, {}, "", "a mask (name from [masks], file or table; cells >= 0.5)", bedformMask(), "whole terrain"});
+  r.push_back({"bedforms.slab_m", Kind::Number, 0.001, 10, {}, "m", "slab thickness, m of snow; tan(repose) x cell size must be at least one slab", at<S>(&S::bedforms, &BF::params, &BP::slabM)});
+  r.push_back({"bedforms.hop_length_m", Kind::Number, 0.01, 1000, {}, "m", "hop length at reference_wind_mps, scaled by the local wind speed", at<S>(&S::bedforms, &BF::params, &BP::hopLengthM)});
+  r.push_back({"bedforms.reference_wind_mps", Kind::Number, 0.1, 100, {}, "m/s", "the wind speed of hop_length_m", at<S>(&S::bedforms, &BF::params, &BP::referenceWindMps)});
+  r.push_back({"bedforms.threshold_wind_mps", Kind::Number, 0, 100, {}, "m/s", "no erosion below it (of loose snow; bonded snow needs more)", at<S>(&S::bedforms, &BF::params, &BP::thresholdWindMps)});
+  r.push_back({"bedforms.deposit_on_snow", Kind::Number, 0.001, 1, {}, "", "p_s, landing probability on snow (the thesis's best Werner barchans)", at<S>(&S::bedforms, &BF::params, &BP::depositSnow)});
+  r.push_back({"bedforms.deposit_on_bare", Kind::Number, 0.001, 1, {}, "", "p_ns, landing probability on bare (slab-free) ground", at<S>(&S::bedforms, &BF::params, &BP::depositBare)});
+  r.push_back({"bedforms.shadow_angle_deg", Kind::Number, 1, 89, {}, "deg", "the wind shadow's angle", at<S>(&S::bedforms, &BF::params, &BP::shadowAngleDeg)});
+  r.push_back({"bedforms.shadow_length_m", Kind::Number, 0, 1000, {}, "m", "how far upwind the shadow test looks", at<S>(&S::bedforms, &BF::params, &BP::shadowLengthM)});
+  r.push_back({"bedforms.repose_angle_deg", Kind::Number, 1, 89, {}, "deg", "angle of repose of the slabs", at<S>(&S::bedforms, &BF::params, &BP::reposeAngleDeg)});
+  r.push_back({"bedforms.speedup_linear", Kind::Number, 0, 100, {}, "",
+       "Momiji's C1: hop speed-up per metre of take-off height above the domain's mean (1.2 is Momiji's 0.4 at Werner's scale; on snow-scale slabs it stopped forms from starting, so it is off)", at<S>(&S::bedforms, &BF::params, &BP::speedupLinear)});
+  r.push_back({"bedforms.speedup_quadratic_per_m", Kind::Number, 0, 100, {}, "1/m", "Momiji's C2, the quadratic speed-up (0.018 is Momiji's 0.002 at Werner's scale; off like C1)", at<S>(&S::bedforms, &BF::params, &BP::speedupQuadraticPerM)});
+  r.push_back({"bedforms.max_slope_deg", Kind::Number, 0, 89, {}, "deg", "the domain: cells whose snow bed is at most this steep", at<S>(&S::bedforms, &BF::params, &BP::maxSlopeDeg)});
+  r.push_back({"bedforms.sintering_per_day", Kind::Number, 0, 1000, {}, "1/day", "cohesion gained per day at 0 degC", at<S>(&S::bedforms, &BF::params, &BP::sinteringPerDay)});
+  r.push_back({"bedforms.sintering_scale_c", Kind::Number, 0.1, 100, {}, "degC", "the sintering rate halves at -scale degC", at<S>(&S::bedforms, &BF::params, &BP::sinteringScaleC)});
+  r.push_back({"bedforms.rounds_per_hour", Kind::Number, 0.01, 3600, {}, "1/h", "polling rounds (each cell once) per hour of wind", at<S>(&S::bedforms, &BF::params, &BP::roundsPerHour)});
+  r.push_back({"bedforms.batches", Kind::Integer, 1, 64, {}, "", "batches a round", at<S>(&S::bedforms, &BF::params, &BP::batches)});
+  r.push_back({"bedforms.periodic", Kind::Bool, -kInf, kInf, {}, "", "wrap around the grid's edges (a tileable window; even sizes)", at<S>(&S::bedforms, &BF::params, &BP::periodic)});
+  // clang-format on
+}
+
+void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [outputs] and [run]
+  // clang-format off
+  r.push_back({"parameters", Kind::Table, -kInf, kInf, {}, "", "any model constant (the table below)"});
+  r.push_back({"precompute", Kind::Table, -kInf, kInf, {}, "", "the sun exposure precompute"});
+  r.push_back({"precompute.sun", Kind::Bool, -kInf, kInf, {}, "", "compute sun exposure (false: temperature from altitude alone)", at<S>(&S::sunExposure)});
+  r.push_back({"precompute.sun_quality", Kind::String, -kInf, kInf, sunQualityNames(), "", "sample counts of the sun exposure (README \"Sun exposure\"), and occlusion mode's ray count", at<S>(&S::sunQuality)});
+  r.push_back({"precompute.sun_method", Kind::String, -kInf, kInf, enumNames<SunMethod>(), "",
+       "auto: the horizon-sweep fast path for pure height fields, Embree rays when the scene has occluders; horizon or embree: that one", at<S>(&S::sunMethod)});
+  r.push_back({"outputs", Kind::Table, -kInf, kInf, {}, "", "what the bake writes (README \"Outputs\")"});
+  r.push_back({"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices, "",
+       "grids to write (a layer the mode does not make is an error; bedform_cohesion needs [bedforms]; ambient_occlusion, sun_visibility, occlusion_accumulation and occlusion_dissipation are occlusion mode's)", at<S>(&S::outputs, &OR::layers)});
+  r.push_back({"outputs.format", Kind::String, -kInf, kInf, enumNames<ImageFormat>(), "", "the layers' image format: 32-bit float, one channel", at<S>(&S::outputs, &OR::format)});
+  r.push_back({"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}, "",
+       "also write each layer normalised to its own range: 16-bit PNG, 8-bit PNG mask, raw 16-bit heightmap (the float file is always written)", at<S>(&S::outputs, &OR::encodings)});
+  r.push_back({"outputs.multichannel_exr", Kind::Bool, -kInf, kInf, {}, "", "also write all layers in one EXR (layers.exr), a channel <layer>.Y each", at<S>(&S::outputs, &OR::multichannelExr)});
+  r.push_back({"outputs.vdb", Kind::Bool, -kInf, kInf, {}, "", "also write the snow body as snow.vdb (OpenVDB)", at<S>(&S::outputs, &OR::vdb)});
+  r.push_back({"outputs.ski_track_factor", Kind::Integer, 1, 16, {}, "", "texels of the ski_tracks texture per simulation cell, each way", at<S>(&S::outputs, &OR::skiTrackFactor)});
+  r.push_back({"outputs.meshes", Kind::StringArray, -kInf, kInf, {"ply", "obj", "glb", "fbx"}, "",
+       "also write meshes in each format (see mesh_parts); occlusion mode on a mesh terrain also writes the input mesh with its vertices raised by their snow (snow_mesh.<ext>)", at<S>(&S::outputs, &OR::meshes)});
+  r.push_back({"outputs.mesh_parts", Kind::StringArray, -kInf, kInf, {"surface", "body"}, "",
+       "surface: the snow-covered surface (snow_surface.<ext>); body: the snow body alone, closed (snow_body.<ext>)", meshParts()});
+  r.push_back({"outputs.mesh_max_error_m", Kind::Number, 0, 10000, {}, "m", "the adaptive triangulation's vertical error bound (0: only exactly planar areas merge)", at<S>(&S::outputs, &OR::meshMaxErrorM)});
+  r.push_back({"outputs.mesh_tile_size_m", Kind::Number, 0, 1e7, {}, "m",
+       "split the surface mesh into square tiles of this size (snow_surface_x<column>_y<row>.<ext>, columns from the west, rows from the north; 0: one file)", at<S>(&S::outputs, &OR::meshTileSizeM)});
+  r.push_back({"outputs.vdb_voxel_size_m", Kind::Number, 0.01, 1000, {}, "m", "the VDB's voxel size", at<S>(&S::outputs, &OR::vdbVoxelSizeM), "the grid's smaller cell size"});
+  r.push_back({"outputs.compression_level", Kind::Integer, 0, 9, {}, "",
+       "deflate effort of the lossless images: PNG's zlib level and EXR's zip level (0: EXR uncompressed; TIFF is always zip at its default level). "
+       "EXR at level 4 is within 0.2 % of level 1's size for 28 % more time; 16-bit PNG at level 6 is 2-16 % smaller than at level 1 for 1.6-4.8 times the time; "
+       "up to level 3 PNG rows take libpng's \"sub\" filter alone, from level 4 libpng chooses per row", at<S>(&S::outputs, &OR::compressionLevel)});
+  r.push_back({"outputs.displacement_size", Kind::NumberArray, 1, 65536, {}, "pixels",
+       "also write displacement_depth and displacement_surface (float, m) resampled bilinearly to [width, height] over the same extent", displacementSize()});
+  r.push_back({"outputs.avalanche_maps", Kind::Bool, -kInf, kInf, {}, "", "write each avalanche's release zone, scour and deposit (avalanches/NNN_*.exr)", at<S>(&S::outputs, &OR::avalancheMaps)});
+  r.push_back({"outputs.avalanche_frame_interval_s", Kind::Number, 0.01, 3600, {}, "s",
+       "write frames of each avalanche's motion at this interval of simulated time (avalanches/NNN/depth.FFFF.exr; implies the maps)", at<S>(&S::outputs, &OR::avalancheFrameIntervalS), "none"});
+  r.push_back({"outputs.frames_days", Kind::NumberArray, 0, 3650, {}, "day", "also write the layers at these days (0: the season's start)", at<S>(&S::outputs, &OR::frameDays)});
+  r.push_back({"run", Kind::Table, -kInf, kInf, {}, "", "how the bake runs"});
+  r.push_back({"run.seed", Kind::Integer, 0, 9.007199254740992e15, {}, "", "random seed", at<S>(&S::seed)});
+  r.push_back({"run.backend", Kind::String, -kInf, kInf, enumNames<BackendChoice>(), "", "compute backend (auto: CUDA when a device works)", at<S>(&S::backend)});
+  r.push_back({"run.threads", Kind::Integer, 0, 4096, {}, "", "CPU threads (0: all cores)", at<S>(&S::threads)});
+  // clang-format on
+}
+
+}  // namespace
+
+// The rules in the order suggestions for misspelt keys were always searched (the reference
+// groups them by sceneSections()).
+const std::vector<Rule>& sceneRules() {
+  static const std::vector<Rule> rules = [] {
+    std::vector<Rule> r;
+    for (auto* group : {topLevelRules, meshSnowRules, occlusionRules, terrainRules, seasonRules, eventRules, artDirectionRules, bedformRules, outputRules})
+      group(r);
+    return r;
+  }();
+  return rules;
+}
+
+const Rule* findRule(std::string path) {
+  // [masks.NAME]: any name, the same keys.
+  if (path.rfind("masks.", 0) == 0) {
+    const size_t end = path.find('.', 6);
+    path = "masks.*" + (end == std::string::npos ? std::string() : path.substr(end));
+  }
+  for (const auto& r : sceneRules())
+    if (r.path == path) return &r;
+  return nullptr;
+}
+
+const std::vector<SceneSection>& sceneSections() {
+  static const std::vector<SceneSection> sections = {
+      {"", "Top level"},
+      {"terrain", "[terrain]"},
+      {"occluders", "[[occluders]]"},
+      {"site", "[site]"},
+      {"season", "[season]"},
+      {"weather", "[weather]"},
+      {"events", "[[events]]"},
+      {"masks", "[masks.NAME]"},
+      {"initial_snow", "[initial_snow]"},
+      {"multipliers", "[multipliers]"},
+      {"edits", "[[edits]]"},
+      {"bedforms", "[bedforms]"},
+      {"mesh_snow", "[mesh_snow]"},
+      {"occlusion", "[occlusion]"},
+      {"precompute", "[precompute]"},
+      {"outputs", "[outputs]"},
+      {"run", "[run]"},
+  };
+  return sections;
+}
+
+std::string where(const std::string& fallbackSource, const toml::source_region& src) {
+  std::ostringstream o;
+  o << (src.path && !src.path->empty() ? *src.path : fallbackSource);
+  if (src.begin.line > 0) o << ":" << src.begin.line;
+  return o.str();
+}
+
+[[noreturn]] void fail(const std::string& source, const toml::node& node, const std::string& key, const std::string& what) {
+  throw InputError(where(source, node.source()) + ": " + key + ": " + what);
+}
+
+std::string numberText(double v) {
+  std::ostringstream o;
+  o << std::setprecision(15) << v;
+  return o.str();
+}
+
+std::optional<toml::date> parseDate(const std::string& s) {
+  int y, m, d;
+  char c1, c2;
+  std::istringstream in(s);
+  if (!(in >> y >> c1 >> m >> c2 >> d) || c1 != '-' || c2 != '-' || m < 1 || m > 12 || d < 1 || d > 31) return {};
+  return toml::date{y, m, d};
+}
+
+}  // namespace snow
