@@ -3,6 +3,7 @@
 //                [--cache-dir DIR] [--no-cache] [--quiet]
 //   snowbake demo [--out DIR]
 //   snowbake info FILE [--json] [--set KEY=VALUE]...
+//   snowbake help scene [--markdown]
 //   snowbake bench [--stage sun|wind|season|avalanche|occlusion|mesh|bedforms|skiers|meshsnow|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
 //                  [--backend cpu|cuda|auto] [--sun-size N] [--csv-dir DIR] [--data DIR]
 //   snowbake --version | --help
@@ -16,6 +17,7 @@
 #include "core/errors.h"
 #include "bake/bake.h"
 #include "bench/bench.h"
+#include "precompute/scene_reference.h"
 #include "tools/info.h"
 
 int main(int argc, char** argv) {
@@ -57,6 +59,12 @@ int main(int argc, char** argv) {
                                         "meshes, whose reading options live in the scene), or builtin:ridged")->required();
   infoCmd->add_flag("--json", infoJson, "Print JSON");
   infoCmd->add_option("--set", infoSets, "Override a scene key (as for bake)");
+
+  std::string helpTopic;
+  bool helpMarkdown = false;
+  CLI::App* helpCmd = app.add_subcommand("help", "Print a reference: `help scene` lists every scene key and model parameter.");
+  helpCmd->add_option("TOPIC", helpTopic, "scene")->required()->check(CLI::IsMember({"scene"}));
+  helpCmd->add_flag("--markdown", helpMarkdown, "As Markdown (docs/scene.md is this output)");
 
   BenchOptions benchOptions;
   std::string benchSizes;
@@ -117,6 +125,8 @@ int main(int argc, char** argv) {
       std::cout << runBench(benchOptions, std::cerr);
     } else if (*infoCmd) {
       std::cout << describeTerrain(infoFile, infoJson, infoSets);
+    } else if (*helpCmd) {
+      std::cout << (helpMarkdown ? sceneReferenceMarkdown() : sceneReferenceText());
     }
   } catch (const InputError& e) {
     std::cerr << "snowbake: error: " << e.what() << "\n";
