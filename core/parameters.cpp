@@ -11,7 +11,7 @@ const std::vector<ParameterInfo>& parameterTable() {
   static const std::vector<ParameterInfo> table = {
       {"lapse_rate_c_per_m", &P::lapseRateCPerM, "degC/m", -0.1, 0.1, "k_t: temperature change per metre of altitude"},
       {"sun_warming_c_per_hour", &P::sunWarmingCPerHour, "degC/h", 0.0, 10.0, "k_i: warming per hour of direct sun"},
-      {"direct_sun_weight_hours", &P::directSunWeightHours, "h", 0.0, 24.0, "k_sun: weight of the direct sun exposure I_sun (README \"Sun exposure and temperature\")"},
+      {"direct_sun_weight_hours", &P::directSunWeightHours, "h", 0.0, 24.0, "k_sun: weight of the direct sun exposure I_sun (docs/precompute.md)"},
       {"sky_ambient_weight_hours", &P::skyAmbientWeightHours, "h", 0.0, 24.0, "k_sky: weight of the sky exposure I_sky"},
       {"indirect_sun_weight_hours", &P::indirectSunWeightHours, "h", 0.0, 24.0, "k_ind: weight of the indirect (reflected) exposure I_ind"},
       {"venturi_per_m", &P::venturiPerM, "1/m", 0.0, 0.1, "k_venturi: wind speed-up per metre of altitude"},

@@ -133,7 +133,7 @@ Terrain loadRawHeightmap(const TerrainSource& src) {
   std::vector<unsigned char> bytes(expected);
   if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(expected)))
     throw InputError(path + ": read failed");
-  const bool big = src.byteOrder == "big";
+  const bool big = src.byteOrder == ByteOrder::Big;
   std::vector<float> values(static_cast<size_t>(src.rawWidth) * src.rawHeight);
   for (size_t i = 0; i < values.size(); ++i) {
     const unsigned char* b = &bytes[i * bytesPerValue];
@@ -152,7 +152,7 @@ Terrain loadRawHeightmap(const TerrainSource& src) {
   Terrain t;
   t.info.source = path;
   t.info.format = "raw";
-  t.info.driver = std::string(is32 ? "raw float32 " : "raw uint16 ") + src.byteOrder + "-endian";
+  t.info.driver = std::string(is32 ? "raw float32 " : "raw uint16 ") + enumName(src.byteOrder) + "-endian";
   fillTerrain(t, values, src.rawWidth, src.rawHeight, mapping, path);
   setMetricSpec(t, cell, src.rawWidth, src.rawHeight);
   t.info.heightMapping = mapping.description + (is32 ? "" : " (16-bit count / 65535)");

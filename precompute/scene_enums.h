@@ -17,6 +17,11 @@ enum class SceneMode { Season, Occlusion, Mesh };             // mode
 enum class SunMethod { Auto, Horizon, Embree };               // precompute.sun_method
 enum class BackendChoice { Cpu, Cuda, Auto };                 // run.backend, --backend
 enum class ImageFormat { Exr, Tiff };                         // outputs.format
+// terrain.format; Builtin is what a terrain.builtin source resolves to, not a terrain.format value.
+enum class TerrainFormat { Auto, Dem, Heightmap, Raw, Mesh, Builtin };
+enum class TerrainCoordinates { Auto, Geographic, Metres };  // terrain.coordinates
+enum class ByteOrder { Little, Big };                         // terrain.byte_order
+enum class EventType { Snowfall, Avalanche, Skier };          // events.type
 
 // EnumNames<E>::table: every value of E with its name, in the order the reference lists them.
 template <class E>
@@ -41,6 +46,26 @@ template <>
 struct EnumNames<ImageFormat> {
   static constexpr std::array<std::pair<ImageFormat, std::string_view>, 2> table{
       {{ImageFormat::Exr, "exr"}, {ImageFormat::Tiff, "tiff"}}};
+};
+template <>
+struct EnumNames<TerrainFormat> {
+  static constexpr std::array<std::pair<TerrainFormat, std::string_view>, 6> table{
+      {{TerrainFormat::Auto, "auto"}, {TerrainFormat::Dem, "dem"}, {TerrainFormat::Heightmap, "heightmap"}, {TerrainFormat::Raw, "raw"},
+       {TerrainFormat::Mesh, "mesh"}, {TerrainFormat::Builtin, "builtin"}}};
+};
+template <>
+struct EnumNames<TerrainCoordinates> {
+  static constexpr std::array<std::pair<TerrainCoordinates, std::string_view>, 3> table{
+      {{TerrainCoordinates::Auto, "auto"}, {TerrainCoordinates::Geographic, "geographic"}, {TerrainCoordinates::Metres, "metres"}}};
+};
+template <>
+struct EnumNames<ByteOrder> {
+  static constexpr std::array<std::pair<ByteOrder, std::string_view>, 2> table{{{ByteOrder::Little, "little"}, {ByteOrder::Big, "big"}}};
+};
+template <>
+struct EnumNames<EventType> {
+  static constexpr std::array<std::pair<EventType, std::string_view>, 3> table{
+      {{EventType::Snowfall, "snowfall"}, {EventType::Avalanche, "avalanche"}, {EventType::Skier, "skier"}}};
 };
 template <>
 struct EnumNames<EditOp> {  // edits.op (core/kernels/edit.h)

@@ -335,7 +335,7 @@ void readEdits(Scene& scene, const toml::table& root, const std::string& source)
 
 // An avalanche or skier event: at a point (grid or map metres) or in a mask, one of them.
 void addPointEvent(Scene& scene, const EventSpec& ev, const toml::table& e, const std::string& source) {
-  const bool skier = ev.type == "skier";
+  const bool skier = ev.type == EventType::Skier;
   const int given = static_cast<int>(ev.positionM.has_value()) + static_cast<int>(ev.mapPosition.has_value()) + static_cast<int>(ev.mask.has_value());
   if (given != 1)
     throw InputError(where(source, e.source()) + ": events: " + (skier ? "a skier" : "an avalanche") +
@@ -363,7 +363,7 @@ void readEvents(Scene& scene, const toml::table& root, const std::string& source
     requireKeys(e, {"type", "day"}, source, "events");
     EventSpec ev;
     applyBindings(ev, e, "events", source, scene);
-    if (ev.type == "avalanche" || ev.type == "skier") {
+    if (ev.type != EventType::Snowfall) {
       addPointEvent(scene, ev, e, source);
       continue;
     }

@@ -121,9 +121,9 @@ std::string sceneReferenceText() {
       if (section == "parameters") o << kParametersIntro << "\n";
     }
     o << "  " << d.path << " (" << d.type;
-    if (!d.range.empty()) o << " " << d.range;
+    if (!d.range.empty()) o << (d.range[0] == '[' ? " in " : ": ") << d.range;
     if (!d.unit.empty()) o << ", " << d.unit;
-    if (!d.defaultValue.empty()) o << ", default " << d.defaultValue;
+    if (!d.defaultValue.empty()) o << (d.defaultValue == "required" ? "; required" : "; default " + d.defaultValue);
     o << ")\n      " << d.doc << "\n";
   }
   return o.str();

@@ -76,11 +76,13 @@ Bind<T> custom(std::function<void(T&, const toml::node&, const BindContext&)> se
   return {std::move(set), std::move(show)};
 }
 
-// An array of exactly n numbers (the rule already checked each is a number in range).
-std::vector<double> numbersOf(const toml::node& node, size_t n, const BindContext& c, const std::string& what) {
+// An array of exactly n numbers (the rule already checked each is a number in range); `what` is
+// the message when the count is wrong (default: how many it needs and has).
+std::vector<double> numbersOf(const toml::node& node, size_t n, const BindContext& c, const std::string& what = {}) {
   std::vector<double> values;
   for (auto&& e : *node.as_array()) values.push_back(e.value<double>().value());
-  if (values.size() != n) fail(c.source, node, c.path, what.empty() ? "needs " + std::to_string(n) + " numbers, has " + std::to_string(values.size()) : what);
+  if (values.size() != n)
+    fail(c.source, node, c.path, what.empty() ? "needs " + std::to_string(n) + " numbers, has " + std::to_string(values.size()) : what);
   return values;
 }
 bool whole(const std::vector<double>& v) {
@@ -92,24 +94,24 @@ bool whole(const std::vector<double>& v) {
 // --- the setters that convert
 Bind<Scene> terrainFile() {
   return custom<Scene>(
-      [](Scene& s, const toml::node& n, const BindContext&) {
+      [](Scene& s, const toml::node& n, const BindContext& c) {
         s.terrain.file = resolvePath(n.as_string()->get(), s.baseDir);
-        s.terrain.declaredAt = where(s.sourceName, n.source());
+        s.terrain.declaredAt = where(c.source, n.source());
       },
       [](const Scene& s) { return show(s.terrain.file); });
 }
 Bind<Scene> terrainBuiltin() {
   return custom<Scene>(
-      [](Scene& s, const toml::node& n, const BindContext&) {
+      [](Scene& s, const toml::node& n, const BindContext& c) {
         s.terrain.builtin = true;
-        s.terrain.declaredAt = where(s.sourceName, n.source());
+        s.terrain.declaredAt = where(c.source, n.source());
       },
       [](const Scene& s) { return s.terrain.builtin ? show(std::string("ridged")) : "none"; });
 }
 Bind<Scene> heightRange() {
   return custom<Scene>(
       [](Scene& s, const toml::node& n, const BindContext& c) {
-        const auto r = numbersOf(n, 2, c, "");
+        const auto r = numbersOf(n, 2, c);
         if (!(r[1] > r[0])) fail(c.source, n, c.path, "needs [lowest, highest] with highest > lowest");
         s.terrain.heightRangeM = std::array<double, 2>{r[0], r[1]};
       },
@@ -118,7 +120,7 @@ Bind<Scene> heightRange() {
 Bind<Scene> cropWindow() {
   return custom<Scene>(
       [](Scene& s, const toml::node& n, const BindContext& c) {
-        const auto r = numbersOf(n, 4, c, "");
+        const auto r = numbersOf(n, 4, c);
         if (!(r[2] > r[0] && r[3] > r[1]))
           fail(c.source, n, c.path, "needs [west, north, east, south] metres from the north-west corner, east > west and south > north");
         s.terrain.cropM = std::array<double, 4>{r[0], r[1], r[2], r[3]};
@@ -128,7 +130,7 @@ Bind<Scene> cropWindow() {
 Bind<Scene> resampleSize() {
   return custom<Scene>(
       [](Scene& s, const toml::node& n, const BindContext& c) {
-        const auto r = numbersOf(n, 2, c, "");
+        const auto r = numbersOf(n, 2, c);
         if (!whole(r)) fail(c.source, n, c.path, "needs whole numbers [width, height]");
         s.terrain.resampleSize = std::array<int, 2>{static_cast<int>(r[0]), static_cast<int>(r[1])};
       },
@@ -215,6 +217,13 @@ using KF = WeatherKeyframe;
 using WS = WeatherState;
 using ED = EditSpec;
 using EV = EventSpec;
+// terrain.format's choices: every TerrainFormat but Builtin (that is terrain.builtin's).
+std::vector<std::string> terrainFormatChoices() {
+  std::vector<std::string> names = enumNames<TerrainFormat>();
+  std::erase(names, enumName(TerrainFormat::Builtin));
+  return names;
+}
+
 const std::vector<std::string> kSnowLayers = {"compacted", "stable", "unstable", "powder"};
 
 }  // namespace
@@ -252,8 +261,8 @@ void topLevelRules(std::vector<Rule>& r) {  // name and mode
   // clang-format off
   r.push_back({"name", Kind::String, -kInf, kInf, {}, "", "shown in the log and manifest", at<S>(&S::name)});
   r.push_back({"mode", Kind::String, -kInf, kInf, enumNames<SceneMode>(), "",
-       "season: the paper's simulated season; occlusion: the static snow cover of Foldes & Benes 2007 instead of a season (README \"Occlusion mode\"); "
-       "mesh: snow on the mesh terrain.file itself, Fearing's model, no grid and no season (README \"Snow on meshes\")", at<S>(&S::mode)});
+       "season: the paper's simulated season; occlusion: the static snow cover of Foldes & Benes 2007 instead of a season (docs/models/occlusion.md); "
+       "mesh: snow on the mesh terrain.file itself, Fearing's model, no grid and no season (docs/models/snow-on-meshes.md)", at<S>(&S::mode)});
   // clang-format on
 }
 
@@ -299,19 +308,19 @@ void occlusionRules(std::vector<Rule>& r) {  // [occlusion]
 // [terrain] and [[occluders]] (the builtin terrain's keys after the occluders, where they always were)
 void terrainRules(std::vector<Rule>& r) {
   // clang-format off
-  r.push_back({"terrain", Kind::Table, -kInf, kInf, {}, "", "the height field (README \"Terrain input\"): exactly one of terrain.file and terrain.builtin"});
+  r.push_back({"terrain", Kind::Table, -kInf, kInf, {}, "", "the height field (docs/terrain.md): exactly one of terrain.file and terrain.builtin"});
   r.push_back({"terrain.file", Kind::String, -kInf, kInf, {}, "", "a DEM, heightmap, raw file or mesh, relative to the scene file's folder", terrainFile(), "none"});
   r.push_back({"terrain.builtin", Kind::String, -kInf, kInf, {"ridged"}, "", "the embedded generated range instead of a file", terrainBuiltin()});
-  r.push_back({"terrain.format", Kind::String, -kInf, kInf, {"auto", "dem", "heightmap", "raw", "mesh"}, "",
+  r.push_back({"terrain.format", Kind::String, -kInf, kInf, terrainFormatChoices(), "",
        "how to read the file; auto goes by extension (.r16/.r32/.raw raw, .png/.exr heightmap, .obj/.gltf/.glb/.fbx/.ply mesh, anything else a DEM through GDAL; a .tif with heightmap keys is read as a heightmap)", at<S>(&S::terrain, &TS::format)});
-  r.push_back({"terrain.coordinates", Kind::String, -kInf, kInf, {"auto", "geographic", "metres"}, "", "for DEMs with no coordinate system: how to read the cell size", at<S>(&S::terrain, &TS::coordinates)});
+  r.push_back({"terrain.coordinates", Kind::String, -kInf, kInf, enumNames<TerrainCoordinates>(), "", "for DEMs with no coordinate system: how to read the cell size", at<S>(&S::terrain, &TS::coordinates)});
   r.push_back({"terrain.fill_nodata", Kind::Bool, -kInf, kInf, {}, "", "fill NODATA holes instead of masking them out", at<S>(&S::terrain, &TS::fillNodata)});
   r.push_back({"terrain.height_range_m", Kind::NumberArray, -12000, 12000, {}, "m", "heightmaps and raw files: [low, high], pixel value 0 -> low, 1 -> high", heightRange()});
   r.push_back({"terrain.height_scale_m", Kind::Number, -1e6, 1e6, {}, "m", "heightmaps and raw files: height = offset + scale x value (instead of a range; 1 when only the offset is given)", at<S>(&S::terrain, &TS::heightScaleM)});
   r.push_back({"terrain.height_offset_m", Kind::Number, -1e6, 1e6, {}, "m", "heightmaps and raw files: the offset of height = offset + scale x value (0 when only the scale is given)", at<S>(&S::terrain, &TS::heightOffsetM)});
-  r.push_back({"terrain.raw_width", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: columns", at<S>(&S::terrain, &TS::rawWidth)});
-  r.push_back({"terrain.raw_height", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: rows", at<S>(&S::terrain, &TS::rawHeight)});
-  r.push_back({"terrain.byte_order", Kind::String, -kInf, kInf, {"little", "big"}, "", "raw files: byte order", at<S>(&S::terrain, &TS::byteOrder)});
+  r.push_back({"terrain.raw_width", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: columns", at<S>(&S::terrain, &TS::rawWidth), "required for raw files"});
+  r.push_back({"terrain.raw_height", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: rows", at<S>(&S::terrain, &TS::rawHeight), "required for raw files"});
+  r.push_back({"terrain.byte_order", Kind::String, -kInf, kInf, enumNames<ByteOrder>(), "", "raw files: byte order", at<S>(&S::terrain, &TS::byteOrder)});
   r.push_back({"terrain.up_axis", Kind::String, -kInf, kInf, {"z", "y"}, "", "meshes: which axis is up (glTF is y-up)", at<S>(&S::terrain, &TS::upAxis)});
   r.push_back({"terrain.resample_cell_size_m", Kind::Number, 0.01, 100000, {}, "m", "bake at another cell size (or give terrain.resample_size)", at<S>(&S::terrain, &TS::resampleCellSizeM)});
   r.push_back({"terrain.crop_m", Kind::NumberArray, 0, 1e8, {}, "m",
@@ -319,7 +328,7 @@ void terrainRules(std::vector<Rule>& r) {
   r.push_back({"terrain.resample_size", Kind::NumberArray, 3, 1 << 20, {}, "cells", "bake at another grid size [width, height] (or give terrain.resample_cell_size_m)", resampleSize()});
   r.push_back({"occluders", Kind::TableArray, -kInf, kInf, {}, "",
        "meshes that block the sun (rocks, buildings), in the terrain's local frame: x east from the west edge, y north from the south edge, z altitude, metres; "
-       "with a [mesh_snow] table they get snow bodies of their own (README \"Snow on meshes\")"});
+       "with a [mesh_snow] table they get snow bodies of their own (docs/models/snow-on-meshes.md)"});
   r.push_back({"occluders.file", Kind::String, -kInf, kInf, {}, "", "the mesh (OBJ, PLY, glTF/glb, FBX), relative to the scene file's folder", occluderFile(), "required"});
   r.push_back({"occluders.up_axis", Kind::String, -kInf, kInf, {"z", "y"}, "", "which axis of the mesh is up", at<OccluderSource>(&OccluderSource::upAxis)});
   r.push_back({"occluders.offset_m", Kind::NumberArray, -1e7, 1e7, {}, "m", "[x, y, z] added to the mesh's vertices (after scaling)", occluderOffset()});
@@ -359,8 +368,8 @@ void eventRules(std::vector<Rule>& r) {  // [[events]]
   // clang-format off
   r.push_back({"events", Kind::TableArray, -kInf, kInf, {}, "",
        "events on given days: a storm (type = \"snowfall\") in addition to the weather's snowfall; an avalanche released at a point or in every unstable cell of a mask; "
-       "skiers starting a descent from a point or from cells drawn from a mask (moved as one batch, README \"Skiers\")"});
-  r.push_back({"events.type", Kind::String, -kInf, kInf, {"snowfall", "avalanche", "skier"}, "", "what happens", at<EV>(&EV::type), "required"});
+       "skiers starting a descent from a point or from cells drawn from a mask (moved as one batch, docs/models/skiers.md)"});
+  r.push_back({"events.type", Kind::String, -kInf, kInf, enumNames<EventType>(), "", "what happens", at<EV>(&EV::type), "required"});
   r.push_back({"events.count", Kind::Integer, 1, 10000, {}, "", "skiers: how many start together", at<EV>(&EV::count)});
   r.push_back({"events.position_m", Kind::NumberArray, -1e7, 1e7, {}, "m",
        "avalanche or skier: [x, y] metres east and south of the grid's north-west corner (a point outside the terrain or on NODATA is refused with the scene's line)", pair<EV>(&EV::positionM)});
@@ -368,13 +377,13 @@ void eventRules(std::vector<Rule>& r) {  // [[events]]
   r.push_back({"events.day", Kind::Number, 0, 3650, {}, "day", "the day it happens", at<EV>(&EV::day), "required"});
   r.push_back({"events.duration_days", Kind::Number, 0.001, 365, {}, "day", "snowfall: how long the storm lasts (required for a snowfall)", at<EV>(&EV::durationDays)});
   r.push_back({"events.mask", Kind::Any, -kInf, kInf, {}, "",
-       "avalanche or skier, instead of a point: release every unstable cell inside the mask, or draw each skier's start cell from it (README \"Art direction\")", maskOf<EV>(&EV::mask), "none"});
+       "avalanche or skier, instead of a point: release every unstable cell inside the mask, or draw each skier's start cell from it (docs/models/art-direction.md)", maskOf<EV>(&EV::mask), "none"});
   // clang-format on
 }
 
 void artDirectionRules(std::vector<Rule>& r) {  // [masks], [initial_snow], [multipliers] and [[edits]]
   // clang-format off
-  r.push_back({"masks", Kind::Table, -kInf, kInf, {}, "", "named rasters ([masks.NAME]) that other keys refer to by NAME (README \"Art direction\")"});
+  r.push_back({"masks", Kind::Table, -kInf, kInf, {}, "", "named rasters ([masks.NAME]) that other keys refer to by NAME (docs/models/art-direction.md)"});
   r.push_back({"masks.*", Kind::Table, -kInf, kInf, {}, "", "a named raster; the name takes letters, digits, '_' and '-'"});
   r.push_back({"masks.*.file", Kind::String, -kInf, kInf, {}, "", "the raster's path, relative to the scene file's folder", {}, "required"});
   r.push_back({"masks.*.values", Kind::NumberArray, -1e30, 1e30, {}, "", "[value meaning 0, value meaning 1] of the file's values", {}, "the file's own range"});
@@ -404,7 +413,7 @@ void artDirectionRules(std::vector<Rule>& r) {  // [masks], [initial_snow], [mul
 void bedformRules(std::vector<Rule>& r) {  // [bedforms]
   // clang-format off
   r.push_back({"bedforms", Kind::Table, -kInf, kInf, {}, "",
-       "the slab-saltation wind-bedform model over the terrain or inside a mask, in place of the layered wind transport there (README \"Wind bedforms\")"});
+       "the slab-saltation wind-bedform model over the terrain or inside a mask, in place of the layered wind transport there (docs/models/bedforms.md)"});
   r.push_back({"bedforms.enabled", Kind::Bool, -kInf, kInf, {}, "", "run the bedform model", at<S>(&S::bedforms, &BF::enabled), "true when [bedforms] is given"});
   r.push_back({"bedforms.mask", Kind::Any, -kInf, kInf, {}, "", "a mask (name from [masks], file or table; cells >= 0.5)", bedformMask(), "whole terrain"});
   r.push_back({"bedforms.slab_m", Kind::Number, 0.001, 10, {}, "m", "slab thickness, m of snow; tan(repose) x cell size must be at least one slab", at<S>(&S::bedforms, &BF::params, &BP::slabM)});
@@ -430,13 +439,13 @@ void bedformRules(std::vector<Rule>& r) {  // [bedforms]
 
 void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [outputs] and [run]
   // clang-format off
-  r.push_back({"parameters", Kind::Table, -kInf, kInf, {}, "", "any model constant (the table below)"});
+  r.push_back({"parameters", Kind::Table, -kInf, kInf, {}, "", "the model constants: any key of this table, a number each"});
   r.push_back({"precompute", Kind::Table, -kInf, kInf, {}, "", "the sun exposure precompute"});
   r.push_back({"precompute.sun", Kind::Bool, -kInf, kInf, {}, "", "compute sun exposure (false: temperature from altitude alone)", at<S>(&S::sunExposure)});
-  r.push_back({"precompute.sun_quality", Kind::String, -kInf, kInf, sunQualityNames(), "", "sample counts of the sun exposure (README \"Sun exposure\"), and occlusion mode's ray count", at<S>(&S::sunQuality)});
+  r.push_back({"precompute.sun_quality", Kind::String, -kInf, kInf, sunQualityNames(), "", "sample counts of the sun exposure (docs/precompute.md), and occlusion mode's ray count", at<S>(&S::sunQuality)});
   r.push_back({"precompute.sun_method", Kind::String, -kInf, kInf, enumNames<SunMethod>(), "",
        "auto: the horizon-sweep fast path for pure height fields, Embree rays when the scene has occluders; horizon or embree: that one", at<S>(&S::sunMethod)});
-  r.push_back({"outputs", Kind::Table, -kInf, kInf, {}, "", "what the bake writes (README \"Outputs\")"});
+  r.push_back({"outputs", Kind::Table, -kInf, kInf, {}, "", "what the bake writes (docs/outputs.md)"});
   r.push_back({"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices, "",
        "grids to write (a layer the mode does not make is an error; bedform_cohesion needs [bedforms]; ambient_occlusion, sun_visibility, occlusion_accumulation and occlusion_dissipation are occlusion mode's)", at<S>(&S::outputs, &OR::layers)});
   r.push_back({"outputs.format", Kind::String, -kInf, kInf, enumNames<ImageFormat>(), "", "the layers' image format: 32-bit float, one channel", at<S>(&S::outputs, &OR::format)});

@@ -31,7 +31,7 @@ struct BindContext {
 
 // One [[events]] entry as written; readEvents turns it into a snowfall, an avalanche or a skier.
 struct EventSpec {
-  std::string type;
+  EventType type = EventType::Snowfall;
   double day = 0;
   int count = 1;
   std::optional<std::array<double, 2>> positionM, mapPosition;

@@ -71,7 +71,7 @@ void updateTerrainStatistics(Terrain& t) {
   t.info.spec.height = t.heightsM.height();
 }
 
-Terrain loadDem(const std::string& path, const std::string& coordinates) {
+Terrain loadDem(const std::string& path, TerrainCoordinates coordinates) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": terrain file does not exist");
   if (std::filesystem::file_size(path, ec) == 0) throw InputError(path + ": terrain file is empty");
@@ -106,8 +106,8 @@ Terrain loadDem(const std::string& path, const std::string& coordinates) {
   const OGRSpatialReference* srs = ds->GetSpatialRef();
   bool geographic = false;
   const bool hasSrs = srs && !srs->IsEmpty();
-  if (hasSrs && coordinates != "auto")
-    throw InputError(path + ": terrain.coordinates = \"" + coordinates +
+  if (hasSrs && coordinates != TerrainCoordinates::Auto)
+    throw InputError(path + ": terrain.coordinates = \"" + enumName(coordinates) +
                      "\" only applies to files without a coordinate system; this one has " +
                      (srs->GetName() ? srs->GetName() : "one"));
   if (hasSrs) {
@@ -139,11 +139,11 @@ Terrain loadDem(const std::string& path, const std::string& coordinates) {
     const double east = west + sizeX * w, south = north - sizeY * h;
     const bool looksLikeDegrees = sizeX < 0.1 && sizeY < 0.1 && west >= -180.0 && east <= 180.0 && south >= -90.0 &&
                                   north <= 90.0 && hasTransform;
-    if (coordinates == "geographic") {
+    if (coordinates == TerrainCoordinates::Geographic) {
       geographic = true;
       info.coordinateSystem = "none in the file; geographic (degrees) as the scene says";
       info.coordinateDecision = "terrain.coordinates = \"geographic\"";
-    } else if (coordinates == "metres") {
+    } else if (coordinates == TerrainCoordinates::Metres) {
       info.coordinateSystem = "none in the file; metres as the scene says";
       info.coordinateDecision = "terrain.coordinates = \"metres\"";
       info.nativeUnit = "metre";
@@ -235,38 +235,38 @@ Terrain makeBuiltinTerrain(const DefaultTerrainOptions& options) {
 
 namespace snow {
 
-std::string detectTerrainFormat(const TerrainSource& src) {
-  if (src.builtin) return "builtin";
-  if (src.format != "auto") return src.format;
+TerrainFormat detectTerrainFormat(const TerrainSource& src) {
+  if (src.builtin) return TerrainFormat::Builtin;
+  if (src.format != TerrainFormat::Auto) return src.format;
   std::string ext = std::filesystem::path(src.file).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (ext == ".r16" || ext == ".r32" || ext == ".raw") return "raw";
-  if (ext == ".png" || ext == ".exr") return "heightmap";
+  if (ext == ".r16" || ext == ".r32" || ext == ".raw") return TerrainFormat::Raw;
+  if (ext == ".png" || ext == ".exr") return TerrainFormat::Heightmap;
   if (ext == ".obj" || ext == ".gltf" || ext == ".glb" || ext == ".fbx" || ext == ".ply" || ext == ".stl" || ext == ".dae")
-    return "mesh";
-  if ((ext == ".tif" || ext == ".tiff") && src.hasHeightmapKeys()) return "heightmap";
-  return "dem";
+    return TerrainFormat::Mesh;
+  if ((ext == ".tif" || ext == ".tiff") && src.hasHeightmapKeys()) return TerrainFormat::Heightmap;
+  return TerrainFormat::Dem;
 }
 
 Terrain loadTerrain(const TerrainSource& src) {
-  const std::string format = detectTerrainFormat(src);
+  const TerrainFormat format = detectTerrainFormat(src);
   Terrain t;
-  if (format == "builtin") {
+  if (format == TerrainFormat::Builtin) {
     t = makeBuiltinTerrain(src.builtinOptions);
-  } else if (format == "dem") {
+  } else if (format == TerrainFormat::Dem) {
     if (src.cellSizeM)
       throw InputError(src.file + ": a DEM carries its own cell size: use terrain.resample_cell_size_m to bake at another one");
     if (src.hasHeightmapKeys())
       throw InputError(src.file + ": terrain.height_range_m/height_scale_m apply to heightmaps; set terrain.format = \"heightmap\"");
     t = loadDem(src.file, src.coordinates);
-  } else if (format == "heightmap") {
+  } else if (format == TerrainFormat::Heightmap) {
     t = loadHeightmapImage(src);
-  } else if (format == "raw") {
+  } else if (format == TerrainFormat::Raw) {
     t = loadRawHeightmap(src);
-  } else if (format == "mesh") {
+  } else if (format == TerrainFormat::Mesh) {
     t = loadMeshTerrain(src);
   } else {
-    throw InputError(src.file + ": unknown terrain.format '" + format + "'");
+    throw InputError(src.file + ": unknown terrain.format '" + enumName(format) + "'");
   }
   if (src.fillNodata && t.info.nodataCells > 0) fillNodata(t);
   if (src.cropM) t = cropTerrain(t, src);

@@ -45,13 +45,13 @@ struct Terrain {
   TerrainInfo info;
 };
 
-// What terrain.format "auto" resolves to for a path.
-std::string detectTerrainFormat(const TerrainSource& source);
+// What terrain.format "auto" resolves to for a path (Builtin for terrain.builtin; never Auto).
+TerrainFormat detectTerrainFormat(const TerrainSource& source);
 
 // Reads the terrain the source describes, fills or masks NODATA, resamples if asked.
 Terrain loadTerrain(const TerrainSource& source);
 
-Terrain loadDem(const std::string& path, const std::string& coordinates = "auto");
+Terrain loadDem(const std::string& path, TerrainCoordinates coordinates = TerrainCoordinates::Auto);
 Terrain loadHeightmapImage(const TerrainSource& source);
 Terrain loadRawHeightmap(const TerrainSource& source);
 Terrain loadMeshTerrain(const TerrainSource& source);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/default_terrain.h"
+#include "scene_enums.h"
 
 namespace snow {
 
@@ -18,15 +19,15 @@ struct TerrainSource {
 
   // "auto" picks by extension: .r16/.r32/.raw raw, .png/.exr heightmap, .obj/.gltf/.glb/.fbx/.ply
   // mesh, anything else a DEM through GDAL (a .tif with heightmap keys is read as a heightmap).
-  std::string format = "auto";        // auto | dem | heightmap | raw | mesh
-  std::string coordinates = "auto";   // DEMs without a coordinate system: auto | geographic | metres
+  TerrainFormat format = TerrainFormat::Auto;
+  TerrainCoordinates coordinates = TerrainCoordinates::Auto;  // DEMs without a coordinate system
   bool fillNodata = false;            // fill NODATA holes instead of masking them out
   std::optional<double> cellSizeM;    // heightmaps, raw files and meshes (and builtin)
   std::optional<std::array<double, 2>> heightRangeM;  // pixel value 0..1 -> [min, max] metres
   std::optional<double> heightScaleM;   // height = offset + scale * value
   std::optional<double> heightOffsetM;
   int rawWidth = 0, rawHeight = 0;      // raw files
-  std::string byteOrder = "little";     // raw files: little | big
+  ByteOrder byteOrder = ByteOrder::Little;  // raw files
   std::string upAxis = "z";             // meshes: z | y (glTF is y-up)
   // A window [west, north, east, south] in metres east and south of the grid's north-west corner:
   // the cells whose centres lie inside it (applied before resampling).

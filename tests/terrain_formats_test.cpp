@@ -206,7 +206,7 @@ TEST(TerrainFormats, FloatTiffAndExrHeightsInMetres) {
     TerrainSource src;
     src.file = dir / name;
     src.cellSizeM = kCell;
-    if (std::string(name) == "hill.tif") src.format = "heightmap";  // a .tif is a DEM unless told
+    if (std::string(name) == "hill.tif") src.format = TerrainFormat::Heightmap;  // a .tif is a DEM unless told
     const Terrain t = loadTerrain(src);
     SCOPED_TRACE(name);
     expectHill(t, 1e-3);
@@ -223,7 +223,7 @@ TEST(TerrainFormats, RawR16BothByteOrdersAndR32) {
     src.cellSizeM = kCell;
     src.rawWidth = kW;
     src.rawHeight = kH;
-    src.byteOrder = big ? "big" : "little";
+    src.byteOrder = big ? ByteOrder::Big : ByteOrder::Little;
     src.heightRangeM = std::array<double, 2>{900.0, 1700.0};
     SCOPED_TRACE(path);
     expectHill(loadTerrain(src), 800.0 / 65535.0 * 0.51 + 1e-4);

@@ -30,9 +30,9 @@ std::string describeTerrain(const std::string& source, bool json, const std::vec
     src.file = source;
     std::error_code ec;
     if (!fs::exists(source, ec)) throw InputError(source + ": terrain file does not exist");
-    const std::string format = detectTerrainFormat(src);
-    if (format != "dem")
-      throw InputError(source + ": a " + format + " file needs its cell size (and height mapping) from a scene: run "
+    const TerrainFormat format = detectTerrainFormat(src);
+    if (format != TerrainFormat::Dem)
+      throw InputError(source + ": a " + enumName(format) + " file needs its cell size (and height mapping) from a scene: run "
                        "`snowbake info SCENE.toml` with a scene whose [terrain] names it");
     t = loadTerrain(src);
   }
