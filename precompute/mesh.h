@@ -20,7 +20,7 @@ struct TriangleMesh {
 
 // Reads every mesh of the file with node transforms applied; y-up files are turned z-up
 // ((x, y, z) -> (x, -z, y)); then scaled and offset. Throws InputError naming the file.
-TriangleMesh loadTriangleMesh(const std::string& path, const std::string& upAxis, double scale = 1.0,
+TriangleMesh loadTriangleMesh(const std::string& path, UpAxis upAxis, double scale = 1.0,
                               const std::array<double, 3>& offsetM = {0.0, 0.0, 0.0});
 
 std::vector<TriangleMesh> loadOccluders(const std::vector<OccluderSource>& occluders);

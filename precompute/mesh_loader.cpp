@@ -14,7 +14,7 @@
 
 namespace snow {
 
-TriangleMesh loadTriangleMesh(const std::string& path, const std::string& upAxis, double scale,
+TriangleMesh loadTriangleMesh(const std::string& path, UpAxis upAxis, double scale,
                               const std::array<double, 3>& offsetM) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": mesh file does not exist");
@@ -27,7 +27,7 @@ TriangleMesh loadTriangleMesh(const std::string& path, const std::string& upAxis
   TriangleMesh mesh;
   mesh.source = path;
   mesh.importer = "assimp";
-  const bool yUp = upAxis == "y";
+  const bool yUp = upAxis == UpAxis::Y;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* am = scene->mMeshes[m];
     if (!(am->mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
@@ -113,7 +113,7 @@ Terrain loadMeshTerrain(const TerrainSource& src) {
   }
   t.info.source = path;
   t.info.format = "mesh";
-  t.info.driver = "assimp, " + std::to_string(mesh.triangles.size()) + " triangles, " + src.upAxis + "-up";
+  t.info.driver = "assimp, " + std::to_string(mesh.triangles.size()) + " triangles, " + enumName(src.upAxis) + "-up";
   t.info.spec.width = static_cast<int>(w);
   t.info.spec.height = static_cast<int>(h);
   t.info.spec.cellSizeXM = t.info.spec.cellSizeYM = cell;

@@ -22,6 +22,7 @@ enum class TerrainFormat { Auto, Dem, Heightmap, Raw, Mesh, Builtin };
 enum class TerrainCoordinates { Auto, Geographic, Metres };  // terrain.coordinates
 enum class ByteOrder { Little, Big };                         // terrain.byte_order
 enum class EventType { Snowfall, Avalanche, Skier };          // events.type
+enum class UpAxis { Z, Y };                                   // terrain.up_axis, occluders.up_axis: a mesh's up
 
 // EnumNames<E>::table: every value of E with its name, in the order the reference lists them.
 template <class E>
@@ -61,6 +62,10 @@ struct EnumNames<TerrainCoordinates> {
 template <>
 struct EnumNames<ByteOrder> {
   static constexpr std::array<std::pair<ByteOrder, std::string_view>, 2> table{{{ByteOrder::Little, "little"}, {ByteOrder::Big, "big"}}};
+};
+template <>
+struct EnumNames<UpAxis> {
+  static constexpr std::array<std::pair<UpAxis, std::string_view>, 2> table{{{UpAxis::Z, "z"}, {UpAxis::Y, "y"}}};
 };
 template <>
 struct EnumNames<EventType> {

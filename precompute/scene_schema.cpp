@@ -321,7 +321,7 @@ void terrainRules(std::vector<Rule>& r) {
   r.push_back({"terrain.raw_width", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: columns", at<S>(&S::terrain, &TS::rawWidth), "required for raw files"});
   r.push_back({"terrain.raw_height", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: rows", at<S>(&S::terrain, &TS::rawHeight), "required for raw files"});
   r.push_back({"terrain.byte_order", Kind::String, -kInf, kInf, enumNames<ByteOrder>(), "", "raw files: byte order", at<S>(&S::terrain, &TS::byteOrder)});
-  r.push_back({"terrain.up_axis", Kind::String, -kInf, kInf, {"z", "y"}, "", "meshes: which axis is up (glTF is y-up)", at<S>(&S::terrain, &TS::upAxis)});
+  r.push_back({"terrain.up_axis", Kind::String, -kInf, kInf, enumNames<UpAxis>(), "", "meshes: which axis is up (glTF is y-up)", at<S>(&S::terrain, &TS::upAxis)});
   r.push_back({"terrain.resample_cell_size_m", Kind::Number, 0.01, 100000, {}, "m", "bake at another cell size (or give terrain.resample_size)", at<S>(&S::terrain, &TS::resampleCellSizeM)});
   r.push_back({"terrain.crop_m", Kind::NumberArray, 0, 1e8, {}, "m",
        "bake a window [west, north, east, south]: the cells whose centres lie in it, metres east and south of the grid's north-west corner (before any resampling)", cropWindow()});
@@ -330,7 +330,7 @@ void terrainRules(std::vector<Rule>& r) {
        "meshes that block the sun (rocks, buildings), in the terrain's local frame: x east from the west edge, y north from the south edge, z altitude, metres; "
        "with a [mesh_snow] table they get snow bodies of their own (docs/models/snow-on-meshes.md)"});
   r.push_back({"occluders.file", Kind::String, -kInf, kInf, {}, "", "the mesh (OBJ, PLY, glTF/glb, FBX), relative to the scene file's folder", occluderFile(), "required"});
-  r.push_back({"occluders.up_axis", Kind::String, -kInf, kInf, {"z", "y"}, "", "which axis of the mesh is up", at<OccluderSource>(&OccluderSource::upAxis)});
+  r.push_back({"occluders.up_axis", Kind::String, -kInf, kInf, enumNames<UpAxis>(), "", "which axis of the mesh is up", at<OccluderSource>(&OccluderSource::upAxis)});
   r.push_back({"occluders.offset_m", Kind::NumberArray, -1e7, 1e7, {}, "m", "[x, y, z] added to the mesh's vertices (after scaling)", occluderOffset()});
   r.push_back({"occluders.scale", Kind::Number, 1e-6, 1e6, {}, "", "the mesh's vertices are multiplied by it", at<OccluderSource>(&OccluderSource::scale)});
   r.push_back({"terrain.size", Kind::Integer, 8, 16384, {}, "cells", "builtin: cells per side", at<S>(&S::terrain, &TS::builtinOptions, &DefaultTerrainOptions::size)});

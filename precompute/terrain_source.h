@@ -28,7 +28,7 @@ struct TerrainSource {
   std::optional<double> heightOffsetM;
   int rawWidth = 0, rawHeight = 0;      // raw files
   ByteOrder byteOrder = ByteOrder::Little;  // raw files
-  std::string upAxis = "z";             // meshes: z | y (glTF is y-up)
+  UpAxis upAxis = UpAxis::Z;            // meshes (glTF is y-up)
   // A window [west, north, east, south] in metres east and south of the grid's north-west corner:
   // the cells whose centres lie inside it (applied before resampling).
   std::optional<std::array<double, 4>> cropM;
@@ -42,7 +42,7 @@ struct TerrainSource {
 // x east from the west edge, y north from the south edge, z altitude, metres.
 struct OccluderSource {
   std::string file;
-  std::string upAxis = "z";
+  UpAxis upAxis = UpAxis::Z;
   std::array<double, 3> offsetM{0.0, 0.0, 0.0};
   double scale = 1.0;
   std::string declaredAt;

@@ -112,7 +112,7 @@ TEST(AdaptiveMesh, SnowBodyIsWatertightAndHoldsTheSnowVolume) {
   for (const std::string format : {"ply", "glb", "obj", "fbx"}) {
     const std::string path = (dir / ("body." + format)).string();
     writeMesh(path, format, body);
-    const TriangleMesh back = loadTriangleMesh(path, format == "ply" ? "z" : "y");
+    const TriangleMesh back = loadTriangleMesh(path, format == "ply" ? UpAxis::Z : UpAxis::Y);
     ASSERT_EQ(back.triangles.size(), body.triangles.size()) << format;
     int bad = 0;
     for (const auto& [edge, count] : countEdges(back.triangles)) bad += count != 2;
@@ -158,7 +158,7 @@ TEST(AdaptiveMesh, SurfaceMeshHeightsAndUvsLineUpWithTheGrid) {
   fs::create_directories(dir);
   const std::string path = (dir / "surface.glb").string();
   writeMesh(path, "glb", mesh);
-  const TriangleMesh back = loadTriangleMesh(path, "y");  // glTF is y up
+  const TriangleMesh back = loadTriangleMesh(path, UpAxis::Y);  // glTF is y up
   ASSERT_EQ(back.positions.size(), mesh.positions.size());
   for (const auto& p : back.positions) {
     const int x = static_cast<int>(std::lround(p[0] / 20.0 - 0.5)), y = 47 - static_cast<int>(std::lround(p[1] / 20.0 - 0.5));

@@ -306,8 +306,8 @@ TEST(Occlusion, BakeOnAMeshWritesTheDisplacedMeshAndAllBakers) {
     EXPECT_TRUE(fs::exists(b.out() / f)) << f;
   // Against the per-vertex snow computed directly on the mesh as the bake read it, vertex by
   // vertex matched on (x, y) (importers may renumber vertices).
-  const TriangleMesh in = loadTriangleMesh((dir / "pit.obj").string(), "z");
-  const TriangleMesh out = loadTriangleMesh((b.out() / "snow_mesh.ply").string(), "z");
+  const TriangleMesh in = loadTriangleMesh((dir / "pit.obj").string(), UpAxis::Z);
+  const TriangleMesh out = loadTriangleMesh((b.out() / "snow_mesh.ply").string(), UpAxis::Z);
   ASSERT_EQ(out.triangles.size(), m.triangles.size());
   ASSERT_EQ(out.positions.size(), in.positions.size());
   const Grid<float> none;
@@ -328,7 +328,7 @@ TEST(Occlusion, BakeOnAMeshWritesTheDisplacedMeshAndAllBakers) {
   for (float v : o.snowM) maxSnow = std::max(maxSnow, double(v));
   EXPECT_GT(maxSnow, 0.5);  // the pit's bottom
   // glTF is y up: read back with y as the up axis, the same heights.
-  const TriangleMesh glb = loadTriangleMesh((b.out() / "snow_mesh.glb").string(), "y");
+  const TriangleMesh glb = loadTriangleMesh((b.out() / "snow_mesh.glb").string(), UpAxis::Y);
   ASSERT_EQ(glb.positions.size(), m.positions.size());
   EXPECT_NEAR(glb.boundsMax[2], out.boundsMax[2], 1e-3);
   EXPECT_NEAR(glb.boundsMin[2], out.boundsMin[2], 1e-3);
@@ -366,9 +366,9 @@ TEST(Occlusion, TheMeshVerticesFollowTheNoSnowMaskAndSnowfallMultiplier) {
   const test::Bake art = test::bakeSceneText(
       "occlusion_mesh_art", base + "[multipliers]\nno_snow = \"" + (dir / "west.pgm").string() + "\"\nsnowfall = { file = \"" +
                                 (dir / "half.pgm").string() + "\", range = [0.0, 0.5] }\n" + outputs);
-  const TriangleMesh in = loadTriangleMesh((dir / "pit.obj").string(), "z");
-  const TriangleMesh a = loadTriangleMesh((plain.out() / "snow_mesh.ply").string(), "z");
-  const TriangleMesh b = loadTriangleMesh((art.out() / "snow_mesh.ply").string(), "z");
+  const TriangleMesh in = loadTriangleMesh((dir / "pit.obj").string(), UpAxis::Z);
+  const TriangleMesh a = loadTriangleMesh((plain.out() / "snow_mesh.ply").string(), UpAxis::Z);
+  const TriangleMesh b = loadTriangleMesh((art.out() / "snow_mesh.ply").string(), UpAxis::Z);
   std::map<std::pair<int, int>, float> bed, full;
   for (const auto& p : in.positions) bed[{static_cast<int>(std::lround(p[0])), static_cast<int>(std::lround(p[1]))}] = p[2];
   for (const auto& p : a.positions) full[{static_cast<int>(std::lround(p[0])), static_cast<int>(std::lround(p[1]))}] = p[2];

@@ -254,7 +254,7 @@ TEST(TerrainFormats, MeshPyramidRasterisesToItsAnalyticHeights) {
     TerrainSource src;
     src.file = path;
     src.cellSizeM = 1.0;
-    src.upAxis = up;
+    src.upAxis = *enumFromName<UpAxis>(up);
     const Terrain t = loadTerrain(src);
     SCOPED_TRACE(up);
     ASSERT_EQ(t.heightsM.width(), 100);
