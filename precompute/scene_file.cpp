@@ -260,54 +260,6 @@ void readMasks(Scene& scene, const toml::table& root, const std::string& source)
   }
 }
 
-// [initial_snow]: a layer's depth is a number, a depth raster, or {mask, depth_m}.
-void readInitialSnow(Scene& scene, const toml::table& root, const std::string& source) {
-  const toml::table* initial = root["initial_snow"].as_table();
-  if (!initial) return;
-  const char* names[] = {"compacted", "stable", "unstable", "powder"};
-  for (int l = 0; l < 4; ++l) {
-    const toml::node* node = initial->get(names[l]);
-    if (!node) continue;
-    const std::string key = std::string("initial_snow.") + names[l];
-    InitialSnowLayer& layer = scene.initialSnow[l];
-    if (node->is_number()) {
-      layer.kind = InitialSnowLayer::Kind::Constant;
-      layer.depthM = node->value<double>().value();
-      if (!(layer.depthM >= 0.0 && layer.depthM <= 10000.0)) fail(source, *node, key, "a depth in metres, 0 to 10000");
-    } else if (const toml::table* t = node->as_table(); t && t->contains("mask")) {
-      for (auto&& [k, v] : *t)
-        if (k.str() != "mask" && k.str() != "depth_m") fail(source, v, key + "." + std::string(k.str()), "unknown key (a masked depth takes mask and depth_m)");
-      if (!t->contains("depth_m") || !t->get("depth_m")->is_number())
-        throw InputError(where(source, t->source()) + ": " + key + ".depth_m: missing (the depth where the mask is 1, metres)");
-      layer.kind = InitialSnowLayer::Kind::Mask;
-      layer.depthM = t->get("depth_m")->value<double>().value();
-      if (!(layer.depthM >= 0.0 && layer.depthM <= 10000.0)) fail(source, *t->get("depth_m"), key + ".depth_m", "a depth in metres, 0 to 10000");
-      layer.raster = rasterRef(*t->get("mask"), source, scene, key + ".mask");
-    } else {
-      layer.kind = InitialSnowLayer::Kind::Raster;
-      layer.raster = rasterRef(*node, source, scene, key);
-      if (layer.raster.range && ((*layer.raster.range)[0] < 0.0 || (*layer.raster.range)[1] < 0.0))
-        fail(source, *node, key, "a depth raster's range must not be negative");
-    }
-  }
-}
-
-void readMultipliers(Scene& scene, const toml::table& root, const std::string& source) {
-  const toml::table* m = root["multipliers"].as_table();
-  if (!m) return;
-  Multipliers& mu = scene.multipliers;
-  const std::pair<const char*, std::optional<RasterRef>*> entries[] = {
-      {"snowfall", &mu.snowfall}, {"melt", &mu.melt}, {"wind_erosion", &mu.windErosion},
-      {"avalanche_release", &mu.avalancheRelease}, {"skier_spawn", &mu.skierSpawn}, {"no_snow", &mu.noSnow}};
-  for (const auto& [name, slot] : entries)
-    if (const toml::node* node = m->get(name)) {
-      *slot = rasterRef(*node, source, scene, std::string("multipliers.") + name);
-      const auto& range = (*slot)->range;
-      if (range && ((*range)[0] < 0.0 || (*range)[1] < 0.0))
-        fail(source, *node, std::string("multipliers.") + name, "a multiplier's range must not be negative");
-    }
-}
-
 void validateEdit(const EditSpec& ed, const toml::table& e, const Scene& scene, const std::string& source) {
   const bool move = ed.op == EditOp::Move;
   if (ed.day > scene.days) fail(source, *e.get("day"), "edits.day", "day " + std::to_string(ed.day) + " is after the season's end");
@@ -501,7 +453,8 @@ void validateMode(const Scene& scene, const toml::table& root, const std::string
 }
 
 // The keys bound to the Scene go in first (each checks only its own value); the masks before
-// them, since bedforms.mask may name one; then the arrays of tables and the checks across keys.
+// them, since rasters (initial_snow, multipliers, bedforms.mask) may name one; then the arrays of
+// tables and the checks across keys.
 Scene buildScene(const toml::table& root, const std::string& source, const std::string& baseDir) {
   Scene scene;
   scene.sourceName = source;
@@ -512,8 +465,6 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   validateTerrain(scene, root, source);
   readOccluders(scene, root, source);
   readWeather(scene, root, source);
-  readInitialSnow(scene, root, source);
-  readMultipliers(scene, root, source);
   readEdits(scene, root, source);
   readEvents(scene, root, source);
   readParameters(scene, root, source);

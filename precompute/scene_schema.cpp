@@ -1,6 +1,6 @@
 // The scene schema's table (see scene_schema.h). Each rule binds its key to a member (a chain of
 // member pointers into the Scene or an array element), or to a small setter where the value
-// needs converting; its doc string is what docs/scene.md says of the key.
+// needs converting (scene_bindings.h); its doc string is what docs/scene.md says of the key.
 #include "scene_schema.h"
 
 #include <cmath>
@@ -12,69 +12,16 @@
 
 #include "core/errors.h"
 #include "exposure.h"
+#include "scene_bindings.h"
 
 namespace snow {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// --- reading a checked value into a member, and printing a member's value
-void read(const toml::node& n, double& v) { v = n.value<double>().value(); }
-void read(const toml::node& n, std::optional<double>& v) { v = n.value<double>().value(); }
-void read(const toml::node& n, int& v) { v = static_cast<int>(n.value<int64_t>().value()); }
-void read(const toml::node& n, uint64_t& v) { v = static_cast<uint64_t>(n.value<int64_t>().value()); }
-void read(const toml::node& n, bool& v) { v = n.value<bool>().value(); }
-void read(const toml::node& n, std::string& v) { v = n.value<std::string>().value(); }
-template <class E>
-  requires std::is_enum_v<E>
-void read(const toml::node& n, E& v) {
-  v = enumFromName<E>(n.as_string()->get()).value();  // the rule's choices are the enum's names
-}
-void read(const toml::node& n, std::vector<std::string>& v) {
-  v.clear();
-  for (auto&& e : *n.as_array()) v.push_back(e.as_string()->get());
-}
-void read(const toml::node& n, std::vector<double>& v) {
-  v.clear();
-  for (auto&& e : *n.as_array()) v.push_back(e.value<double>().value());
-}
-
-std::string show(double v) { return numberText(v); }
-std::string show(const std::optional<double>& v) { return v ? show(*v) : "none"; }
-std::string show(int v) { return std::to_string(v); }
-std::string show(uint64_t v) { return std::to_string(v); }
-std::string show(bool v) { return v ? "true" : "false"; }
-std::string show(const std::string& v) { return "\"" + v + "\""; }
-template <class E>
-  requires std::is_enum_v<E>
-std::string show(E v) {
-  return show(enumName(v));
-}
-template <class V>
-std::string show(const std::vector<V>& v) {
-  std::string s = "[";
-  for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + show(v[i]);
-  return s + "]";
-}
-template <class V, size_t N>
-std::string show(const std::array<V, N>& v) {
-  return show(std::vector<V>(v.begin(), v.end()));
-}
-template <class V, size_t N>
-std::string show(const std::optional<std::array<V, N>>& v) {
-  return v ? show(*v) : "none";
-}
-
-// at<T>(&A::b, &B::c, ...): the member obj.*b.*c... of an object of type T.
-template <class T, class... M>
-Bind<T> at(M... members) {
-  return {[=](T& obj, const toml::node& n, const BindContext&) { read(n, (obj .* ... .* members)); },
-          [=](const T& obj) { return show((obj .* ... .* members)); }};
-}
-template <class T>
-Bind<T> custom(std::function<void(T&, const toml::node&, const BindContext&)> set, std::function<std::string(const T&)> show) {
-  return {std::move(set), std::move(show)};
-}
+using binding::at;
+using binding::custom;
+using binding::read;
+using binding::show;
 
 // An array of exactly n numbers (the rule already checked each is a number in range); `what` is
 // the message when the count is wrong (default: how many it needs and has).
@@ -191,6 +138,47 @@ Bind<OccluderSource> occluderOffset() {
       },
       [](const OccluderSource& o) { return show(o.offsetM); });
 }
+bool hasNegativeRange(const RasterRef& r) { return r.range && ((*r.range)[0] < 0.0 || (*r.range)[1] < 0.0); }
+
+// initial_snow.LAYER: a depth in metres, a depth raster, or {mask, depth_m} (the depth where the mask is 1).
+void readInitialLayer(InitialSnowLayer& layer, const toml::node& node, const BindContext& c) {
+  const std::string& key = c.path;
+  if (node.is_number()) {
+    layer.kind = InitialSnowLayer::Kind::Constant;
+    layer.depthM = node.value<double>().value();
+    if (!(layer.depthM >= 0.0 && layer.depthM <= 10000.0)) fail(c.source, node, key, "a depth in metres, 0 to 10000");
+  } else if (const toml::table* t = node.as_table(); t && t->contains("mask")) {
+    for (auto&& [k, v] : *t)
+      if (k.str() != "mask" && k.str() != "depth_m") fail(c.source, v, key + "." + std::string(k.str()), "unknown key (a masked depth takes mask and depth_m)");
+    if (!t->contains("depth_m") || !t->get("depth_m")->is_number())
+      throw InputError(where(c.source, t->source()) + ": " + key + ".depth_m: missing (the depth where the mask is 1, metres)");
+    layer.kind = InitialSnowLayer::Kind::Mask;
+    layer.depthM = t->get("depth_m")->value<double>().value();
+    if (!(layer.depthM >= 0.0 && layer.depthM <= 10000.0)) fail(c.source, *t->get("depth_m"), key + ".depth_m", "a depth in metres, 0 to 10000");
+    layer.raster = rasterRef(*t->get("mask"), c.source, c.scene, key + ".mask");
+  } else {
+    layer.kind = InitialSnowLayer::Kind::Raster;
+    layer.raster = rasterRef(node, c.source, c.scene, key);
+    if (hasNegativeRange(layer.raster)) fail(c.source, node, key, "a depth raster's range must not be negative");
+  }
+}
+Bind<Scene> initialSnow(size_t l) {
+  return custom<Scene>([l](Scene& s, const toml::node& n, const BindContext& c) { readInitialLayer(s.initialSnow[l], n, c); },
+                       [l](const Scene& s) {
+                         const InitialSnowLayer& layer = s.initialSnow[l];
+                         if (layer.kind == InitialSnowLayer::Kind::None || layer.kind == InitialSnowLayer::Kind::Constant) return show(layer.depthM);
+                         return (layer.kind == InitialSnowLayer::Kind::Mask ? show(layer.depthM) + " m in " : std::string()) + layer.raster.label();
+                       });
+}
+Bind<Scene> multiplier(std::optional<RasterRef> Multipliers::*slot, std::string none = "1 (none)") {
+  return custom<Scene>(
+      [slot](Scene& s, const toml::node& n, const BindContext& c) {
+        s.multipliers.*slot = rasterRef(n, c.source, s, c.path);
+        if (hasNegativeRange(*(s.multipliers.*slot))) fail(c.source, n, c.path, "a multiplier's range must not be negative");
+      },
+      [slot, none](const Scene& s) { return (s.multipliers.*slot) ? (s.multipliers.*slot)->label() : none; });
+}
+
 template <class T>
 Bind<T> pair(std::optional<std::array<double, 2>> T::*member) {
   return custom<T>(
@@ -391,15 +379,15 @@ void artDirectionRules(std::vector<Rule>& r) {  // [masks], [initial_snow], [mul
   r.push_back({"masks.*.range", Kind::NumberArray, -1e30, 1e30, {}, "", "[first, second]: what 0 and 1 become", {}, "[0, 1]"});
   r.push_back({"masks.*.invert", Kind::Bool, -kInf, kInf, {}, "", "use 1 - value", {}, "false"});
   r.push_back({"initial_snow", Kind::Table, -kInf, kInf, {}, "", "each layer's depth at day 0: metres, a depth raster, or { mask = ..., depth_m = ... } (the depth where the mask is 1)"});
-  for (const auto& layer : kSnowLayers)
-    r.push_back({"initial_snow." + layer, Kind::Any, -kInf, kInf, {}, "m", "the " + layer + " layer's depth at day 0", {}, "0"});
+  for (size_t l = 0; l < kSnowLayers.size(); ++l)
+    r.push_back({"initial_snow." + kSnowLayers[l], Kind::Any, -kInf, kInf, {}, "m", "the " + kSnowLayers[l] + " layer's depth at day 0", initialSnow(l)});
   r.push_back({"multipliers", Kind::Table, -kInf, kInf, {}, "", "per-cell multiplier rasters over the season (a [masks] name, a file or a table)"});
-  r.push_back({"multipliers.snowfall", Kind::Any, -kInf, kInf, {}, "", "multiplies the snowfall", {}, "1 (none)"});
-  r.push_back({"multipliers.melt", Kind::Any, -kInf, kInf, {}, "", "multiplies the melt", {}, "1 (none)"});
-  r.push_back({"multipliers.wind_erosion", Kind::Any, -kInf, kInf, {}, "", "multiplies the wind erosion", {}, "1 (none)"});
-  r.push_back({"multipliers.avalanche_release", Kind::Any, -kInf, kInf, {}, "", "multiplies the avalanche release probability", {}, "1 (none)"});
-  r.push_back({"multipliers.skier_spawn", Kind::Any, -kInf, kInf, {}, "", "multiplies where automatic skiers start", {}, "1 (none)"});
-  r.push_back({"multipliers.no_snow", Kind::Any, -kInf, kInf, {}, "", "a mask: cells >= 0.5 stay bare", {}, "none"});
+  r.push_back({"multipliers.snowfall", Kind::Any, -kInf, kInf, {}, "", "multiplies the snowfall", multiplier(&Multipliers::snowfall)});
+  r.push_back({"multipliers.melt", Kind::Any, -kInf, kInf, {}, "", "multiplies the melt", multiplier(&Multipliers::melt)});
+  r.push_back({"multipliers.wind_erosion", Kind::Any, -kInf, kInf, {}, "", "multiplies the wind erosion", multiplier(&Multipliers::windErosion)});
+  r.push_back({"multipliers.avalanche_release", Kind::Any, -kInf, kInf, {}, "", "multiplies the avalanche release probability", multiplier(&Multipliers::avalancheRelease)});
+  r.push_back({"multipliers.skier_spawn", Kind::Any, -kInf, kInf, {}, "", "multiplies where automatic skiers start", multiplier(&Multipliers::skierSpawn)});
+  r.push_back({"multipliers.no_snow", Kind::Any, -kInf, kInf, {}, "", "a mask: cells >= 0.5 stay bare", multiplier(&Multipliers::noSnow, "none")});
   r.push_back({"edits", Kind::TableArray, -kInf, kInf, {}, "", "change a layer's depth on a given day (applied in day order)"});
   r.push_back({"edits.day", Kind::Number, 0, 3650, {}, "day", "the day of the edit", at<ED>(&ED::day), "required"});
   r.push_back({"edits.op", Kind::String, -kInf, kInf, enumNames<EditOp>(), "",
