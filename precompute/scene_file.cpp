@@ -12,6 +12,7 @@
 
 #include "core/errors.h"
 #include "embedded_presets.h"
+#include "scene/layers.h"
 #include "scene.h"
 #include "scene_schema.h"
 
@@ -423,10 +424,8 @@ void validateMeshMode(const Scene& scene, const toml::table& root, const std::st
 // not silently empty files.
 void validateOcclusionMode(const Scene& scene, const toml::table& root, const std::string& source) {
   for (const auto& layer : scene.outputs.layers)
-    for (const char* seasonOnly : {"wind_scour", "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit", "avalanche_preview", "ski_tracks", "ski_route_map",
-                                   "sun_exposure", "temperature", "wind_speed", "wind_direction", "wind_shadow_depth", "wind_shadow_mask"})
-      if (layer == seasonOnly)
-        fail(source, *root["outputs"]["layers"].node(), "outputs.layers", "'" + layer + "' needs a season; mode = \"occlusion\" has none");
+    if (!(findLayer(layer)->modes & kOcclusionMode))
+      fail(source, *root["outputs"]["layers"].node(), "outputs.layers", "'" + layer + "' needs a season; mode = \"occlusion\" has none");
   if (!scene.outputs.frameDays.empty())
     fail(source, *root["outputs"]["frames_days"].node(), "outputs.frames_days", "mode = \"occlusion\" has no season to take frames of");
   if (scene.outputs.avalancheMaps || scene.outputs.avalancheFrameIntervalS > 0)
@@ -448,7 +447,7 @@ void validateMode(const Scene& scene, const toml::table& root, const std::string
     return;
   }
   for (const auto& layer : scene.outputs.layers)
-    if (std::find(kOcclusionLayers.begin(), kOcclusionLayers.end(), layer) != kOcclusionLayers.end())
+    if (!(findLayer(layer)->modes & kSeasonMode))
       fail(source, *root["outputs"]["layers"].node(), "outputs.layers", "'" + layer + "' needs mode = \"occlusion\"");
 }
 

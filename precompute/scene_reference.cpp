@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "scene/layers.h"
 #include "scene_schema.h"
 
 namespace snow {
@@ -30,7 +31,9 @@ const char* typeName(Kind k) {
 // [min, max], as the range errors print it but to 15 digits.
 std::string rangeText(double minValue, double maxValue) {
   if (!std::isfinite(minValue) && !std::isfinite(maxValue)) return "";
-  return "[" + numberText(minValue) + ", " + numberText(maxValue) + "]";
+  // Appended, not "[" + ...: GCC 12 warns (-Wrestrict, a false positive) on const char* + string&&.
+  std::string text = "[";
+  return text.append(numberText(minValue)).append(", ").append(numberText(maxValue)).append("]");
 }
 
 std::string ruleRange(const Rule& r) {
@@ -70,8 +73,8 @@ const char* kRasterNote =
     "A raster (type `raster`) is a mask name from `[masks]`, a file path (with its extension), or a table "
     "`{ file = ..., values = [v0, v1], range = [r0, r1], invert = false }`.";
 const char* kParametersIntro =
-    "Every constant of the paper's Table 2 in world units, with the paper's defaults (k_w and k_c are kept as printed, 10^4 m/day; "
-    "the stability-change issue will settle their reading), plus the event frequencies of section 3.2/7.4. Powder diffusion's k_m is "
+    "Every constant of the paper's Table 2 in world units, with the paper's defaults (k_w and k_c are kept as printed, 10^4 m/day, "
+    "which makes the stability change all-or-nothing within a step: see docs/models/season.md), plus the event frequencies of section 3.2/7.4. Powder diffusion's k_m is "
     "turned into a creep speed in world units, k_m x `diffusion_length_m` metres a day per unit of slope above the rest slope "
     "(200 m/day by default), so a 2 m and a 10 m run move the same distance of snow per day. Each is a number under `[parameters]`.";
 
@@ -84,6 +87,16 @@ std::string cell(const std::string& s) {
   return out;
 }
 std::string code(const std::string& s) { return s.empty() ? "" : "`" + s + "`"; }
+
+const char* kLayersIntro =
+    "What `outputs.layers` names, from the layer table (scene/layers.cpp). A float layer is written as a float image "
+    "(`outputs.format`), in each of `outputs.encodings` and as a channel of the multi-channel EXR; a preview is an RGB PNG. "
+    "NODATA cells are 0 in every layer (`valid_mask` says which they are).";
+
+std::string layerModes(const LayerInfo& l) {
+  if ((l.modes & kGridModes) == kGridModes) return "season, occlusion";
+  return l.modes & kSeasonMode ? "season" : "occlusion";
+}
 
 }  // namespace
 
@@ -126,6 +139,10 @@ std::string sceneReferenceText() {
     if (!d.defaultValue.empty()) o << (d.defaultValue == "required" ? "; required" : "; default " + d.defaultValue);
     o << ")\n      " << d.doc << "\n";
   }
+  o << "\noutput layers (outputs.layers)\n" << kLayersIntro << "\n";
+  for (const LayerInfo& l : layerTable())
+    o << "  " << l.name << " (" << (l.kind == LayerKind::Preview ? "RGB preview" : "float") << ", " << l.unit << "; " << layerModes(l)
+      << ")\n      " << l.content << "\n";
   return o.str();
 }
 
@@ -154,6 +171,11 @@ std::string sceneReferenceMarkdown() {
       o << "| " << code(d.path) << " | " << d.type << " | " << cell(d.range) << " | " << cell(d.defaultValue) << " | " << cell(d.unit) << " | "
         << cell(d.doc) << " |\n";
   }
+  o << "\n## Output layers (`outputs.layers`)\n\n" << kLayersIntro << "\n\n"
+    << "| layer | kind | unit | modes | content |\n|---|---|---|---|---|\n";
+  for (const LayerInfo& l : layerTable())
+    o << "| " << code(l.name) << " | " << (l.kind == LayerKind::Preview ? "RGB preview" : "float") << " | " << l.unit << " | "
+      << layerModes(l) << " | " << cell(l.content) << " |\n";
   return o.str();
 }
 

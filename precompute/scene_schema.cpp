@@ -12,6 +12,7 @@
 
 #include "core/errors.h"
 #include "exposure.h"
+#include "scene/layers.h"
 #include "scene_bindings.h"
 
 namespace snow {
@@ -232,16 +233,12 @@ const char* kindName(Kind k) {
   return "?";
 }
 
-const std::vector<std::string> kLayerChoices = {"compacted", "stable", "unstable", "powder", "depth", "bedrock", "surface",
-                                                "valid_mask", "wind_speed", "wind_direction", "wind_shadow_depth",
-                                                "wind_shadow_mask", "sun_exposure", "temperature", "wind_scour",
-                                                "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit",
-                                                "avalanche_preview", "preview", "ambient_occlusion", "sun_visibility",
-                                                "occlusion_accumulation", "occlusion_dissipation", "ski_tracks", "ski_route_map",
-                                                "bedform_cohesion"};
-// Layers only occlusion mode has.
-const std::vector<std::string> kOcclusionLayers = {"ambient_occlusion", "sun_visibility", "occlusion_accumulation",
-                                                   "occlusion_dissipation"};
+// The layer names, from the layer table (scene/layers.cpp), in its order.
+const std::vector<std::string> kLayerChoices = [] {
+  std::vector<std::string> names;
+  for (const LayerInfo& l : layerTable()) names.push_back(l.name);
+  return names;
+}();
 
 namespace {
 
@@ -436,7 +433,7 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
        "auto: the horizon-sweep fast path for pure height fields, Embree rays when the scene has occluders; horizon or embree: that one", at<S>(&S::sunMethod)});
   r.push_back({"outputs", Kind::Table, -kInf, kInf, {}, "", "what the bake writes (docs/outputs.md)"});
   r.push_back({"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices, "",
-       "grids to write (a layer the mode does not make is an error; bedform_cohesion needs [bedforms]; ambient_occlusion, sun_visibility, occlusion_accumulation and occlusion_dissipation are occlusion mode's)", at<S>(&S::outputs, &OR::layers)});
+       "grids to write: the layers listed under Output layers below (a layer the mode does not make is an error; bedform_cohesion needs [bedforms])", at<S>(&S::outputs, &OR::layers)});
   r.push_back({"outputs.format", Kind::String, -kInf, kInf, enumNames<ImageFormat>(), "", "the layers' image format: 32-bit float, one channel", at<S>(&S::outputs, &OR::format)});
   r.push_back({"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}, "",
        "also write each layer normalised to its own range: 16-bit PNG, 8-bit PNG mask, raw 16-bit heightmap (the float file is always written)", at<S>(&S::outputs, &OR::encodings)});

@@ -61,9 +61,8 @@ struct Rule {
   std::string defaultText = {};  // printed instead of the binding's default (a default that depends on other keys)
 };
 
-// The names outputs.layers takes, and those only occlusion mode makes.
+// The names outputs.layers takes (scene/layers.h's table).
 extern const std::vector<std::string> kLayerChoices;
-extern const std::vector<std::string> kOcclusionLayers;
 
 const std::vector<Rule>& sceneRules();
 // The rule of a dotted path ([masks.NAME] keys match masks.*), or null.

@@ -10,6 +10,7 @@
 
 #include "precompute/scene_reference.h"
 #include "precompute/scene_schema.h"
+#include "scene/layers.h"
 
 namespace snow {
 namespace {
@@ -32,7 +33,8 @@ TEST(SceneReference, DocsSceneMdIsTheGeneratedMarkdown) {
 TEST(SceneReference, HelpScenePrintsIt) {
   auto run = [](const std::string& args) {
     std::string out;
-    FILE* p = popen(("'" + std::string(SNOWBAKE_BINARY) + "' help scene" + args).c_str(), "r");
+    const std::string command = std::string("'").append(SNOWBAKE_BINARY).append("' help scene").append(args);
+    FILE* p = popen(command.c_str(), "r");
     char buffer[4096];
     for (size_t n; p && (n = fread(buffer, 1, sizeof buffer, p)) > 0;) out.append(buffer, n);
     EXPECT_EQ(p ? pclose(p) : -1, 0) << args;
@@ -59,6 +61,10 @@ TEST(SceneReference, EveryKeyAndParameterIsDocumented) {
     EXPECT_NE(markdown.find(std::string("| `") + p.key + "` |"), std::string::npos) << p.key;
   }
   EXPECT_EQ(docs.size(), sceneRules().size() + parameterTable().size());
+  for (const LayerInfo& l : layerTable()) {
+    EXPECT_NE(markdown.find(std::string("| `") + l.name + "` |"), std::string::npos) << l.name;
+    EXPECT_NE(text.find(std::string("  ") + l.name + " ("), std::string::npos) << l.name;
+  }
 }
 
 // A key the scene leaves out holds the default the reference prints: every key bound into the
