@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "backend.h"
-#include "step_args.h"
 
 namespace snow {
 
