@@ -89,7 +89,7 @@ void uploadSkierRoute(Exec& exec, SkierStorage<Exec>& storage, const std::vector
 template <class Exec>
 std::vector<float> runRouteMap(Exec& exec, const SnowFieldsView& v) {
   const int w = v.width, h = v.height;
-  const float dx = v.cellSizeXM, dy = v.cellSizeYM;
+  const float dx = v.cellSizeXM, dy = v.cellSizeYM, diagonal = std::sqrt(dx * dx + dy * dy);
   const size_t cells = static_cast<size_t>(w) * h;
   typename Exec::template Buffer<float> a, b;
   const std::vector<float> zero(cells, 0.f);
@@ -100,7 +100,7 @@ std::vector<float> runRouteMap(Exec& exec, const SnowFieldsView& v) {
   for (size_t it = 1;; ++it) {
     auto& in = it % 2 ? a : b;
     auto& result = it % 2 ? b : a;
-    exec.forEachCell(w, h, RouteMapStepKernel{v.bedrock, v.valid, in.data(), result.data(), w, h, dx, dy, std::sqrt(dx * dx + dy * dy)});
+    exec.forEachCell(w, h, RouteMapStepKernel{v.bedrock, v.valid, in.data(), result.data(), w, h, dx, dy, diagonal});
     if (it % 16 == 0 || it > cells) {
       exec.download(in, previous);
       exec.download(result, latest);
