@@ -1,4 +1,4 @@
-// `snowbake bench --stage skiers`: skiers moved together as agents (kernels/ski.h) on the builtin
+// `snowbake bench --stage skiers`: skiers moved together as agents (phenomena/skiers.h) on the builtin
 // range at 1024² (10 m cells, a metre of snow): the time of a batch and per move for 1 to 4096
 // skiers (CPU, and CUDA when a device works), and the exact reference: the serial executor's
 // paths and bytes, which the parallel backends must equal.

@@ -22,7 +22,6 @@
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/reference_scenario.h"
-#include "core/step_args.h"
 #include "cuda/cuda_backend.h"
 #include "precompute/exposure.h"
 #include "precompute/terrain_loader.h"

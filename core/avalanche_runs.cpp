@@ -151,14 +151,7 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
         x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
       }
   backend_.avalancheRelease(moving);
-  args_ = AvalancheArgs{};
-  args_.gravity = static_cast<float>(p_.gravityMps2);
-  args_.tanRestAngle = static_cast<float>(std::tan(p_.avalancheRestAngleDeg * kPi / 180.0));
-  args_.viscosity = static_cast<float>(p_.snowViscosityPerS2);
-  args_.dryTemperatureC = static_cast<float>(p_.avalancheDryTemperatureC);
-  args_.wetTemperatureC = static_cast<float>(p_.avalancheWetTemperatureC);
-  args_.seaLevelTemperatureC = static_cast<float>(seaLevelTemperatureC);
-  args_.alphaWet = static_cast<float>(p_.avalancheWetGranularFraction);
+  args_ = makeAvalancheArgs(p_, seaLevelTemperatureC);
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
   unionBox_ = args_;
   record_.released = true;

@@ -1,13 +1,13 @@
 // One avalanche on a SnowBackend (paper §6.1): release, steps of 0.1 s of simulated time until
-// the snow is at rest, deposit. The per-cell work is in kernels/avalanche.h; this host side picks
-// the release zone, the substep length and the active box, and keeps the records.
+// the snow is at rest, deposit. The model and its kernels are in phenomena/avalanches.h; this
+// host side picks the release zone, the substep length and the active box, and keeps the records.
 //
 // Release (§6.1): at the rupture cell the unstable snow must be at least avalanche_min_unstable_m
 // deep. The release zone is the connected unstable snow within a reach of
 // avalanche_reach_m_per_m x U(rupture) metres of the rupture point. The unstable snow downslope
 // is set moving as the avalanche reaches it: a cell that receives moving snow entrains its own
-// unstable snow and powder (kernels/avalanche.h). (Setting all downslope unstable snow moving at
-// once, a literal reading of §6.1, released whole mountainsides after a storm: every slope above
+// unstable snow and powder (phenomena/avalanches.h). (Setting all downslope unstable snow moving
+// at once, a literal reading of §6.1, released whole mountainsides after a storm: every slope above
 // s_U holds some U.) Powder on moving cells joins the flow.
 //
 // Time step: each avalanche step is avalanche_step_s (0.1 s) of simulated time, cut into

@@ -1,6 +1,7 @@
-// The season's view of a compute backend. The CPU backend (TBB, core/cpu_backend.cpp) and the
-// CUDA backend (cuda/) both implement it with ExecBackend<Exec> (core/exec_backend.h), which
-// runs the same kernel bodies through each backend's forEachCell / forEachCellOfColour.
+// The season's view of a compute backend: one group of virtuals per phenomenon (core/phenomena/,
+// one module header each, says what it models). The CPU backend (TBB, core/cpu_backend.cpp) and
+// the CUDA backend (cuda/) both implement it with ExecBackend<Exec> (core/exec_backend.h), which
+// runs each module's runX over the backend's forEachCell / forEachCellOfColour.
 // This header is plain C++ so that host code never needs CUDA headers.
 #pragma once
 #include <memory>
@@ -8,15 +9,15 @@
 
 #include <vector>
 
-#include "kernels/avalanche.h"
-#include "kernels/bedform.h"
-#include "kernels/edit.h"
-#include "kernels/melt.h"
-#include "kernels/ski.h"
-#include "kernels/powder_diffusion.h"
-#include "kernels/snowfall.h"
-#include "kernels/stability.h"
-#include "kernels/wind_transport.h"
+#include "phenomena/avalanches.h"
+#include "phenomena/bedforms.h"
+#include "phenomena/melt.h"
+#include "phenomena/powder_diffusion.h"
+#include "phenomena/skiers.h"
+#include "phenomena/snowfall.h"
+#include "phenomena/stability_change.h"
+#include "phenomena/timeline_edits.h"
+#include "phenomena/wind_transport.h"
 #include "snow_state.h"
 
 namespace snow {
@@ -26,17 +27,6 @@ namespace snow {
 struct LayerTotals {
   double compactedM3 = 0, stableM3 = 0, unstableM3 = 0, powderM3 = 0;
   double totalM3() const { return compactedM3 + stableM3 + unstableM3 + powderM3; }
-};
-
-// What a bedform step did (kernels/bedform.h).
-struct BedformStepReport {
-  long long slabsEroded = 0;    // slabs lifted by the wind
-  long long slabsAvalanched = 0;  // slab moves of the repose relaxation
-  long long domainCells = 0;
-  // The slab ledger: slabs in the domain after the preparation, and after the step (those
-  // that left the domain included); equal, exactly, when transport conserves mass.
-  long long slabsBefore = 0, slabsAfter = 0;
-  bool reposeConverged = true;  // every domain edge within the repose angle at the end
 };
 
 class SnowBackend {
@@ -60,7 +50,7 @@ class SnowBackend {
   // Moves snow between the stable and unstable layers (conserves mass).
   virtual void stabilityChange(const StabilityArgs& args) = 0;
 
-  // A timeline edit (kernels/edit.h) weighted per cell by `weights` (one per cell, row order;
+  // A timeline edit (phenomena/timeline_edits.h) weighted per cell by `weights` (one per cell, row order;
   // empty: 1 everywhere); returns the snow volume it added (negative: removed), in m^3.
   virtual double applyEdit(const EditArgs& args, const std::vector<float>& weights) = 0;
 
@@ -73,7 +63,7 @@ class SnowBackend {
   // (clipped to the grid by the caller), row after row: a cheap look at a few cells.
   virtual void readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) = 0;
 
-  // Wind bedforms (kernels/bedform.h): `args.rounds` polling rounds over the cells of the domain
+  // Wind bedforms (phenomena/bedforms.h): `args.rounds` polling rounds over the cells of the domain
   // (valid, inside state.bedformMask when it is set, bed slope within args.tanMaxSlope); conserves
   // mass (whole slabs). The cohesion field persists from step to step (0 at upload).
   virtual BedformStepReport bedformStep(const BedformArgs& args) = 0;
@@ -87,15 +77,15 @@ class SnowBackend {
     (void)out;
     return false;
   }
-  // The route map the skier kernels read (kernels/ski.h); before the first skierBatch.
+  // The route map the skier kernels read (phenomena/skiers.h); before the first skierBatch.
   virtual void uploadRouteMap(const Grid<float>& route) = 0;
   // A batch of skiers moved together, one move of every skier at a time, until all have stopped
-  // (kernels/ski.h): in, each agent's startCell and id; out, their final state, and in `paths`
+  // (phenomena/skiers.h): in, each agent's startCell and id; out, their final state, and in `paths`
   // each one's large-scale path as x, y pairs (metres). Each cell a skier enters (its start cell
   // too) turns args.compactionM of U into S, or of S into C where U runs short (conserves mass).
   virtual void skierBatch(const SkierArgs& args, std::vector<SkierAgent>& agents, std::vector<std::vector<double>>& paths) = 0;
 
-  // Avalanches (kernels/avalanche.h; the host loop is core/avalanche_runs.h). Release: `moving` (one
+  // Avalanches (phenomena/avalanches.h; the host loop is core/avalanche_runs.h). Release: `moving` (one
   // byte per cell) marks the released cells; records U + P and joins their powder to U.
   virtual void avalancheRelease(const std::vector<uint8_t>& moving) = 0;
   // `substeps` substeps of args.dtS, the box dilated by one cell before each (snow moves at most

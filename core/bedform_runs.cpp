@@ -10,10 +10,6 @@
 
 namespace snow {
 
-namespace {
-double tanDeg(double d) { return std::tan(d * kPi / 180.0); }
-}  // namespace
-
 std::string validateBedformParameters(const BedformParameters& p, const GridSpec& spec) {
   const double minCellM = std::min(spec.cellSizeXM, spec.cellSizeYM);
   std::ostringstream e;
@@ -26,7 +22,7 @@ std::string validateBedformParameters(const BedformParameters& p, const GridSpec
   else if (!(p.shadowAngleDeg > 0.0 && p.shadowAngleDeg < 90.0)) e << "bedforms.shadow_angle_deg must be in (0, 90)";
   else if (!(p.shadowLengthM >= 0.0)) e << "bedforms.shadow_length_m must be at least 0";
   else if (!(p.reposeAngleDeg > 0.0 && p.reposeAngleDeg < 90.0)) e << "bedforms.repose_angle_deg must be in (0, 90)";
-  else if (tanDeg(p.reposeAngleDeg) * minCellM < p.slabM)
+  else if (bedform::tanDeg(p.reposeAngleDeg) * minCellM < p.slabM)
     e << "bedforms.repose_angle_deg = " << p.reposeAngleDeg << " on cells of " << minCellM
       << " m allows a step smaller than one slab (slab_m = " << p.slabM
       << "): use a thinner slab, a larger angle or larger cells";
@@ -40,34 +36,6 @@ std::string validateBedformParameters(const BedformParameters& p, const GridSpec
     e << "bedforms.periodic: the grid is " << spec.width << " x " << spec.height
       << " cells; a periodic (tileable) window needs an even width and height";
   return e.str();
-}
-
-BedformArgs makeBedformArgs(const BedformParameters& p, double dtDays, int rounds, uint64_t roundBase, uint64_t seed,
-                            double seaLevelTemperatureC) {
-  BedformArgs a;
-  a.dtDays = static_cast<float>(dtDays);
-  a.rounds = rounds;
-  a.batches = p.batches;
-  a.roundBase = roundBase;
-  a.seed = seed;
-  a.slabM = static_cast<float>(p.slabM);
-  a.hopLengthM = static_cast<float>(p.hopLengthM);
-  a.referenceWindMps = static_cast<float>(p.referenceWindMps);
-  a.thresholdWindMps = static_cast<float>(p.thresholdWindMps);
-  a.depositSnow = static_cast<float>(p.depositSnow);
-  a.depositBare = static_cast<float>(p.depositBare);
-  a.tanShadow = static_cast<float>(tanDeg(p.shadowAngleDeg));
-  a.shadowLengthM = static_cast<float>(p.shadowLengthM);
-  a.tanRepose = static_cast<float>(tanDeg(p.reposeAngleDeg));
-  a.speedupLinear = static_cast<float>(p.speedupLinear);
-  a.speedupQuadraticPerM = static_cast<float>(p.speedupQuadraticPerM);
-  a.tanMaxSlope = static_cast<float>(tanDeg(p.maxSlopeDeg));
-  a.sinteringPerDay = static_cast<float>(p.sinteringPerDay);
-  a.sinteringScaleC = static_cast<float>(p.sinteringScaleC);
-  a.seaLevelTemperatureC = static_cast<float>(seaLevelTemperatureC);
-  a.maxHops = p.maxHops;
-  a.periodic = p.periodic;
-  return a;
 }
 
 SnowState makeBedformWindow(int w, int h, double cellM, double meanDepthM, double noiseM, float windXMps,

@@ -1,44 +1,20 @@
-// Wind bedforms: the scene-level parameters (world units) of the slab-saltation model
-// (kernels/bedform.h), the kernel arguments built from them, and the measurements the tests and
-// the benchmark make of a bedform field (repose, migration, bodies, face slopes).
+// Wind bedforms on the host: the scene-level parameters' validation, the test windows, and the
+// measurements the tests and the benchmark make of a bedform field (repose, migration, bodies,
+// face slopes). The model, BedformParameters and makeBedformArgs: phenomena/bedforms.h.
 #pragma once
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "grid.h"
-#include "kernels/bedform.h"
+#include "phenomena/bedforms.h"
 #include "snow_state.h"
 
 namespace snow {
 
-struct BedformParameters {
-  double slabM = 0.025;               // slab thickness (m of snow): the unit of transport
-  double hopLengthM = 0.5;           // hop length at the reference wind speed
-  double referenceWindMps = 10.0;
-  double thresholdWindMps = 4.0;     // below it: no erosion, hops end
-  double depositSnow = 0.4;          // p_s: landing probability on snow
-  double depositBare = 0.9;          // p_ns: on bare (slab-free) ground
-  double shadowAngleDeg = 15.0;
-  double shadowLengthM = 10.0;       // how far upwind the shadow test looks
-  double reposeAngleDeg = 30.0;
-  double speedupLinear = 0.0;        // Momiji's C1 (hop metres per metre above the mean; 1.2 = Momiji's 0.4 cells a slab at Werner's scale)
-  double speedupQuadraticPerM = 0.0;   // Momiji's C2 (0.018 = Momiji's 0.002)
-  double maxSlopeDeg = 20.0;         // bedforms only where the snow bed is at most this steep
-  double sinteringPerDay = 0.5;      // cohesion gained per day at 0 degC
-  double sinteringScaleC = 10.0;     // rate halves at -scale degC
-  double roundsPerHour = 10.0;        // polling rounds (each cell once) per hour of the season
-  int batches = 4;                   // batches a round
-  int maxHops = 64;
-  bool periodic = false;             // wrap around (test windows only)
-};
-
 // Empty when the parameters are usable on the grid `spec` (its smaller cell side, and an even
 // width and height when periodic), else the problem in words (naming the scene key).
 std::string validateBedformParameters(const BedformParameters& p, const GridSpec& spec);
-
-BedformArgs makeBedformArgs(const BedformParameters& p, double dtDays, int rounds, uint64_t roundBase, uint64_t seed,
-                            double seaLevelTemperatureC);
 
 // A flat test window: w x h cells of `cellM`, powder `meanDepthM` plus uniform noise of +-noiseM
 // (seeded), a uniform wind, a constant temperature (sea-level T0 = 0 gives T = temperatureC).

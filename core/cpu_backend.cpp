@@ -8,8 +8,8 @@
 #include <limits>
 
 #include "exec_backend.h"
-#include "kernels/powder_diffusion_rows.h"
-#include "kernels/surface_rows.h"
+#include "phenomena/powder_diffusion_rows.h"
+#include "phenomena/surface_slope_rows.h"
 #include "serial_exec.h"
 
 namespace snow {

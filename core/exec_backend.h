@@ -1,20 +1,16 @@
 // SnowBackend implemented once over any Exec: the Exec supplies storage (host vectors or
 // device buffers), forEachCell / forEachCellOfColour and fixed-order reductions; this class
-// owns the fields and runs the step functions of steps.h. Included by core/cpu_backend.cpp and
-// by the CUDA backend's .cu file, so it must stay free of TBB and CUDA headers.
+// owns the fields and runs each phenomenon's runX (core/phenomena/) over them. Included by
+// core/cpu_backend.cpp and by the CUDA backend's .cu file, so it must stay free of TBB and CUDA
+// headers.
 #pragma once
 #include <algorithm>
-#include <climits>
-#include <cmath>
-#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "backend.h"
-#include "kernels/ski.h"
-#include "steps.h"
 
 namespace snow {
 
@@ -35,7 +31,7 @@ class ExecBackend final : public SnowBackend {
     SNOW_STATE_FIELDS(SNOW_UPLOAD_WITH_STATE)
 #undef SNOW_UPLOAD_WITH_STATE
     avalancheFieldsReady_ = false;
-    bedformFieldsReady_ = false;
+    bed_.ready = false;
     makeScratch(true);
     uploadStaticFields(s);
   }
@@ -50,13 +46,7 @@ class ExecBackend final : public SnowBackend {
   }
 
   double applyEdit(const EditArgs& a, const std::vector<float>& weights) override {
-    exec_.upload(editWeight_, weights);
-    SnowFieldsView v = view();
-    v.editWeight = weights.empty() ? nullptr : editWeight_.data();
-    const double added = runEdit(exec_, v, a);
-    exec_.upload(editWeight_, std::vector<float>());
-    exec_.finish();
-    return added;
+    return runEdit(exec_, view(), editWeight_, a, weights);
   }
 
   void download(SnowState& s) override {
@@ -64,7 +54,7 @@ class ExecBackend final : public SnowBackend {
   if constexpr (downloadedWithState(FieldRole::role)) exec_.download(member##_, s.member.values());
     SNOW_STATE_FIELDS(SNOW_DOWNLOAD)
 #undef SNOW_DOWNLOAD
-    if (bedformFieldsReady_) {
+    if (bed_.ready) {
       s.bedformCohesion.resize(spec_.width, spec_.height, 0.f);
       exec_.download(bed_.cohesion, s.bedformCohesion.values());
     }
@@ -98,42 +88,13 @@ class ExecBackend final : public SnowBackend {
   }
 
   BedformStepReport bedformStep(const BedformArgs& args) override {
-    const int w = spec_.width, h = spec_.height;
-    if (args.periodic && (w % 2 != 0 || h % 2 != 0))  // the repose edge families need even sizes to wrap
-      throw std::invalid_argument("bedforms: a periodic grid needs an even width and height");
-    if (!(args.slabM > 0.f) || args.batches < 1 || args.rounds < 0)
-      throw std::invalid_argument("bedforms: slab thickness, batches and rounds must be positive");
-    if (!bedformFieldsReady_) makeBedformFields();  // on the first bedform step only
-    exec_.upload(bed_.counters, std::vector<unsigned long long>(4, 0ull));
-    const SnowFieldsView v = view();
-    const BedformFields f = bedformFields();
-    BedformArgs a = args;
-    exec_.forEachCell(w, h, BedformPrepareKernel{v, f, a});
-    BedformStepReport report;
-    const double cells = exec_.sum(v.surfaceSlope, v.valid, w, h);
-    report.domainCells = static_cast<long long>(cells);
-    a.meanSlabs = cells > 0 ? static_cast<float>(exec_.sum(v.delta, v.valid, w, h) / cells) : 0.f;
-    report.slabsBefore = bedformSlabTotal();
-    unsigned long long relaxed = 0;
-    if (report.domainCells > 0) {
-      for (int r = 0; r < args.rounds; ++r) bedformRound(v, f, args, r, a, relaxed);
-      report.reposeConverged = relaxBedforms(v, f, a, 1 << 16, relaxed);
-    }
-    report.slabsAfter = bedformSlabTotal();
-    BedformArgs c = a;
-    c.dtDays = args.rounds > 0 ? 0.f : args.dtDays;  // the rest of the arrivals; sintering if no round ran
-    exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
-    exec_.forEachCell(w, h, BedformFinishKernel{v, f, a});
-    unsigned long long counters[2] = {0, 0};
-    exec_.downloadRange(bed_.counters, 0, 2, counters);
-    exec_.finish();
-    report.slabsEroded = static_cast<long long>(counters[0]);
-    report.slabsAvalanched = static_cast<long long>(counters[1]);
-    return report;
+    checkBedformArgs(args, spec_.width, spec_.height);
+    if (!bed_.ready) makeBedformStorage(exec_, bed_, powderM_, spec_.cellCount());  // on the first bedform step only
+    return runBedformStep(exec_, view(), bed_, dataIfPresent(bedformMask_), args);
   }
 
   bool bedformCohesion(Grid<float>& out) override {
-    if (!bedformFieldsReady_) return false;
+    if (!bed_.ready) return false;
     out = Grid<float>(spec_.width, spec_.height, 0.f);
     exec_.download(bed_.cohesion, out.values());
     return true;
@@ -144,95 +105,18 @@ class ExecBackend final : public SnowBackend {
       (void)out;
       return false;
     } else {
-      const int w = spec_.width, h = spec_.height;
-      const float dx = static_cast<float>(spec_.cellSizeXM), dy = static_cast<float>(spec_.cellSizeYM);
-      typename Exec::template Buffer<float> a, b;
-      const std::vector<float> zero(spec_.cellCount(), 0.f);
-      exec_.upload(a, zero);
-      exec_.upload(b, zero);
-      std::vector<float> previous, latest;
-      // Information moves one cell an iteration; compare the last two iterations every 16.
-      for (size_t it = 1;; ++it) {
-        auto& in = it % 2 ? a : b;
-        auto& result = it % 2 ? b : a;
-        exec_.forEachCell(w, h, RouteMapStepKernel{bedrockM_.data(), validCell_.data(), in.data(), result.data(), w, h, dx, dy,
-                                                   std::sqrt(dx * dx + dy * dy)});
-        if (it % 16 == 0 || it > spec_.cellCount()) {
-          exec_.download(in, previous);
-          exec_.download(result, latest);
-          if (previous == latest) break;
-        }
-      }
-      exec_.finish();
-      out = Grid<float>(w, h, 0.f);
-      out.values() = latest;
+      out = Grid<float>(spec_.width, spec_.height, 0.f);
+      out.values() = runRouteMap(exec_, view());
       return true;
     }
   }
 
   void uploadRouteMap(const Grid<float>& route) override {
-    exec_.upload(skierRoute_, route.values());
-    exec_.upload(skierClaim_, std::vector<int>(spec_.cellCount(), INT_MAX));
-    exec_.upload(skierCounters_, std::vector<int>(2, 0));
-    exec_.finish();
+    uploadSkierRoute(exec_, skiers_, route.values(), spec_.cellCount());
   }
 
   void skierBatch(const SkierArgs& args, std::vector<SkierAgent>& agents, std::vector<std::vector<double>>& paths) override {
-    const int n = static_cast<int>(agents.size());
-    paths.assign(agents.size(), {});
-    if (n == 0) return;
-    // The path buffer holds kSkierPathChunk points a skier; the host empties it every
-    // kSkierPathChunk - 1 moves (a move adds at most one point; the start adds the first).
-    constexpr int kSkierPathChunk = 64;
-    SkierArgs a = args;
-    a.pathStride = kSkierPathChunk;
-    exec_.upload(skierAgents_, agents);
-    exec_.upload(skierPath_, std::vector<double>(2 * static_cast<size_t>(kSkierPathChunk) * n));
-    const SkierFields f{skierAgents_.data(), n, skierPath_.data(), skierRoute_.data(), skierClaim_.data(), skierCounters_.data()};
-    const SnowFieldsView v = view();
-    auto counter = [&](int k) {
-      int c = 0;
-      exec_.downloadRange(skierCounters_, static_cast<size_t>(k), 1, &c);
-      return c;
-    };
-    auto resetCounter = [&](int k) {
-      const int zero = 0;
-      exec_.uploadRange(skierCounters_, static_cast<size_t>(k), 1, &zero);
-    };
-    // Claim rounds until every entry of this move is applied (one when no two skiers share a cell).
-    auto enterAll = [&] {
-      for (int round = 0; round <= n; ++round) {
-        resetCounter(1);
-        exec_.forEachIndex(n, SkierClaimKernel{f});
-        exec_.forEachIndex(n, SkierEnterKernel{v, f, a});
-        if (counter(1) == 0) return;
-      }
-      throw std::logic_error("skier entries: a claim round applied nothing");
-    };
-    std::vector<double> chunk;
-    auto takePaths = [&] {
-      exec_.download(skierAgents_, agents);
-      for (int i = 0; i < n; ++i) {
-        SkierAgent& s = agents[static_cast<size_t>(i)];
-        if (s.pathCount == 0) continue;
-        chunk.resize(2 * static_cast<size_t>(s.pathCount));
-        exec_.downloadRange(skierPath_, 2 * static_cast<size_t>(i) * kSkierPathChunk, chunk.size(), chunk.data());
-        paths[static_cast<size_t>(i)].insert(paths[static_cast<size_t>(i)].end(), chunk.begin(), chunk.end());
-        s.pathCount = 0;
-      }
-      exec_.upload(skierAgents_, agents);
-    };
-    exec_.forEachIndex(n, SkierStartKernel{v, f, a});
-    enterAll();
-    for (int moves = 1;; ++moves) {
-      resetCounter(0);
-      exec_.forEachIndex(n, SkierMoveKernel{v, f, a});
-      enterAll();
-      const bool running = counter(0) > 0;
-      if (!running || moves % (kSkierPathChunk - 1) == 0) takePaths();
-      if (!running) break;
-    }
-    exec_.finish();
+    runSkierBatch(exec_, view(), skiers_, args, agents, paths);
   }
 
   void avalancheRelease(const std::vector<uint8_t>& moving) override {
@@ -241,26 +125,12 @@ class ExecBackend final : public SnowBackend {
       avalancheFieldsReady_ = true;
     }
     exec_.upload(snowMoving_, moving);
-    exec_.forEachCell(spec_.width, spec_.height, AvalancheReleaseKernel{view()});
-    exec_.finish();
+    runAvalancheRelease(exec_, view());
   }
   std::vector<float> avalancheSteps(const AvalancheArgs& args, int substeps) override {
-    AvalancheArgs a = args;
-    runAvalancheSteps(exec_, view(), a, substeps);
-    std::vector<float> stats;
-    exec_.download(rowStats_, stats);
-    std::vector<float> box(stats.begin() + 4 * static_cast<size_t>(a.y0), stats.begin() + 4 * static_cast<size_t>(a.y1));
-    box.push_back(static_cast<float>(a.x0));
-    box.push_back(static_cast<float>(a.y0));
-    box.push_back(static_cast<float>(a.x1));
-    box.push_back(static_cast<float>(a.y1));
-    return box;
+    return runAvalancheSteps(exec_, view(), rowStats_, args, substeps);
   }
-  void avalancheSettle(const AvalancheArgs& a) override {
-    if (a.x1 > a.x0 && a.y1 > a.y0)
-      exec_.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheSettleKernel>{AvalancheSettleKernel{view()}, a.x0, a.y0});
-    exec_.finish();
-  }
+  void avalancheSettle(const AvalancheArgs& a) override { runAvalancheSettle(exec_, view(), a); }
 
   LayerTotals totals() override {
     const double area = spec_.cellAreaM2();
@@ -280,15 +150,6 @@ class ExecBackend final : public SnowBackend {
   Exec& exec() { return exec_; }
 
  private:
-  BedformFields bedformFields() {
-    BedformFields f;
-#define SNOW_BEDFORM_POINTER(member, Element, start) f.member = bed_.member.data();
-    SNOW_BEDFORM_FIELDS(SNOW_BEDFORM_POINTER)
-#undef SNOW_BEDFORM_POINTER
-    f.mask = dataIfPresent(bedformMask_);
-    return f;
-  }
-
   SnowFieldsView view() {
     SnowFieldsView v;
     v.width = spec_.width;
@@ -299,71 +160,11 @@ class ExecBackend final : public SnowBackend {
   SNOW_IF_VIEW(access, v.view = optionalField(FieldRole::role) ? dataIfPresent(member##_) : member##_.data();)
     SNOW_STATE_FIELDS(SNOW_VIEW_OF_FIELD)
 #undef SNOW_VIEW_OF_FIELD
-    v.bedformActive = bedformFieldsReady_ ? bed_.active.data() : nullptr;
+    v.bedformActive = bed_.ready ? bed_.active.data() : nullptr;
 #define SNOW_VIEW_OF_SCRATCH(view, Element, extent) v.view = view##_.data();
     SNOW_SCRATCH_FIELDS(SNOW_VIEW_OF_SCRATCH)
 #undef SNOW_VIEW_OF_SCRATCH
     return v;
-  }
-
-  // The bedforms' storage (kernels/bedform.h), each field as its `start` says.
-  void makeBedformFields() {
-    const size_t n = spec_.cellCount();
-    std::vector<float> powder;
-    exec_.download(powderM_, powder);  // the snow already there is not fresh
-#define SNOW_MAKE_BEDFORM_FIELD(member, Element, start)                                                          \
-  if constexpr (BedformStart::start == BedformStart::Zero) exec_.upload(bed_.member, std::vector<Element>(n)); \
-  else if constexpr (BedformStart::start == BedformStart::Powder) exec_.upload(bed_.member, powder);
-    SNOW_BEDFORM_FIELDS(SNOW_MAKE_BEDFORM_FIELD)
-#undef SNOW_MAKE_BEDFORM_FIELD
-    bedformFieldsReady_ = true;
-  }
-
-  // Slabs in the domain and those that left it: conserved by a step.
-  long long bedformSlabTotal() {
-    std::vector<int> slabs, exported;
-    exec_.download(bed_.slabs, slabs);
-    exec_.download(bed_.exported, exported);
-    long long total = 0;
-    for (size_t i = 0; i < slabs.size(); ++i) total += static_cast<long long>(slabs[i]) + exported[i];
-    return total;
-  }
-
-  // Relaxation sweeps over the four edge families until no edge moves (true), at most maxSweeps;
-  // `relaxed` carries the relaxation's move counter from sweep to sweep.
-  bool relaxBedforms(const SnowFieldsView& v, const BedformFields& f, BedformArgs& a, int maxSweeps, unsigned long long& relaxed) {
-    const int w = spec_.width, h = spec_.height;
-    for (int sweep = 0; sweep < maxSweeps; ++sweep) {
-      for (int family = 0; family < 4; ++family) {
-        a.family = family;
-        if (family < 2) exec_.forEachCell((w + 1) / 2, h, BedformReposeKernel{v, f, a});
-        else exec_.forEachCell(w, (h + 1) / 2, BedformReposeKernel{v, f, a});
-      }
-      unsigned long long now = 0;
-      exec_.downloadRange(bed_.counters, 1, 1, &now);
-      if (now == relaxed) return true;
-      relaxed = now;
-    }
-    return false;
-  }
-
-  // Polling round r of a step: its batches (snapshot, shadow, saltation, relaxation), then the
-  // round's share of the cohesion.
-  void bedformRound(const SnowFieldsView& v, const BedformFields& f, const BedformArgs& args, int r, BedformArgs& a,
-                    unsigned long long& relaxed) {
-    const int w = spec_.width, h = spec_.height;
-    a.round = args.roundBase + static_cast<uint64_t>(r);
-    for (int b = 0; b < args.batches; ++b) {
-      a.batch = b;
-      exec_.forEachCell(w, h, BedformSnapshotKernel{v, f, a.slabM, v.surfaceSlope});
-      a.maxSurface = exec_.maxValue(v.surfaceSlope, v.valid, w, h);
-      exec_.forEachCell(w, h, BedformShadowKernel{v, f, a});
-      exec_.forEachCell(w, h, BedformSaltationKernel{v, f, a});
-      relaxBedforms(v, f, a, 16, relaxed);
-    }
-    BedformArgs c = a;
-    c.dtDays = args.dtDays / static_cast<float>(args.rounds);
-    exec_.forEachCell(w, h, BedformCohesionKernel{v, f, c});
   }
 
   // Zeroed scratch fields: those made with the state (withState), or at the first avalanche.
@@ -403,16 +204,8 @@ class ExecBackend final : public SnowBackend {
 #undef SNOW_SCRATCH_BUFFER
   Buffer<float> editWeight_;
   bool avalancheFieldsReady_ = false;
-  struct BedformBuffers {
-#define SNOW_BEDFORM_BUFFER(member, Element, start) Buffer<Element> member;
-    SNOW_BEDFORM_FIELDS(SNOW_BEDFORM_BUFFER)
-#undef SNOW_BEDFORM_BUFFER
-  } bed_;
-  bool bedformFieldsReady_ = false;
-  Buffer<SkierAgent> skierAgents_;
-  Buffer<double> skierPath_;
-  Buffer<float> skierRoute_;
-  Buffer<int> skierClaim_, skierCounters_;
+  BedformStorage<Exec> bed_;
+  SkierStorage<Exec> skiers_;
 };
 
 }  // namespace snow

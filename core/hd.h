@@ -1,5 +1,5 @@
 // SNOW_HD: marks a function as callable from host code and, under nvcc, from device code.
-// Kernel bodies (core/kernels/*.h) are written once with it and run on both backends.
+// Kernel bodies (core/phenomena/*.h) are written once with it and run on both backends.
 #pragma once
 #include <cmath>
 

@@ -1,13 +1,14 @@
-// Every season step a backend runs, by name. The GPU test binary runs each of them on the serial
-// CPU reference and on CUDA from the same state and compares the results, so a kernel added here
-// is checked on both backends without writing a new test.
+// The continuous season steps a backend runs (one per phenomenon module that needs no fixture of
+// its own), by name. tests/gpu/backend_parity.h runs each of them, and the steps that do need a
+// fixture (timeline edits, avalanches, bedforms, skiers), on two backends from the same state and
+// compares the results: the GPU binary CUDA against the serial reference, tests/backend_test.cpp
+// the TBB backend. A step added here is checked on every backend without writing a new test.
 #pragma once
 #include <functional>
 #include <string>
 #include <vector>
 
 #include "backend.h"
-#include "step_args.h"
 
 namespace snow {
 

@@ -40,7 +40,7 @@ struct ModelParameters {
   // --- §5.3 powder diffusion and §5.4 wind transport
   double diffusionRestSlope = 0.5;           // s_d0
   double diffusionRatePerDay = 0.5;          // k_m, defined at the paper's 10 m cells (see powder_diffusion.h)
-  double windErosionRateMPerSPerDay = 0.1;   // k_erosion (read as m s day^-1; see kernels/wind_transport.h)
+  double windErosionRateMPerSPerDay = 0.1;   // k_erosion (read as m s day^-1; see phenomena/wind_transport.h)
   double windInstabilityPerMps2 = 0.05;      // not in Table 2: S -> U per day per m/s^2 of wind loading (§5.4)
   double windShadowToleranceM = 0.1;         // W_z this far above the snow: sheltered from erosion
   // --- §6.1 avalanches

@@ -6,7 +6,6 @@
 #include <utility>
 
 #include "season_run.h"
-#include "step_args.h"
 
 namespace snow {
 
@@ -191,7 +190,7 @@ void SeasonRun::bedformStep(int slot, double day, double dt) {
   report_.bedforms.atRest = report_.bedforms.atRest && r.reposeConverged;
 }
 
-// Wind bedforms (kernels/bedform.h), hourly steps of rounds_per_hour polling rounds each.
+// Wind bedforms (phenomena/bedforms.h), hourly steps of rounds_per_hour polling rounds each.
 void SeasonRun::addBedforms() {
   bedformsMasked_ = state_.bedformMask.size() == state_.spec.cellCount() && state_.bedformMask.size() > 0;
   if (!cfg_.bedforms) return;

@@ -36,7 +36,7 @@ struct UserAvalanche {
   std::shared_ptr<const std::vector<uint8_t>> zone;
 };
 
-// A timeline edit (kernels/edit.h) on a given day; `weights` one per cell (null: 1 everywhere).
+// A timeline edit (phenomena/timeline_edits.h) on a given day; `weights` one per cell (null: 1 everywhere).
 struct SeasonEdit {
   double day = 0;
   EditArgs args;
@@ -69,7 +69,7 @@ struct SeasonConfig {
   std::function<void(int day, SnowState& state)> updateStaticFields;
   // Wind transport runs only when the season has wind (the static wind fields are non-zero).
   bool windTransport = false;
-  // Wind bedforms (kernels/bedform.h), when set: over the whole terrain or, with
+  // Wind bedforms (phenomena/bedforms.h), when set: over the whole terrain or, with
   // state.bedformMask, inside the mask; in their domain (cells whose snow bed is at most
   // max_slope_deg steep) they replace the layered wind transport and powder diffusion.
   std::optional<BedformParameters> bedforms;

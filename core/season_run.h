@@ -17,8 +17,9 @@
 namespace snow {
 
 // The phenomena registered with the scheduler (each add* function, in the order that fixes their
-// slots and so the random draws), then the events fired until the last day. The scheduler's
-// events call back into this object: it stays where it is while they run.
+// slots and so the random draws; each phenomenon's module in core/phenomena/ names its add*), then
+// the events fired until the last day. The scheduler's events call back into this object: it
+// stays where it is while they run.
 class SeasonRun {
  public:
   SeasonRun(SnowBackend& backend, SnowState& state, const SeasonConfig& cfg, const ProgressCallback& progress,

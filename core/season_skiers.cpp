@@ -85,7 +85,7 @@ void SeasonRun::addUserSkiers() {
 // Skiers (§6.2, §7.3): automatic ones, about skiers_per_hour in each of the day's
 // ski_hours_per_day hours (an hour's skiers start together from cells drawn by the route map),
 // and the scene's user skiers. The skiers of a batch move together on the backend, one move of
-// each at a time (kernels/ski.h); the bake has no real-time display, so a batch runs to its end
+// each at a time (phenomena/skiers.h); the bake has no real-time display, so a batch runs to its end
 // at its event.
 void SeasonRun::addSkiers() {
   if (!skiing_) return;

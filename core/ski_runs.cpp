@@ -244,27 +244,6 @@ const char* skierStopReason(int status) {
   }
 }
 
-SkierArgs SkiRun::args(uint64_t seed) const {
-  SkierArgs a;
-  a.dx = spec_.cellSizeXM;
-  a.dy = spec_.cellSizeYM;
-  a.stepM = std::min(a.dx, a.dy);
-  a.reach = std::max(1, static_cast<int>(std::lround(p_.skiLookaheadM / a.stepM)));
-  a.reachM = a.reach * a.stepM;
-  a.targetRad = p_.skierTargetSlopeDeg * kPi / 180.0;
-  a.sigmaRad = p_.skiSlopeToleranceDeg * kPi / 180.0;
-  a.cosHalfCone = std::cos(100.0 * kPi / 180.0);
-  a.tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
-  a.minSnowM = p_.skiMinSnowM;
-  a.steering = p_.skiSteering;
-  a.triggerFactor = p_.skiTriggerFactor;
-  a.minUnstableM = p_.avalancheMinUnstableM;
-  a.compactionM = static_cast<float>(p_.skiCompactionM);
-  a.maxSteps = 4 * (spec_.width + spec_.height);
-  a.seed = seed;
-  return a;
-}
-
 std::vector<SkierRecord> SkiRun::descendTogether(const std::vector<SkierStart>& starts, double day, uint64_t seed) {
   const int w = spec_.width, h = spec_.height;
   std::vector<SkierAgent> agents(starts.size());
@@ -277,7 +256,7 @@ std::vector<SkierRecord> SkiRun::descendTogether(const std::vector<SkierStart>& 
     records[k].day = day, records[k].startX = st.x, records[k].startY = st.y, records[k].user = st.user;
   }
   std::vector<std::vector<double>> paths;
-  backend_.skierBatch(args(seed), agents, paths);
+  backend_.skierBatch(makeSkierArgs(p_, spec_, seed), agents, paths);
 
   const double dx = spec_.cellSizeXM, dy = spec_.cellSizeYM;
   std::vector<float> box, depth, unstable;  // the path's surroundings; one cell outside them

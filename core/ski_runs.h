@@ -4,7 +4,7 @@
 // Route map: for every cell, the length in metres of the longest strictly descending 8-neighbour
 // path from it (to a local minimum, which includes cells at the terrain's edge with no lower
 // neighbour). The paper's cellular automaton, D(c) = max over lower neighbours n of D(n) + |cn|,
-// is RouteMapStepKernel (kernels/ski.h), iterated on the device by GPU backends
+// is RouteMapStepKernel (phenomena/skiers.h), iterated on the device by GPU backends
 // (SnowBackend::routeMapOnDevice); routeMap() gets the same numbers in one pass over the cells
 // sorted by altitude (tested equal, bit for bit).
 //
@@ -33,7 +33,7 @@
 // snowfall deeper than the track erases it and a light one softens it (the paper's alpha-blending).
 //
 // Agents in parallel (§7.3): the skiers of a batch (an hour's automatic skiers, a scene's group)
-// move together, one move of every skier at a time, on the backend (kernels/ski.h: a move only
+// move together, one move of every skier at a time, on the backend (phenomena/skiers.h: a move only
 // reads the snow, so all skiers move at once; the cells they enter are then written one skier at
 // a time in skier order through integer claims): the same bytes on any thread count and on CUDA.
 //
@@ -49,10 +49,10 @@
 #include <vector>
 
 #include "backend.h"
-#include "kernels/ski.h"
 #include "grid.h"
 #include "hd.h"
 #include "parameters.h"
+#include "phenomena/skiers.h"
 #include "snow_state.h"
 
 namespace snow {
@@ -128,13 +128,11 @@ class SkiRun {
   // Whether the cell has snow enough to start a descent (reads one cell).
   bool canStart(int x, int y);
   // Descents from the given cells, all skiers moved together (one move of every skier at a time,
-  // on the backend: kernels/ski.h), in the order given; `seed` and each skier's id seed its
+  // on the backend: phenomena/skiers.h), in the order given; `seed` and each skier's id seed its
   // choices. When one triggers an avalanche its record says where. Tracks are stamped in order.
   std::vector<SkierRecord> descendTogether(const std::vector<SkierStart>& starts, double day, uint64_t seed);
   // One descent from cell (x, y): a batch of one.
   SkierRecord descend(int x, int y, double day, uint64_t seed, uint64_t id, bool user);
-  // The kernels' arguments for this run's parameters and grid.
-  SkierArgs args(uint64_t seed) const;
 
  private:
   SnowBackend& backend_;

@@ -80,7 +80,7 @@ constexpr bool optionalField(FieldRole r) {
   /* 1 where snow is never allowed (roads, buildings, rivers): the season treats those cells as   \
      outside the snow domain */                                                                    \
   X(noSnow, none, uint8_t, HostOnly, None, 0)                                                      \
-  /* Wind bedforms (kernels/bedform.h): 1 where the slab-saltation model runs (absent:            \
+  /* Wind bedforms (phenomena/bedforms.h): 1 where the slab-saltation model runs (absent:            \
      everywhere; the bedform kernels get it in BedformFields::mask), and the snow's cohesion      \
      there (0 loose .. 1 bonded; filled by download once bedforms ran) */                          \
   X(bedformMask, none, uint8_t, ArtDirection, None, 1)                                             \

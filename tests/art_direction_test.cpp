@@ -1,5 +1,5 @@
 // Art direction: painted rasters read and placed on the grid (precompute/raster_input.h), the
-// initial snow cover, timeline edits (kernels/edit.h), multipliers, the no-snow mask and masked
+// initial snow cover, timeline edits (phenomena/timeline_edits.h), multipliers, the no-snow mask and masked
 // events, through the season and the whole bake.
 #include <OpenImageIO/imageio.h>
 #include <gdal_priv.h>

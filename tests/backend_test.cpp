@@ -9,7 +9,7 @@
 
 #include "core/cpu_backend.h"
 #include "core/kernel_registry.h"
-#include "core/kernels/powder_diffusion_rows.h"
+#include "core/phenomena/powder_diffusion_rows.h"
 #include "gpu/backend_parity.h"
 #include "test_support.h"
 

@@ -1,4 +1,4 @@
-// Wind bedforms (core/kernels/bedform.h): the slab ledger, repose, shadow geometry, obstacles,
+// Wind bedforms (core/phenomena/bedforms.h): the slab ledger, repose, shadow geometry, obstacles,
 // any wind direction, determinism, the forms themselves (barchans: horns downwind, sizes,
 // migration, steep lee faces) and cohesion freezing them; the scene option in a season.
 #include <tbb/global_control.h>
@@ -14,7 +14,6 @@
 #include "core/cpu_backend.h"
 #include "core/season.h"
 #include "core/serial_exec.h"
-#include "core/step_args.h"
 #include "core/util.h"
 #include "core/errors.h"
 #include "precompute/scene.h"
@@ -111,7 +110,7 @@ std::vector<uint8_t> shadowFractions(SnowState& s, bool periodic) {
 TEST(Bedform, ShadowIsTheFractionOfTheCellUnderTheFifteenDegreeLine) {
   // A snow step of height H at the west end of a flat row, wind from the west: the fraction of
   // a cell at distance d (centre to centre) from the step's top cell under the shadow line is
-  // clamp((H / tan 15 - d + dx) / dx, 0, 1) (plateau geometry, kernels/bedform.h).
+  // clamp((H / tan 15 - d + dx) / dx, 0, 1) (plateau geometry, phenomena/bedforms.h).
   const int w = 40, h = 3;
   const float dx = 0.5f, slab = 0.025f;
   SnowState s = makeBedformWindow(w, h, dx, 0.0, 0.0, 10.f, 0.f, -5.f, 1);

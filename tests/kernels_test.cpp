@@ -5,7 +5,11 @@
 #include <cstring>
 
 #include "core/serial_exec.h"
-#include "core/steps.h"
+#include "core/phenomena/melt.h"
+#include "core/phenomena/powder_diffusion.h"
+#include "core/phenomena/snowfall.h"
+#include "core/phenomena/stability_change.h"
+#include "core/phenomena/wind_transport.h"
 #include "test_support.h"
 
 using namespace snow;

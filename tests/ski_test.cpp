@@ -366,7 +366,7 @@ TEST(Ski, NoDescentSpinsInPlaceOnRoughGround) {
 namespace snow {
 namespace {
 
-// The skier kernels' own atan and exp (kernels/ski.h: + - * / only, so every executor gives the
+// The skier kernels' own atan and exp (phenomena/skiers.h: + - * / only, so every executor gives the
 // same bytes) against the C library.
 TEST(Ski, KernelMathMatchesTheLibrary) {
   double worstAtan = 0.0, worstExp = 0.0;
@@ -393,7 +393,7 @@ std::vector<SkierStart> manyStarts(const SkiRun& run, int n, uint64_t firstId) {
   return starts;
 }
 
-// Skiers moved together (kernels/ski.h) take the paths they take alone (a move reads only the
+// Skiers moved together (phenomena/skiers.h) take the paths they take alone (a move reads only the
 // surface, which skiers do not change), and the cells they enter are compacted exactly as if each
 // entry were applied one after the other in (move, skier) order: the batch's layers equal a host
 // replay of the paths, to the bit, with 16 skiers sharing one start cell among 200.

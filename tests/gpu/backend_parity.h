@@ -16,7 +16,6 @@
 #include "core/bedform_runs.h"
 #include "core/kernel_registry.h"
 #include "core/ski_runs.h"
-#include "core/step_args.h"
 #include "tests/test_support.h"
 
 namespace snow::test {

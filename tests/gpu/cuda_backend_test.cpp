@@ -20,7 +20,6 @@
 #include "core/ski_runs.h"
 #include "core/util.h"
 #include "core/serial_exec.h"
-#include "core/step_args.h"
 #include "cuda/cuda_backend.h"
 #include "tests/gpu/backend_parity.h"
 #include "tests/test_support.h"

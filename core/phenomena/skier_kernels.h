@@ -1,29 +1,14 @@
-// The skiers' kernels (core/ski_runs.h) for every executor: the route map's cellular automaton, and
-// the agents of a batch of skiers moved together, one step of every skier at a time.
-//
-// A step of a batch (ExecBackend::skierBatch) is three kernels:
-//   SkierMoveKernel, one thread per skier: Eq. 4 over the cells ahead, the smooth turn, the move;
-//     it reads the snow and writes only its own agent (skiers change no cell's surface, the only
-//     thing a move reads, so every skier of the batch moves at once and in any order);
-//   SkierClaimKernel and SkierEnterKernel, in rounds: each skier that entered a new cell claims
-//     it (an integer atomic minimum of the skiers' indices) and the claim's winner applies its
-//     entry (the snow check, the avalanche trigger, the compaction), so a cell is written by one
-//     thread at a time, in skier order, whatever the schedule: the transport tiling's guarantee
-//     (no cell written by two threads at once) for cells entered by any number of skiers. Rounds
-//     repeat while a cell has skiers left to enter (one round when no two skiers share a cell).
-// Only + - * / and sqrt on doubles (FMA contraction is off in the build) and integer atomics:
-// the same bytes on the serial, TBB and CUDA executors. The weighting f uses atanPositive and
-// expNonPositive below instead of the libraries' atan2 and exp, which differ in the last bits
-// between glibc and CUDA.
+// The skiers' arguments, agents and kernels. What they model and how a batch runs them is in
+// skiers.h, where a reader starts.
 #pragma once
 #include <climits>
 #include <cstdint>
 
+#include "../atomics.h"
 #include "../hd.h"
 #include "../rng.h"
 #include "../snow_state.h"
 #include "../util.h"
-#include "atomics.h"
 #include "powder_diffusion.h"
 
 namespace snow {

@@ -1,5 +1,11 @@
-// Shared per-cell geometry of the snow surface: gradient by central differences that never
-// reads NODATA cells (one-sided next to a hole or the grid edge, zero when both sides are out).
+// The surface slope, shared by the phenomena that read |grad A| (A = B + C + S + U + P, the snow
+// surface): snowfall's shares, the stability change's slope factor, the bedforms' domain.
+//
+// Model: the gradient by central differences that never reads NODATA cells (one-sided next to a
+// hole or the grid edge, zero when both sides are out).
+// Writes: the scratch field surfaceSlope (SurfaceSlopeKernel), a snapshot taken before a per-cell
+// pass that changes A, so that pass never reads a neighbour another thread is writing.
+// Mass: changes no snow. Row path for the TBB executor: surface_slope_rows.h.
 #pragma once
 #include "../hd.h"
 #include "../snow_state.h"

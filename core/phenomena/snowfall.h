@@ -1,13 +1,21 @@
-// Snowfall step (paper §5.1). Per cell, no neighbour writes; the slope comes from the
-// SurfaceSlopeKernel snapshot taken just before, because this pass changes A.
+// Snowfall (paper §5.1): fresh snow on every cell above the rain-snow limit, shared between the
+// powder, unstable and stable layers by the slope and the temperature.
 //   depth added   = f * dt * k_snow * max(0, A - A_0precip)  (Foehn relation; f the scene's snowfall multiplier, 1 without)
 //   powder share  x_p = clamp(k_powdery * (|grad A| - s_c), 0, 1)
 //                 s_c = s_c0 + k_sc * max(0, T_0powdery - T)
 //   of the rest, unstable share x_U = clamp(k_unstable * (|grad A| - s_U), 0, 1), stable the remainder.
+// Per cell, no neighbour writes. The slope comes from the SurfaceSlopeKernel snapshot
+// (surface_slope.h) runSnowfall takes just before, because this pass changes A.
+// Scratch: surfaceSlope, delta (what each cell's layers gained).
+// Mass: adds snow; runSnowfall returns the volume added (m^3) for the season's ledger.
+// Backend: SnowBackend::snowfall (ExecBackend runs runSnowfall). Season: SeasonRun::addSnowfall
+// (core/season.cpp). Parameters: §5.1's rows of parameterTable (core/parameters.cpp).
 #pragma once
 #include "../hd.h"
+#include "../parameters.h"
 #include "../snow_state.h"
-#include "surface.h"
+#include "../weather.h"
+#include "surface_slope.h"
 
 namespace snow {
 
@@ -61,5 +69,29 @@ struct SnowfallKernel {
     v.delta[i] = (p1 - p0) + (u1 - u0) + (s1 - s0);
   }
 };
+
+inline SnowfallArgs makeSnowfallArgs(const ModelParameters& p, double dtDays, const WeatherState& w) {
+  SnowfallArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.seaLevelTemperatureC = static_cast<float>(w.seaLevelTemperatureC);
+  a.intensity = static_cast<float>(w.snowfallIntensity);
+  a.snowfallRatePerDay = static_cast<float>(p.snowfallRatePerDay);
+  a.rainSnowLimitM = static_cast<float>(p.rainSnowLimitM);
+  a.powderFromPrecipitation = static_cast<float>(p.powderFromPrecipitation);
+  a.powderCriticalSlopeMin = static_cast<float>(p.powderCriticalSlopeMin);
+  a.powderCriticalSlopePerC = static_cast<float>(p.powderCriticalSlopePerC);
+  a.powderSlopeTemperatureC = static_cast<float>(p.powderSlopeTemperatureC);
+  a.unstableFromPrecipitation = static_cast<float>(p.unstableFromPrecipitation);
+  a.unstableCriticalSlope = static_cast<float>(p.unstableCriticalSlope);
+  return a;
+}
+
+// The slope snapshot, then the snowfall; returns the volume added (m^3).
+template <class Exec>
+double runSnowfall(Exec& exec, const SnowFieldsView& v, const SnowfallArgs& a) {
+  exec.forEachCell(v.width, v.height, SurfaceSlopeKernel{v});
+  exec.forEachCell(v.width, v.height, SnowfallKernel{v, a});
+  return exec.sum(v.delta, v.valid, v.width, v.height) * static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
+}
 
 }  // namespace snow

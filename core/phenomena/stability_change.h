@@ -1,15 +1,24 @@
-// Stability changes (paper §5.2): snow moves between the stable and unstable layers at a rate
+// Stability change (paper §5.2): snow moves between the stable and unstable layers at a rate
 // interpolated linearly in temperature: -k_w (toward unstable) at T_warm and above, +k_c
 // (toward stable) at T_cool, 0 at T_freeze and below. Slope slows both ways as the paper says,
 // through g = s / (s + s_U) with s = |grad A| and s_U the unstable critical slope: instability
 // grows at g times its rate (slowly on gentle slopes), stability at (1 - g) times (slowly on
 // steep ones). Wind loading adds instability where the wind-effect surface's vertical speed
-// rises (§5.4): at wind_instability_per_mps2 times max(0, W . grad W_sz). Per cell; the slope
-// comes from the SurfaceSlopeKernel snapshot. Mass moves between two layers: the total changes
-// only by float rounding.
+// rises (§5.4): at wind_instability_per_mps2 times max(0, W . grad W_sz). Per cell, no neighbour
+// writes; the slope comes from the SurfaceSlopeKernel snapshot (surface_slope.h) runStability
+// takes just before.
+// Scratch: surfaceSlope.
+// Mass: moves snow between two layers only; the total changes only by float rounding.
+// Backend: SnowBackend::stabilityChange (ExecBackend runs runStability). Season:
+// SeasonRun::addStateChanges (core/season.cpp), which skips days colder than T_freeze without
+// wind loading. Parameters: the §5.2 block of ModelParameters (core/parameters.h; scene keys in
+// parameterTable, parameters.cpp), and wind_instability_per_mps2 in the §5.3/§5.4 block.
 #pragma once
 #include "../hd.h"
+#include "../parameters.h"
 #include "../snow_state.h"
+#include "../weather.h"
+#include "surface_slope.h"
 
 namespace snow {
 
@@ -61,5 +70,26 @@ struct StabilityKernel {
     }
   }
 };
+
+inline StabilityArgs makeStabilityArgs(const ModelParameters& p, double dtDays, const WeatherState& w) {
+  StabilityArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.seaLevelTemperatureC = static_cast<float>(w.seaLevelTemperatureC);
+  a.warmTemperatureC = static_cast<float>(p.warmTemperatureC);
+  a.coolTemperatureC = static_cast<float>(p.coolTemperatureC);
+  a.freezeTemperatureC = static_cast<float>(p.freezeTemperatureC);
+  a.instabilityByWarmthMPerDay = static_cast<float>(p.instabilityByWarmthMPerDay);
+  a.stabilityByColdMPerDay = static_cast<float>(p.stabilityByColdMPerDay);
+  a.unstableCriticalSlope = static_cast<float>(p.unstableCriticalSlope);
+  a.windInstabilityPerMps2 = static_cast<float>(p.windInstabilityPerMps2);
+  return a;
+}
+
+// The slope snapshot, then the stability change.
+template <class Exec>
+void runStability(Exec& exec, const SnowFieldsView& v, const StabilityArgs& a) {
+  exec.forEachCell(v.width, v.height, SurfaceSlopeKernel{v});
+  exec.forEachCell(v.width, v.height, StabilityKernel{v, a});
+}
 
 }  // namespace snow

@@ -28,11 +28,17 @@
 //    rescaling: no cell goes negative, whatever its neighbours give it).
 // A powder film thinner than diffusion_min_depth_m (1 mm) does not slide: a dusting sticks to
 // rock (and the CPU's row path skips a whole vector of cells where none holds more).
-// Snow never enters NODATA cells or leaves the grid, so the step conserves mass exactly up to
-// float rounding.
+// Scratch: scratchSurface (the surface below the powder, PowderBaseKernel) and powderFlow (five
+// shares a cell; the TBB executor keeps them in row buffers instead).
+// Mass: snow never enters NODATA cells or leaves the grid, so the step conserves mass exactly up
+// to float rounding.
+// Backend: SnowBackend::powderDiffusion (ExecBackend runs runPowderDiffusion). Season:
+// SeasonRun::addTransport (core/season.cpp). Parameters: the §5.3/§5.4 block of ModelParameters
+// (core/parameters.h; scene keys in parameterTable, parameters.cpp).
 #pragma once
 #include <cmath>
 #include "../hd.h"
+#include "../parameters.h"
 #include "../snow_state.h"
 
 namespace snow {
@@ -219,6 +225,29 @@ SNOW_HD SNOW_INLINE int powderDiffusionSubsteps(float dtDays, float ratePerDay, 
   const float perStep = dtDays * ratePerDay * diffusionLengthM / minCellSizeM;
   const float n = ceilf(perStep);
   return n < 1.f ? 1 : (n > 256.f ? 256 : static_cast<int>(n));
+}
+
+inline PowderDiffusionArgs makePowderDiffusionArgs(const ModelParameters& p, double dtDays) {
+  PowderDiffusionArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.diffusionRatePerDay = static_cast<float>(p.diffusionRatePerDay);
+  a.restSlope = static_cast<float>(p.diffusionRestSlope);
+  a.diffusionLengthM = static_cast<float>(p.diffusionLengthM);
+  a.minDepthM = static_cast<float>(p.diffusionMinDepthM);
+  return a;
+}
+
+template <class Exec>
+void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusionArgs& a) {
+  const float minCell = v.cellSizeXM < v.cellSizeYM ? v.cellSizeXM : v.cellSizeYM;
+  const int substeps = powderDiffusionSubsteps(a.dtDays, a.diffusionRatePerDay, a.diffusionLengthM, minCell);
+  PowderDiffusionArgs sub = a;
+  sub.dtDays = a.dtDays / static_cast<float>(substeps);
+  exec.forEachCell(v.width, v.height, PowderBaseKernel{v});
+  // Each substep: every cell's shares from the state at the substep's start, then every cell
+  // gathers what it keeps and what its neighbours give it. The TBB executor interleaves the two
+  // passes row by row (powder_diffusion_rows.h); the others run them one after the other.
+  for (int s = 0; s < substeps; ++s) exec.forEachCellThen(v.width, v.height, PowderFlowKernel{v, sub}, PowderGatherKernel{v});
 }
 
 }  // namespace snow

@@ -1,30 +1,5 @@
-// Avalanche flow (paper §6.1 and §7.2): the hydrostatic pipe model over the Moore neighbourhood,
-// with granular friction and viscosity, moving the unstable layer of the cells whose "snow
-// moving" flag is set (powder on top joins it when a cell starts moving).
-//
-// Storage (§7.2): one signed flow per pipe, four pipes owned per cell (east, south-east, south,
-// south-west), flows[4 i + d] in m^3/s, positive from the owner toward the neighbour. Each pipe
-// is written by its owner only; heights are updated by gathering the eight pipes. No atomics.
-//
-// One substep of length dt runs four per-cell passes over the active box:
-//   1. AvalancheFlowKernel: phi += dt c a, a = g (A_p - A_n) / L (rho cancels in dP / (rho dx));
-//      granular friction of norm dt c alpha g tan(theta_c) opposes the flow and sets it to zero
-//      rather than reversing it (static friction: snow on a slope below theta_c never starts);
-//      viscosity -k_v U phi, applied implicitly (phi / (1 + dt (1 - alpha) k_v U)) so that no
-//      k_v can make it oscillate. c = dx dy (the paper's dx^2), L the pipe length (dx, dy or
-//      the diagonal). alpha = 1 for dry snow at or below T_dry, alpha_wet for wet snow at or
-//      above T_wet, linear between, from the source cell's temperature. alpha_wet (0.2) is ours:
-//      with alpha = 0 wet snow has no yield stress, and with the paper's small k_v it keeps
-//      flowing down any slope, however gentle, for as long as it is simulated.
-//   2. AvalancheScaleKernel: the outflow of each cell is scaled so it never takes more than the
-//      unstable snow there (the paper's min(V_out, dx^2 U) / V_out, to all but a millionth).
-//   3. AvalancheApplyScaleKernel: each pipe takes the factor of the cell it drains.
-//   4. AvalancheHeightKernel: U += dt (inflow - outflow) / c, summed and kept in double through
-//      the avalanche (avalancheU; the float layer holds its rounding, which the flow reads). A
-//      cell that receives snow starts moving and its own unstable snow and powder are entrained.
-// A flow may only leave a moving cell that holds snow, so flows never grow where there is
-// nothing to move. The sum of U over the grid changes only by double rounding during the run and
-// by one float rounding per cell when it settles.
+// The avalanche's arguments and kernels. The model, its storage and the four passes of a
+// substep are described in avalanches.h, where a reader starts.
 #pragma once
 #include "../hd.h"
 #include "../snow_state.h"

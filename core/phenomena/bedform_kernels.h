@@ -1,45 +1,13 @@
-// Wind bedforms (optional fine-scale wind mode): Werner's slab-saltation model (1995) with the
-// improvements Cimbura (2022) collects -- Momiji's speed-up of the hop on crests and no erosion
-// in the wind shadow, hops stepped cell by cell so that snow stops at obstacles -- extended to
-// any wind direction without rotating the grid, and to snow by a per-cell cohesion (sintering)
-// that grows with the snow's age and temperature.
-//
-// The loose powder of each cell in the bedform domain is counted in whole slabs of `slabM`
-// metres (the rest, less than a slab, stays put as a residual): transport moves whole slabs, so
-// the number of slabs is conserved exactly, and slab counts change by integer atomic additions,
-// which give the same result in any order (any thread count, CPU or GPU).
-//
-// A round polls every cell once (non-repeated polling), in `batches` batches: a cell's batch is
-// drawn from the counter-based RNG. In a batch, from a snapshot of the slab counts:
-//   1. shadow: the fraction of each cell under the 15 deg shadow line of the surface upwind of it
-//      (along its own wind direction, up to shadowLengthM);
-//   2. saltation: a polled cell with a slab, not wholly in shadow, in wind above the threshold,
-//      erodes one slab with probability (1 - shadow) x wind-erosion factor if |W| (1 - cohesion)
-//      is above the threshold (cohesion raises the wind speed needed to lift snow); the slab hops
-//      along the wind, cell by cell (a DDA walk through the cells it crosses), hop length
-//      L = hopLengthM |W| / W_ref + Momiji's speed-up on the take-off height; a step up steeper
-//      than the repose angle stops it (it lands before the obstacle); where a hop ends it lands
-//      with probability shadow + (1 - shadow) p, p = p_s on snow or p_ns on bare ground, or hops on with the
-//      wind of where it landed. A slab reaching a cell outside the domain (but on the terrain)
-//      leaves the bedform model as powder of that cell; NODATA and the grid's edge (unless
-//      periodic) are walls;
-//   3. avalanching: pairwise relaxation over the four families of grid edges (each cell in at
-//      most one edge of a family, so a family runs in parallel without conflicts): where the
-//      surface step between two domain cells exceeds tan(repose) x spacing, whole slabs move
-//      down until it does not, repeated until no edge moves.
-// After every round (and at the end of a step without rounds) arrived slabs mix the cohesion
-// they carry (their source cell's: snow keeps its age while it moves) into the cell's by count,
-// and cohesion grows by sintering (fresh snowfall starts at 0):
-//   dc/dt = sinteringPerDay x s / (s - min(T, 0))   (T the cell's temperature, s = sinteringScaleC:
-//   full rate at 0 degC, half at -s, a third at -2s; warmer snow bonds faster)
-// At the end of a step the slab counts go back to the powder layer.
+// The wind bedforms' arguments, storage list and kernels. The model (Werner's slab saltation,
+// its batches, the repose relaxation, the cohesion) is described in bedforms.h, where a reader
+// starts.
 #pragma once
 #include <cstdint>
 
+#include "../atomics.h"
 #include "../hd.h"
 #include "../rng.h"
 #include "../snow_state.h"
-#include "atomics.h"
 
 namespace snow {
 

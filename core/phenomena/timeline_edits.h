@@ -5,9 +5,17 @@
 //   remove  L -= min(L, w d)
 //   set     L  = (1 - w) L + w d          (w = 1: exactly d; w = 0: unchanged)
 //   move    m  = w min(L, d) (or w L when no depth is given);  L -= m, L_to += m
-// Per cell, no neighbour writes. delta records what the layers actually gained, so the season's
-// mass ledger stays exact (a move changes the total by float rounding only).
+// Per cell, no neighbour writes. The edits and their masks come from the scene's art direction
+// (bake/art_direction.cpp builds each SeasonEdit: EditArgs and its weights).
+// Scratch: delta (what the layers actually gained), and the backend's edit-weight buffer for the
+// pass (emptied after it).
+// Mass: adds or removes snow (a move changes the total by float rounding only); runEdit returns
+// the volume added for the season's ledger, which stays exact.
+// Backend: SnowBackend::applyEdit (ExecBackend runs runEdit). Season: SeasonRun::addEdits
+// (core/season.cpp), each edit an action at its day. Parameters: none (the scene's edits).
 #pragma once
+#include <vector>
+
 #include "../hd.h"
 #include "../snow_state.h"
 
@@ -67,5 +75,18 @@ struct EditKernel {
     v.delta[i] = field[i] - before;
   }
 };
+
+// The edit weighted by `weights` (one per cell, row order; empty: 1 everywhere), uploaded into
+// `weightBuffer` for the pass only; returns the snow volume it added (negative: removed), in m^3.
+template <class Exec, class WeightBuffer>
+double runEdit(Exec& exec, SnowFieldsView v, WeightBuffer& weightBuffer, const EditArgs& a, const std::vector<float>& weights) {
+  exec.upload(weightBuffer, weights);
+  v.editWeight = weights.empty() ? nullptr : weightBuffer.data();
+  exec.forEachCell(v.width, v.height, EditKernel{v, a});
+  const double added = exec.sum(v.delta, v.valid, v.width, v.height) * static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
+  exec.upload(weightBuffer, std::vector<float>());
+  exec.finish();
+  return added;
+}
 
 }  // namespace snow

@@ -4,7 +4,7 @@
 #pragma once
 #include <cstdint>
 
-#include "../hd.h"
+#include "hd.h"
 
 namespace snow {
 

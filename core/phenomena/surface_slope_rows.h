@@ -10,7 +10,7 @@
 #pragma once
 #include <cstring>
 
-#include "surface.h"
+#include "surface_slope.h"
 
 #if defined(__SSE2__)
 #include <emmintrin.h>

@@ -10,9 +10,17 @@
 // the wind blows toward (sign of W_x, sign of W_y), split |W_x| : |W_y|. A neighbour that is
 // NODATA or off the grid does not receive: its share stays (the boundary is closed, so mass is
 // conserved exactly up to float rounding). Records: cumulative scour at the source, deposit at
-// the receivers.
+// the receivers (windScourM, windDepositM). Cells the bedform model runs (bedformActive) are
+// left to it.
+// Scratch: scratchSurface and scratchPowder, the snapshot (PowderSnapshotKernel, powder_diffusion.h).
+// Mass: conserved (one cell's powder moves to its downwind neighbours; see giveTo).
+// Backend: SnowBackend::windTransport (ExecBackend runs runWindTransport). Season:
+// SeasonRun::addTransport (core/season.cpp), only while the season has wind. Parameters: the
+// §5.3/§5.4 block of ModelParameters (core/parameters.h; scene keys in parameterTable,
+// parameters.cpp).
 #pragma once
 #include "../hd.h"
+#include "../parameters.h"
 #include "../snow_state.h"
 #include "powder_diffusion.h"
 
@@ -69,5 +77,25 @@ struct WindTransportKernel {
     v.windScour[i] = v.windScour[i] + (start - remaining);
   }
 };
+
+inline WindTransportArgs makeWindTransportArgs(const ModelParameters& p, double dtDays) {
+  WindTransportArgs a;
+  a.dtDays = static_cast<float>(dtDays);
+  a.erosionRate = static_cast<float>(p.windErosionRateMPerSPerDay);
+  a.shadowToleranceM = static_cast<float>(p.windShadowToleranceM);
+  return a;
+}
+
+// One pass of five colours from a snapshot. Erosion per event is bounded by the powder there,
+// and the deposit moves one cell: no substeps needed for stability.
+template <class Exec>
+void runWindTransport(Exec& exec, const SnowFieldsView& v, const WindTransportArgs& a) {
+  exec.forEachCell(v.width, v.height, PowderSnapshotKernel{v});
+  WindTransportArgs pass = a;
+  for (int colour = 0; colour < 5; ++colour) {
+    pass.colour = colour;
+    exec.forEachCellOfColour(v.width, v.height, colour, WindTransportKernel{v, pass});
+  }
+}
 
 }  // namespace snow

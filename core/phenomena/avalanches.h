@@ -1,0 +1,118 @@
+// Avalanches (paper §6.1 and §7.2): the hydrostatic pipe model over the Moore neighbourhood,
+// with granular friction and viscosity, moving the unstable layer of the cells whose "snow
+// moving" flag is set (powder on top joins it when a cell starts moving).
+//
+// Storage (§7.2): one signed flow per pipe, four pipes owned per cell (east, south-east, south,
+// south-west), flows[4 i + d] in m^3/s, positive from the owner toward the neighbour. Each pipe
+// is written by its owner only; heights are updated by gathering the eight pipes. No atomics.
+//
+// One substep of length dt runs four per-cell passes over the active box:
+//   1. AvalancheFlowKernel: phi += dt c a, a = g (A_p - A_n) / L (rho cancels in dP / (rho dx));
+//      granular friction of norm dt c alpha g tan(theta_c) opposes the flow and sets it to zero
+//      rather than reversing it (static friction: snow on a slope below theta_c never starts);
+//      viscosity -k_v U phi, applied implicitly (phi / (1 + dt (1 - alpha) k_v U)) so that no
+//      k_v can make it oscillate. c = dx dy (the paper's dx^2), L the pipe length (dx, dy or
+//      the diagonal). alpha = 1 for dry snow at or below T_dry, alpha_wet for wet snow at or
+//      above T_wet, linear between, from the source cell's temperature. alpha_wet (0.2) is ours:
+//      with alpha = 0 wet snow has no yield stress, and with the paper's small k_v it keeps
+//      flowing down any slope, however gentle, for as long as it is simulated.
+//   2. AvalancheScaleKernel: the outflow of each cell is scaled so it never takes more than the
+//      unstable snow there (the paper's min(V_out, dx^2 U) / V_out, to all but a millionth).
+//   3. AvalancheApplyScaleKernel: each pipe takes the factor of the cell it drains.
+//   4. AvalancheHeightKernel: U += dt (inflow - outflow) / c, summed and kept in double through
+//      the avalanche (avalancheU; the float layer holds its rounding, which the flow reads). A
+//      cell that receives snow starts moving and its own unstable snow and powder are entrained.
+// A flow may only leave a moving cell that holds snow, so flows never grow where there is
+// nothing to move. The sum of U over the grid changes only by double rounding during the run and
+// by one float rounding per cell when it settles.
+//
+// Preconditions: snowMoving marks the released cells (avalancheRelease uploads it); scratch:
+// flows, avalancheBefore, avalancheU and rowStats (made by the backend at the first avalanche),
+// scratchPowder (the outflow scales).
+// Mass: conserved (see above); the scour and deposit records (avalancheScourM, avalancheDepositM)
+// are kept at the settle.
+// Backend: SnowBackend::avalancheRelease, avalancheSteps and avalancheSettle (ExecBackend runs
+// the functions below). Host runner: AvalancheRun (core/avalanche_runs.h: the release zone,
+// the substep length, the box, the records). Season: SeasonRun::addAvalanches
+// (core/season_avalanches.cpp). Parameters: the §6.1 blocks of ModelParameters
+// (core/parameters.h; scene keys in parameterTable, parameters.cpp).
+#pragma once
+#include <cmath>
+#include <vector>
+
+#include "../parameters.h"
+#include "../util.h"
+#include "avalanche_kernels.h"
+
+namespace snow {
+
+// The flow's constants for a day of sea-level temperature T0; the box is the caller's.
+inline AvalancheArgs makeAvalancheArgs(const ModelParameters& p, double seaLevelTemperatureC) {
+  AvalancheArgs a;
+  a.gravity = static_cast<float>(p.gravityMps2);
+  a.tanRestAngle = static_cast<float>(std::tan(p.avalancheRestAngleDeg * kPi / 180.0));
+  a.viscosity = static_cast<float>(p.snowViscosityPerS2);
+  a.dryTemperatureC = static_cast<float>(p.avalancheDryTemperatureC);
+  a.wetTemperatureC = static_cast<float>(p.avalancheWetTemperatureC);
+  a.seaLevelTemperatureC = static_cast<float>(seaLevelTemperatureC);
+  a.alphaWet = static_cast<float>(p.avalancheWetGranularFraction);
+  return a;
+}
+
+// The released cells (snowMoving, uploaded by the caller) start moving.
+template <class Exec>
+void runAvalancheRelease(Exec& exec, const SnowFieldsView& v) {
+  exec.forEachCell(v.width, v.height, AvalancheReleaseKernel{v});
+  exec.finish();
+}
+
+// Avalanche substeps over a box that grows by one cell per substep (snow moves at most one cell
+// a substep), then the per-row statistics of the grown box. Returns the grown box in `a`.
+template <class Exec>
+void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a, int substeps) {
+  for (int s = 0; s < substeps; ++s) {
+    a.x0 = a.x0 > 0 ? a.x0 - 1 : 0;
+    a.y0 = a.y0 > 0 ? a.y0 - 1 : 0;
+    a.x1 = a.x1 < v.width ? a.x1 + 1 : v.width;
+    a.y1 = a.y1 < v.height ? a.y1 + 1 : v.height;
+    const int w = a.x1 - a.x0, h = a.y1 - a.y0;
+    if (w <= 0 || h <= 0) return;
+    // Every cell with moving snow is at least one cell inside the box, so all of its pipes and
+    // neighbours are processed; cells outside hold no flows (AvalancheClearIdleKernel).
+    exec.forEachCell(w, h, InBox<AvalancheFlowKernel>{AvalancheFlowKernel{v, a}, a.x0, a.y0});
+    exec.forEachCell(w, h, InBox<AvalancheScaleKernel>{AvalancheScaleKernel{v, a}, a.x0, a.y0});
+    exec.forEachCell(w, h, InBox<AvalancheApplyScaleKernel>{AvalancheApplyScaleKernel{v}, a.x0, a.y0});
+    exec.forEachCell(w, h, InBox<AvalancheHeightKernel>{AvalancheHeightKernel{v, a}, a.x0, a.y0});
+  }
+  if (a.x1 > a.x0 && a.y1 > a.y0) {
+    exec.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheClearIdleKernel>{AvalancheClearIdleKernel{v}, a.x0, a.y0});
+    exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a});
+  }
+}
+
+// `substeps` substeps from `args`' box, then what the host reads back: 4 floats per row of the
+// grown box (from `rowStats`, the buffer behind v.rowStats), then the box x0, y0, x1, y1.
+template <class Exec, class RowStatsBuffer>
+std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowStatsBuffer& rowStats, const AvalancheArgs& args,
+                                     int substeps) {
+  AvalancheArgs a = args;
+  runAvalancheSubsteps(exec, v, a, substeps);
+  std::vector<float> stats;
+  exec.download(rowStats, stats);
+  std::vector<float> box(stats.begin() + 4 * static_cast<size_t>(a.y0), stats.begin() + 4 * static_cast<size_t>(a.y1));
+  box.push_back(static_cast<float>(a.x0));
+  box.push_back(static_cast<float>(a.y0));
+  box.push_back(static_cast<float>(a.x1));
+  box.push_back(static_cast<float>(a.y1));
+  return box;
+}
+
+// The moving snow in the box comes to rest, with the scour and deposit records.
+template <class Exec>
+void runAvalancheSettle(Exec& exec, const SnowFieldsView& v, const AvalancheArgs& a) {
+  if (a.x1 > a.x0 && a.y1 > a.y0)
+    exec.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheSettleKernel>{AvalancheSettleKernel{v}, a.x0, a.y0});
+  exec.finish();
+}
+
+}  // namespace snow
