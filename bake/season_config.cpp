@@ -32,7 +32,10 @@ std::array<int, 2> eventCell(const Scene& scene, const TerrainInfo& ti, const Sn
   return {x, y};
 }
 
-bool asks(const std::vector<std::string>& layers, const char* name) { return std::find(layers.begin(), layers.end(), name) != layers.end(); }
+// Whether a layer asked for is computed from `input` (the ski-track texture, the route map).
+bool layersNeed(const std::vector<std::string>& layers, LayerNeeds input) {
+  return std::any_of(layers.begin(), layers.end(), [&](const std::string& name) { return findLayer(name)->needs & input; });
+}
 
 }  // namespace
 
@@ -59,8 +62,8 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
     const auto c = eventCell(scene, terrain.info(), state, a, "skier", "start point");
     config.userSkiers.push_back({a.day, c[0], c[1], a.count, nullptr});
   }
-  if (asks(layers, "ski_route_map")) outputs.routeMap = routeMap(state.bedrockM, state.validCell, state.spec);
-  if (asks(layers, "ski_tracks")) {
+  if (layersNeed(layers, kNeedsRouteMap)) outputs.routeMap = routeMap(state.bedrockM, state.validCell, state.spec);
+  if (layersNeed(layers, kNeedsSkiTracks)) {
     outputs.skiTracks.emplace(state.spec, scene.outputs.skiTrackFactor);
     config.skiTracks = &*outputs.skiTracks;
   }

@@ -77,7 +77,7 @@ struct Multipliers {
   bool any() const { return snowfall || melt || windErosion || avalancheRelease || skierSpawn || noSnow; }
 };
 
-// [bedforms]: the slab-saltation bedform model (core/kernels/bedform.h) in the season, over the
+// [bedforms]: the slab-saltation bedform model (core/phenomena/bedforms.h) in the season, over the
 // whole terrain or inside `mask` (cells >= 0.5), in place of the layered wind transport there.
 struct BedformScene {
   bool enabled = false;

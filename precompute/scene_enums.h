@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/kernels/edit.h"
+#include "core/phenomena/timeline_edits.h"
 
 namespace snow {
 
@@ -73,7 +73,7 @@ struct EnumNames<EventType> {
       {{EventType::Snowfall, "snowfall"}, {EventType::Avalanche, "avalanche"}, {EventType::Skier, "skier"}}};
 };
 template <>
-struct EnumNames<EditOp> {  // edits.op (core/kernels/edit.h)
+struct EnumNames<EditOp> {  // edits.op (core/phenomena/timeline_edits.h)
   static constexpr std::array<std::pair<EditOp, std::string_view>, 4> table{
       {{EditOp::Add, "add"}, {EditOp::Remove, "remove"}, {EditOp::Set, "set"}, {EditOp::Move, "move"}}};
 };
