@@ -9,6 +9,7 @@
 
 #include "core/errors.h"
 #include "core/hash.h"
+#include "inputs/raster_input.h"
 
 namespace snow {
 namespace {

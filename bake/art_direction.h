@@ -1,4 +1,4 @@
-// Art direction (README "Art direction"): the scene's painted rasters read, placed on the grid,
+// Art direction (docs/models/art-direction.md): the scene's painted rasters read, placed on the grid,
 // and turned into what the season runs with: the initial snow cover, the per-cell multipliers
 // and no-snow mask in the SnowState, timeline edits, and masked avalanche and skier events.
 #pragma once
@@ -8,7 +8,8 @@
 
 #include "bakers/manifest.h"
 #include "core/season.h"
-#include "precompute/scene.h"
+#include "inputs/terrain_loader.h"
+#include "scene/scene.h"
 
 namespace snow {
 

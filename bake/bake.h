@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/season.h"
-#include "precompute/terrain_loader.h"
+#include "inputs/terrain_loader.h"
 
 namespace snow {
 

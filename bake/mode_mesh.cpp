@@ -10,7 +10,7 @@
 #include "core/format.h"
 #include "core/hash.h"
 #include "modes.h"
-#include "precompute/fallen_snow.h"
+#include "static_snow/fallen_snow.h"
 
 namespace snow {
 

@@ -1,11 +1,11 @@
-// mode = "occlusion" (Foldes & Benes 2007, precompute/occlusion.h): ambient occlusion and the
+// mode = "occlusion" (Foldes & Benes 2007, static_snow/occlusion.h): ambient occlusion and the
 // day's sun trajectory give a static snow cover, in place of the season.
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 
 #include "core/format.h"
-#include "precompute/occlusion.h"
+#include "static_snow/occlusion.h"
 #include "precompute/ray_scene.h"
 #include "stages.h"
 

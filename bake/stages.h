@@ -18,9 +18,9 @@
 #include "core/ski_runs.h"
 #include "precompute/cache.h"
 #include "precompute/exposure.h"
-#include "precompute/mesh.h"
-#include "precompute/scene.h"
-#include "precompute/terrain_loader.h"
+#include "inputs/mesh.h"
+#include "scene/scene.h"
+#include "inputs/terrain_loader.h"
 #include "precompute/wind_timeline.h"
 #include "scene/layers.h"
 

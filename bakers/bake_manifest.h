@@ -5,8 +5,8 @@
 
 #include "core/season.h"
 #include "manifest.h"
-#include "precompute/scene.h"
-#include "precompute/terrain_loader.h"
+#include "scene/scene.h"
+#include "inputs/terrain_loader.h"
 
 namespace snow {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "core/grid.h"
-#include "precompute/fallen_snow.h"
+#include "static_snow/fallen_snow.h"
 
 namespace snow {
 

@@ -1,4 +1,4 @@
-// The snow body of snow on a mesh (precompute/fallen_snow.h) as a volume and a mesh: every site
+// The snow body of snow on a mesh (static_snow/fallen_snow.h) as a volume and a mesh: every site
 // holding snow stands for a column over its footprint (a square of its spacing) from just inside
 // the surface it sits on up to its snow top; the columns' voxels (centres inside a column) are
 // the snow. OpenVDB turns them into a narrow-band level set (snow_sdf, in metres, smoothed by a
@@ -12,11 +12,11 @@
 #include <string>
 
 #include "mesh_writer.h"
-#include "precompute/fallen_snow.h"
+#include "static_snow/fallen_snow.h"
 
 namespace snow {
 
-// MeshSnowBodyOptions: precompute/fallen_snow.h (the scene file sets them too).
+// MeshSnowBodyOptions: scene/mesh_snow_options.h (the scene file sets them).
 
 struct MeshSnowBody {
   MeshData mesh;               // closed, outward-facing triangles

@@ -12,7 +12,7 @@
 #include "mesh_snow_body.h"
 #include "mesh_writer.h"
 #include "output_writer.h"
-#include "precompute/fallen_snow.h"
+#include "static_snow/fallen_snow.h"
 #include "rtin.h"
 
 namespace snow {

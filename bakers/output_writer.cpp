@@ -101,6 +101,7 @@ void OutputWriter::writeLayers(const Day& d) {
   LayerInputs in;
   in.state = &d.s;
   in.params = &scene_.params;
+  in.outputs = &scene_.outputs;
   if (needs & kNeedsWind) {
     wind = src_.wind->at(d.outputDay);
     in.windXMps = &wind.windXMps, in.windYMps = &wind.windYMps, in.windEffectZM = &wind.windEffectZM;

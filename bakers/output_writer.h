@@ -12,8 +12,8 @@
 #include "core/snow_state.h"
 #include "output_sink.h"
 #include "precompute/exposure.h"
-#include "precompute/mesh.h"
-#include "precompute/scene.h"
+#include "inputs/mesh.h"
+#include "scene/scene.h"
 #include "precompute/wind_timeline.h"
 #include "scene/layers.h"
 

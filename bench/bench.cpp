@@ -19,10 +19,10 @@
 #include "cuda/cuda_backend.h"
 #include "precompute/exposure.h"
 #include "precompute/horizon.h"
-#include "precompute/occlusion.h"
+#include "static_snow/occlusion.h"
 #include "bakers/mesh_writer.h"
 #include "bakers/rtin.h"
-#include "precompute/terrain_loader.h"
+#include "inputs/terrain_loader.h"
 #include "precompute/wind.h"
 #include "bench_suite.h"
 

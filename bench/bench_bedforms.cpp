@@ -1,7 +1,7 @@
 // `snowbake bench --stage bedforms`: the wind-bedform model's time per polling round on windows
 // of 256² to 1024² (CPU, and CUDA when a device works), and its checks against references that
 // are exact: the slab ledger (every slab kept), the repose angle after avalanching, the serial
-// executor's bytes (the parallel backends must equal them), and the barchan census of README's
+// executor's bytes (the parallel backends must equal them), and the barchan census of the documented
 // parameter set against Filhol & Sturm's snow-barchan sizes.
 #include <cmath>
 #include <cstring>
@@ -45,7 +45,7 @@ std::string bedformBench(const BenchOptions& o, std::ostream& log, int threads) 
   std::ostringstream table;
   const cuda::DeviceInfo info = cuda::probeDevice();
   table << "Wind bedforms: time per polling round (every cell polled once: shadow, saltation and avalanching in 4 batches), "
-           "README's barchan set on periodic windows of 0.5 m cells, after 20 warm-up rounds; "
+           "the documented barchan set on periodic windows of 0.5 m cells, after 20 warm-up rounds; "
         << benchMachineDescription() << ", " << threads << " threads\n\n"
         << "| window | backend | ms per round | ns per cell and round | slabs lifted per round | slab ledger |\n|---|---|---|---|---|---|\n";
   for (int n : {256, 512, 1024}) {

@@ -9,7 +9,7 @@
 
 #include "bakers/mesh_snow_body.h"
 #include "bench_suite.h"
-#include "precompute/fallen_snow.h"
+#include "static_snow/fallen_snow.h"
 
 namespace snow {
 

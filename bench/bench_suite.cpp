@@ -24,7 +24,7 @@
 #include "core/reference_scenario.h"
 #include "cuda/cuda_backend.h"
 #include "precompute/exposure.h"
-#include "precompute/terrain_loader.h"
+#include "inputs/terrain_loader.h"
 #include "precompute/wind.h"
 #include "bake/bake.h"
 

@@ -21,7 +21,7 @@ std::string validateBedformParameters(const BedformParameters& p, const GridSpec
 SnowState makeBedformWindow(int w, int h, double cellM, double meanDepthM, double noiseM, float windXMps,
                             float windYMps, float temperatureC, uint64_t seed);
 
-// README's barchan set, shared by the tests, the benchmark and the GPU tests: the default
+// The documented barchan set (docs/models/bedforms.md), shared by the tests, the benchmark and the GPU tests: the default
 // parameters on a periodic (tileable) window without sintering, and an n x n window of 0.5 m
 // cells holding 5 cm of powder with +-1 slab of noise (seed 3) under a steady 10 m/s westerly at
 // -10 degC.

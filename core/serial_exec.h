@@ -1,6 +1,17 @@
 // The reference executor: every kernel body called in a plain loop, in row order, on one thread.
 // The TBB executor must give the same bytes (each cell is written by exactly one call per pass),
 // and the GPU test binary uses this one as the CPU reference because it links no TBB.
+//
+// What every executor (this one, TbbExec in cpu_backend.cpp, CudaExec in cuda/cuda_exec.cuh)
+// provides, and each phenomenon's runX<Exec> (core/phenomena/) uses:
+//   template <class T> using Buffer = ...;  // the storage ExecBackend keeps per field
+//   template <class K> void forEachCell(int width, int height, const K& kernel);
+//   template <class K> void forEachCellOfColour(int width, int height, int colour, const K& kernel);
+//   template <class F, class G> void forEachCellThen(int width, int height, const F& first, const G& second);
+//     (first on every cell, then second)
+//   double sum(const float* values, const uint8_t* valid, int width, int height);  // fixed order
+//   float maxValue(const float* values, const uint8_t* valid, int width, int height);
+//   void finish();  // waits for queued work (GPU) and reports its errors
 #pragma once
 #include <algorithm>
 #include <cstdint>

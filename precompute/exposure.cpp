@@ -26,17 +26,6 @@ std::array<float, 3> rayOrigin(const RayScene& scene, int i, int j, const std::a
 
 }  // namespace
 
-const std::vector<std::string>& sunQualityNames() {
-  static const std::vector<std::string> names{"draft", "production", "reference"};
-  return names;
-}
-
-SunQuality sunQuality(const std::string& name) {
-  if (name == "draft") return {"draft", 8, 6, 1.0, 30.0, 8, 4, 200.0};
-  if (name == "production") return {"production", 16, 9, 0.5, 10.0, 16, 8, 400.0};
-  if (name == "reference") return {"reference", 64, 12, 0.125, 5.0, 32, 16, 800.0};
-  throw InputError("sun quality '" + name + "' is not one of: draft, production, reference");
-}
 
 void terrainNormals(const Grid<float>& a, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out) {
   const int w = spec.width, h = spec.height;
@@ -153,7 +142,7 @@ Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights
 // annuli, directions rotated by half a step every other ring), senders read from the direct
 // sun map at the nearest cell. Senders are not tested for visibility: the two cosines already
 // drop those behind the receiver's horizon plane or facing away; a ridge between two facing
-// slopes is not seen (documented in README).
+// slopes is not seen (documented in docs/precompute.md).
 std::vector<Grid<float>> computeIndirectSunForDays(const std::vector<const Grid<float>*>& suns, const Grid<float>& heights,
                                                    const Grid<uint8_t>& valid, const GridSpec& spec, int directions, int rings,
                                                    double radiusM, double kIndOverKSun) {

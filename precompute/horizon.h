@@ -1,7 +1,7 @@
 // The fast path for pure height fields: horizon angles per azimuth by a sweep over the grid
 // (an upper convex hull along lines in each direction, O(cells) per azimuth), after which the
 // sky term is a sum and direct shadowing for any sun position is a lookup. Used by default
-// where no occluder mesh is in the scene; README "Sun exposure" gives its measured agreement
+// where no occluder mesh is in the scene; docs/precompute.md gives its measured agreement
 // with the Embree path.
 #pragma once
 #include <vector>

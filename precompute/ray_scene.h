@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "core/grid.h"
-#include "mesh.h"
+#include "inputs/mesh.h"
 
 namespace snow {
 

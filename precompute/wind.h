@@ -26,7 +26,7 @@ enum class WindOrdering { RedBlack, UpwindSweep };
 const char* windOrderingName(WindOrdering o);
 
 struct WindSolverOptions {
-  WindOrdering ordering = WindOrdering::UpwindSweep;  // the faster (README "Benchmarks")
+  WindOrdering ordering = WindOrdering::UpwindSweep;  // the faster (docs/benchmarks.md)
   double toleranceM = 1e-4;    // stop when no cell's W_z (m) or W_sz (m/s) moves more than this in an iteration
   int maxIterations = 100000;  // full iterations (both colours, or one sweep)
 };

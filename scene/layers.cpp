@@ -1,6 +1,7 @@
 // The layer table (layers.h) and the compute function of every float layer.
 #include "layers.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/season.h"
@@ -49,6 +50,16 @@ Grid<float> sunLayer(const LayerInputs& in, bool temperature) {
   return g;
 }
 
+// snow_coverage: a smooth step 3t^2 - 2t^3 of the depth between outputs.coverage_depths_m's two
+// depths, so a material blend has no hard edge and no slope at either end.
+Grid<float> snowCoverage(const LayerInputs& in) {
+  const double bare = in.outputs->coverageDepthsM[0], covered = in.outputs->coverageDepthsM[1];
+  return perValidCell(*in.state, [&](int x, int y) {
+    const double t = std::clamp((in.state->depthM(x, y) - bare) / (covered - bare), 0.0, 1.0);
+    return static_cast<float>(t * t * (3.0 - 2.0 * t));
+  });
+}
+
 constexpr uint8_t S = kSeasonMode, G = kGridModes, O = kOcclusionMode;
 
 const LayerInfo kLayers[] = {
@@ -57,6 +68,10 @@ const LayerInfo kLayers[] = {
     {"unstable", "m", "snow layer: unstable", G, kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.unstableM(x, y))},
     {"powder", "m", "snow layer: powder", G, kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.powderM(x, y))},
     {"depth", "m", "total snow depth C+S+U+P", G, kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.depthM(x, y))},
+    {"snow_coverage", "1",
+     "soft snow cover for material blends: 0 on ground with at most the first of outputs.coverage_depths_m, 1 under at least the "
+     "second, a smooth step (3t^2 - 2t^3) of the depth between",
+     G, kNeedsState, LayerKind::Float, snowCoverage},
     {"bedrock", "m", "terrain altitude B", G, kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.bedrockM(x, y))},
     {"surface", "m", "snow-surface altitude B+C+S+U+P", G, kNeedsState, LayerKind::Float,
      SNOW_STATE_LAYER(s.bedrockM(x, y) + s.depthM(x, y))},

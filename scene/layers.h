@@ -9,6 +9,7 @@
 #include "core/grid.h"
 #include "core/parameters.h"
 #include "core/snow_state.h"
+#include "scene.h"
 
 namespace snow {
 
@@ -27,6 +28,7 @@ struct OcclusionGrids {
 struct LayerInputs {
   const SnowState* state = nullptr;
   const ModelParameters* params = nullptr;
+  const OutputRequest* outputs = nullptr;      // the scene's [outputs] (layers with settings of their own)
   const Grid<float>* windXMps = nullptr;       // kNeedsWind: the day's wind field and wind-effect surface
   const Grid<float>* windYMps = nullptr;
   const Grid<float>* windEffectZM = nullptr;

@@ -1,4 +1,4 @@
-// Art direction: painted rasters read and placed on the grid (precompute/raster_input.h), the
+// Art direction: painted rasters read and placed on the grid (inputs/raster_input.h), the
 // initial snow cover, timeline edits (phenomena/timeline_edits.h), multipliers, the no-snow mask and masked
 // events, through the season and the whole bake.
 #include <OpenImageIO/imageio.h>
@@ -18,8 +18,8 @@
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/season.h"
-#include "precompute/raster_input.h"
-#include "precompute/scene.h"
+#include "inputs/raster_input.h"
+#include "scene/scene.h"
 #include "test_support.h"
 
 namespace snow {

@@ -16,7 +16,7 @@
 #include "core/serial_exec.h"
 #include "core/util.h"
 #include "core/errors.h"
-#include "precompute/scene.h"
+#include "scene/scene.h"
 #include "tests/bake_support.h"
 
 namespace snow {
@@ -46,7 +46,7 @@ double powderTotal(const SnowState& s) {
   return t;
 }
 
-// The barchan parameter set of README "Wind bedforms" (the defaults): 0.5 m cells, 2.5 cm slabs,
+// The barchan parameter set of docs/models/bedforms.md (the defaults): 0.5 m cells, 2.5 cm slabs,
 // 5 cm of loose snow on a hard bed, hops of 0.5 m at 10 m/s, p_s 0.4, p_ns 0.9; 500 rounds.
 Window barchanField(int n, std::unique_ptr<SnowBackend> backend) {
   return Window(makeBarchanWindow(n), periodicBedformParameters(), std::move(backend));
@@ -265,7 +265,7 @@ TEST(Bedform, SameBytesOnOneAndTwoThreadsAndTheSerialReference) {
 }
 
 TEST(Bedform, BarchansFormWithHornsDownwindMigrateDownwindAndHaveSteepLeeFaces) {
-  // README's barchan set from a flat bed with +-1 slab of noise under a steady westerly, 500
+  // the documented barchan set from a flat bed with +-1 slab of noise under a steady westerly, 500
   // rounds: crescents whose horns reach past their crest downwind, 3-20 m long and 0.1-0.5 m
   // tall (Filhol & Sturm's snow barchans), moving downwind, lee faces steeper than windward ones.
   // (Seeds 1 to 8 and 11 of this window, measured: 9-19 bodies with a horn downwind against 1-6

@@ -1,4 +1,4 @@
-// Snow on any mesh, placement stage (precompute/fallen_snow.h): the thesis's own checks that
+// Snow on any mesh, placement stage (static_snow/fallen_snow.h): the thesis's own checks that
 // placement alone must pass (Fearing 2000, digest §6.3): a flat open plane holds exactly the
 // requested depth and mass; with zero flutter an opaque overhang keeps the ground under it bare,
 // with a sharp edge at its vertical projection; with flutter some snow reaches under it and the
@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "precompute/fallen_snow.h"
+#include "static_snow/fallen_snow.h"
 
 namespace snow {
 namespace {

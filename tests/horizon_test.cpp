@@ -8,7 +8,7 @@
 #include "core/default_terrain.h"
 #include "precompute/exposure.h"
 #include "precompute/horizon.h"
-#include "precompute/terrain_loader.h"
+#include "inputs/terrain_loader.h"
 
 using namespace snow;
 

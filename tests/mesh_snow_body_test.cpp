@@ -11,7 +11,7 @@
 #include <map>
 
 #include "bakers/mesh_snow_body.h"
-#include "precompute/fallen_snow.h"
+#include "static_snow/fallen_snow.h"
 
 namespace snow {
 namespace {

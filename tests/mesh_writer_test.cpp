@@ -10,7 +10,7 @@
 #include "bakers/rtin.h"
 #include "bake_support.h"
 #include "core/default_terrain.h"
-#include "precompute/mesh.h"
+#include "inputs/mesh.h"
 
 namespace snow {
 namespace {

@@ -18,10 +18,10 @@
 #include "core/mesh_normals.h"
 #include "core/util.h"
 #include "precompute/exposure.h"
-#include "precompute/mesh.h"
-#include "precompute/occlusion.h"
+#include "inputs/mesh.h"
+#include "static_snow/occlusion.h"
 #include "precompute/ray_scene.h"
-#include "precompute/scene.h"
+#include "scene/scene.h"
 
 namespace snow {
 namespace {

@@ -4,7 +4,7 @@
 #include <fstream>
 
 #include "core/errors.h"
-#include "precompute/scene.h"
+#include "scene/scene.h"
 
 using namespace snow;
 namespace fs = std::filesystem;

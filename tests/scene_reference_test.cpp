@@ -8,8 +8,8 @@
 #include <map>
 #include <sstream>
 
-#include "precompute/scene_reference.h"
-#include "precompute/scene_schema.h"
+#include "scene/scene_reference.h"
+#include "scene/scene_schema.h"
 #include "scene/layers.h"
 
 namespace snow {

@@ -12,8 +12,8 @@
 #include <fstream>
 
 #include "core/errors.h"
-#include "precompute/mesh.h"
-#include "precompute/terrain_loader.h"
+#include "inputs/mesh.h"
+#include "inputs/terrain_loader.h"
 
 using namespace snow;
 namespace fs = std::filesystem;

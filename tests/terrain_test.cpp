@@ -7,7 +7,7 @@
 #include <functional>
 
 #include "core/errors.h"
-#include "precompute/terrain_loader.h"
+#include "inputs/terrain_loader.h"
 
 using namespace snow;
 namespace fs = std::filesystem;

@@ -8,8 +8,8 @@
 #include "core/default_terrain.h"
 #include "core/errors.h"
 #include "core/format.h"
-#include "precompute/scene.h"
-#include "precompute/terrain_loader.h"
+#include "scene/scene.h"
+#include "inputs/terrain_loader.h"
 
 namespace snow {
 

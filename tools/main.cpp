@@ -17,7 +17,7 @@
 #include "core/errors.h"
 #include "bake/bake.h"
 #include "bench/bench.h"
-#include "precompute/scene_reference.h"
+#include "scene/scene_reference.h"
 #include "tools/info.h"
 
 int main(int argc, char** argv) {

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's snow-on-a-mesh picture. `mesh_snow_table.py obj OUT.obj` writes the scene's mesh (a
+"""The snow-on-a-mesh picture of docs/models/snow-on-meshes.md. `mesh_snow_table.py obj OUT.obj` writes the scene's mesh (a
 3 m x 3 m ground inside a curb, a table whose top overhangs on four legs, a 35 degree wedge and a
 stepped block: our own geometry, z up); `mesh_snow_table.py render MESH.obj BAKE_DIR OUT.png` draws the
 mesh and the baked snow body (BAKE_DIR/snow_body.obj, y-up as the OBJ writer writes it) in an

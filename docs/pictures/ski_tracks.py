@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's ski-track picture from a bake of docs/pictures/ski_tracks_tyrol.toml: the shaded
+"""The ski-track picture of docs/models/skiers.md from a bake of docs/pictures/ski_tracks_tyrol.toml: the shaded
 snow surface with the ski-track texture cut into it, the 500 m x 500 m window holding the most
 track texels. Usage: ski_tracks.py BAKE_DIR OUT.png (needs python3-openimageio, python3-numpy)."""
 import json

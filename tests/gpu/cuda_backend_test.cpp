@@ -185,7 +185,7 @@ TEST(CudaBackend, RouteMapMatchesTheHostsOnePass) {
   EXPECT_EQ(onDevice.values(), routeMap(s.bedrockM, s.validCell, s.spec).values());
 }
 
-// Time per polling round of README's barchan set on a 1024² periodic window (printed; the bench's
+// Time per polling round of the documented barchan set (docs/models/bedforms.md) on a 1024² periodic window (printed; the bench's
 // `--stage bedforms` measures the same on the CPU).
 TEST(CudaBackend, BedformRoundTimeOn1024Squared) {
   SKIP_WITHOUT_CUDA();

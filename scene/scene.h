@@ -14,8 +14,8 @@
 #include "core/default_terrain.h"
 #include "core/parameters.h"
 #include "core/weather.h"
-#include "fallen_snow.h"
-#include "raster_input.h"
+#include "mesh_snow_options.h"
+#include "raster_ref.h"
 #include "scene_enums.h"
 #include "terrain_source.h"
 
@@ -38,9 +38,10 @@ struct OutputRequest {
   int compressionLevel = 1;            // PNG zlib and EXR zip level, 0 (none) to 9 (bakers/grid_writer.h)
   bool avalancheMaps = false;      // each avalanche's release zone, scour and deposit
   double avalancheFrameIntervalS = 0.0;  // frames of each avalanche's motion (0: none)
+  std::array<double, 2> coverageDepthsM{0.02, 0.15};  // snow_coverage: 0 up to the first depth, 1 from the second
 };
 
-// mode = "occlusion": Foldes & Benes 2007 (precompute/occlusion.h), no season.
+// mode = "occlusion": Foldes & Benes 2007 (static_snow/occlusion.h), no season.
 struct OcclusionParameters {
   double sMaxM = 1.0;
   double tauAmbient = 1.25;
@@ -52,7 +53,7 @@ struct OcclusionParameters {
   double turbidity = 3.0;
 };
 
-// Art direction (README "Art direction"): painted rasters that set the starting snow, steer the
+// Art direction (docs/models/art-direction.md): painted rasters that set the starting snow, steer the
 // season, and edit it on given days.
 struct InitialSnowLayer {
   enum class Kind { None, Constant, Raster, Mask };
@@ -85,7 +86,7 @@ struct BedformScene {
   std::optional<RasterRef> mask;
 };
 
-// mode = "mesh": Fearing's snow on the mesh itself ([mesh_snow]; README "Snow on meshes").
+// mode = "mesh": Fearing's snow on the mesh itself ([mesh_snow]; docs/models/snow-on-meshes.md).
 struct MeshSnowScene {
   bool onOccluders = false;  // season mode with [mesh_snow]: snow on the [[occluders]] meshes too
   FallenSnowSettings placement;

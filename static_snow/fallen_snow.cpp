@@ -12,7 +12,7 @@
 #include "core/errors.h"
 #include "core/rng.h"
 #include "core/util.h"
-#include "ray_scene.h"
+#include "precompute/ray_scene.h"
 
 namespace snow {
 

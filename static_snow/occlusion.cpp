@@ -11,8 +11,8 @@
 #include "core/errors.h"
 #include "core/util.h"
 #include "core/mesh_normals.h"
-#include "exposure.h"
-#include "solar.h"
+#include "precompute/exposure.h"
+#include "precompute/solar.h"
 
 namespace snow {
 

@@ -31,8 +31,8 @@
 #include <vector>
 
 #include "core/grid.h"
-#include "mesh.h"
-#include "ray_scene.h"
+#include "inputs/mesh.h"
+#include "precompute/ray_scene.h"
 
 namespace snow {
 

@@ -10,7 +10,7 @@
 
 #include "core/default_terrain.h"
 #include "core/grid.h"
-#include "terrain_source.h"
+#include "scene/terrain_source.h"
 
 namespace snow {
 
@@ -62,7 +62,7 @@ size_t fillNodata(Terrain& terrain);
 // Keeps the cells whose centres lie in source.cropM (metres east and south of the north-west
 // corner); throws InputError naming the key and the terrain's extent when nothing is left.
 Terrain cropTerrain(const Terrain& terrain, const TerrainSource& source);
-// Resamples to a cell size or a grid size (filters documented in README "Terrain input").
+// Resamples to a cell size or a grid size (filters documented in docs/terrain.md).
 Terrain resampleTerrain(const Terrain& terrain, const TerrainSource& source);
 
 // Throws InputError when a width x height grid would not fit in this machine's memory

@@ -11,7 +11,7 @@
 #include <type_traits>
 
 #include "core/errors.h"
-#include "exposure.h"
+#include "scene/sun_quality.h"
 #include "scene/layers.h"
 #include "scene_bindings.h"
 
@@ -64,6 +64,15 @@ Bind<Scene> heightRange() {
         s.terrain.heightRangeM = std::array<double, 2>{r[0], r[1]};
       },
       [](const Scene& s) { return show(s.terrain.heightRangeM); });
+}
+Bind<Scene> coverageDepths() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        const auto r = numbersOf(n, 2, c);
+        if (!(r[1] > r[0])) fail(c.source, n, c.path, "needs [bare, covered] depths with covered > bare");
+        s.outputs.coverageDepthsM = {r[0], r[1]};
+      },
+      [](const Scene& s) { return show(s.outputs.coverageDepthsM); });
 }
 Bind<Scene> cropWindow() {
   return custom<Scene>(
@@ -458,6 +467,8 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
   r.push_back({"outputs.avalanche_maps", Kind::Bool, -kInf, kInf, {}, "", "write each avalanche's release zone, scour and deposit (avalanches/NNN_*.exr)", at<S>(&S::outputs, &OR::avalancheMaps)});
   r.push_back({"outputs.avalanche_frame_interval_s", Kind::Number, 0.01, 3600, {}, "s",
        "write frames of each avalanche's motion at this interval of simulated time (avalanches/NNN/depth.FFFF.exr; implies the maps)", at<S>(&S::outputs, &OR::avalancheFrameIntervalS), "none"});
+  r.push_back({"outputs.coverage_depths_m", Kind::NumberArray, 0, 100, {}, "m",
+       "the snow_coverage layer's [bare, covered] snow depths: 0 at or below the first, 1 at or above the second, a smooth step between", coverageDepths()});
   r.push_back({"outputs.frames_days", Kind::NumberArray, 0, 3650, {}, "day", "also write the layers at these days (0: the season's start)", at<S>(&S::outputs, &OR::frameDays)});
   r.push_back({"run", Kind::Table, -kInf, kInf, {}, "", "how the bake runs"});
   r.push_back({"run.seed", Kind::Integer, 0, 9.007199254740992e15, {}, "", "random seed", at<S>(&S::seed)});

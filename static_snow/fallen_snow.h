@@ -52,35 +52,18 @@
 //    maxPassesPerRound (counted as unconverged).
 //
 // The snow body (the level set and its mesh) is built from this stage's output in
-// bakers/mesh_snow_body.h, and `mode = "mesh"` bakes it. Not done (README "Snow on meshes"):
+// bakers/mesh_snow_body.h, and `mode = "mesh"` bakes it. Not done (docs/models/snow-on-meshes.md):
 // refinement beyond one level, wind in the stability phase.
 #pragma once
 #include <array>
 #include <cstdint>
 #include <vector>
 
-#include "mesh.h"
+#include "inputs/mesh.h"
+#include "scene/mesh_snow_options.h"
 
 namespace snow {
 
-struct FallenSnowSettings {
-  double depthM = 0.3;           // snowfall depth on open flat ground (m of snow)
-  double siteSpacingM = 0.05;    // launch-site lattice
-  int skyCellSites = 2;          // sky bucket side in sites (bucket = skyCellSites x siteSpacingM)
-  int flakesPerSite = 4;
-  double flutterMeanM = 0.0;     // lateral step per swirl (thesis: 1-7 cm)
-  double flutterSigmaM = 0.0;
-  double swirlHeightM = 0.1;     // vertical step per swirl
-  double skyClearanceM = 0.5;    // the sky plane this far above the mesh's top (the world box's top)
-  uint64_t seed = 1;
-  // Adaptive sampling: lattice cells where a site's coverage (the share of its flakes that
-  // reached the sky) differs from a neighbour's by more than this are split into four sites of
-  // half the spacing, and every flake is traced again (1 or more: no refinement).
-  double maxCoverageDiff = 0.25;
-  // Optional sky mask (precipitation map): one factor per sky bucket, rows from the north
-  // (empty: 1 everywhere).
-  std::vector<float> skyMask;
-};
 
 struct SnowSite {
   std::array<float, 3> position{};  // on the face, metres (x east, y north, z up)
@@ -108,16 +91,6 @@ struct FallenSnow {
 
 FallenSnow placeFallenSnow(const TriangleMesh& mesh, const FallenSnowSettings& settings);
 
-struct FallenSnowStability {
-  double reposeAngleDeg = 38.0;      // AOR (Kuroiwa, thesis Tab. 2.5: 40-50 degrees for dry pulverised snow)
-  double transitionWidthDeg = 10.0;  // w: stable below AOR - w/2, unstable above AOR + w/2, linear between
-  int depositRounds = 4;             // the storm laid down in this many equal rounds
-  double stopFraction = 0.005;       // a round ends when no site moved more than this share of its mean deposit in a pass
-  int maxPassesPerRound = 20000;
-  double connectAngleDeg = 80.0;     // steepest base-to-base slope that still joins two sites
-  double landingSpreadSpacings = 1.0;  // sigma of the landing splat, in lattice spacings
-  uint64_t seed = 1;
-};
 
 struct FallenSnowStabilityReport {
   int rounds = 0, passes = 0;
@@ -135,12 +108,5 @@ struct FallenSnowStabilityReport {
 // Relaxes `snow` (from placeFallenSnow on `mesh`) to its angle of repose; sites' depthM updated.
 FallenSnowStabilityReport stabilizeFallenSnow(const TriangleMesh& mesh, FallenSnow& snow, const FallenSnowStability& settings);
 
-// The snow body's settings (built by bakers/mesh_snow_body.h).
-struct MeshSnowBodyOptions {
-  double voxelSizeM = 0.0;     // 0: half the site spacing
-  double adaptivity = 0.0;     // OpenVDB volume-to-mesh adaptivity in [0, 1] (0: uniform)
-  int smoothingSteps = 2;      // mean-curvature smoothing passes of the level set
-  double densityKgPerM3 = 150.0;  // for the fog volume (fresh snow on props)
-};
 
 }  // namespace snow

@@ -21,19 +21,11 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "scene/raster_ref.h"
 #include "terrain_loader.h"
 
 namespace snow {
 
-struct RasterRef {
-  std::string name;  // the [masks] entry it came from, or empty for a file given in place
-  std::string file;  // resolved path
-  std::optional<std::array<double, 2>> values;  // the file's values that mean 0 and 1
-  std::optional<std::array<double, 2>> range;   // what 0 and 1 become
-  bool invert = false;
-  std::string declaredAt;  // "scene.toml:12: multipliers.snowfall", for messages
-  std::string label() const { return name.empty() ? file : name + " (" + file + ")"; }
-};
 
 enum class RasterUse { Mask, Depth };
 

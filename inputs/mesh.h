@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "terrain_source.h"
+#include "scene/terrain_source.h"
 
 namespace snow {
 

@@ -1,5 +1,5 @@
 // Where a terrain comes from and how to read it: what the scene's [terrain] table (or --terrain)
-// says. Documented in README.md, "Terrain input".
+// says. Documented in docs/terrain.md.
 #pragma once
 #include <array>
 #include <optional>
