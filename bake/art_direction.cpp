@@ -78,55 +78,71 @@ class RasterCache {
   std::map<Key, Entry> cache_;
 };
 
-}  // namespace
-
-ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terrain, SnowState& state, std::ostream& log) {
-  ArtDirectionPlan plan;
+// True when the scene asks for anything this stage does; otherwise the bake skips it silently.
+bool needsArtDirection(const Scene& scene) {
   bool anyEvent = false;
   for (const auto* events : {&scene.userAvalanches, &scene.userSkiers})
     for (const auto& e : *events) anyEvent = anyEvent || e.mask.has_value();
   bool anyInitial = false;
   for (const auto& l : scene.initialSnow) anyInitial = anyInitial || l.kind != InitialSnowLayer::Kind::None;
   const bool bedformMask = scene.bedforms.enabled && scene.bedforms.mask.has_value();
-  if (!anyEvent && !anyInitial && scene.edits.empty() && !scene.multipliers.any() && !bedformMask) return plan;
+  return anyEvent || anyInitial || !scene.edits.empty() || scene.multipliers.any() || bedformMask;
+}
 
-  log << "art direction:\n";
-  RasterCache rasters(terrain, state, log, plan.rasters);
+// Fills one snow layer from its [initial_snow] entry; returns the volume placed (m^3).
+double placeInitialLayer(int l, const InitialSnowLayer& spec, RasterCache& rasters, SnowState& state, std::ostream& log) {
   const size_t n = state.spec.cellCount();
   const double area = state.spec.cellAreaM2();
   const auto& valid = state.validCell.values();
+  const std::string role = std::string("initial_snow.") + snowLayerName(static_cast<SnowLayer>(l));
+  std::vector<float>& layer = state.layer(static_cast<SnowLayer>(l)).values();
+  const Grid<float>* raster = nullptr;
+  if (spec.kind == InitialSnowLayer::Kind::Raster) raster = &rasters.get(spec.raster, RasterUse::Depth, role);
+  if (spec.kind == InitialSnowLayer::Kind::Mask) raster = &rasters.get(spec.raster, RasterUse::Mask, role + ".mask");
+  double volume = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    if (!valid[i]) {
+      layer[i] = 0.f;
+      continue;
+    }
+    switch (spec.kind) {
+      case InitialSnowLayer::Kind::Constant: layer[i] = static_cast<float>(spec.depthM); break;
+      case InitialSnowLayer::Kind::Raster: layer[i] = raster->values()[i]; break;
+      case InitialSnowLayer::Kind::Mask: layer[i] = static_cast<float>(raster->values()[i] * spec.depthM); break;
+      case InitialSnowLayer::Kind::None: break;
+    }
+    volume += static_cast<double>(layer[i]) * area;
+  }
+  if (spec.kind == InitialSnowLayer::Kind::Constant) log << "  " << role << ": " << num(spec.depthM) << " m everywhere\n";
+  log << "  " << role << ": " << std::scientific << std::setprecision(4) << volume << std::defaultfloat << " m^3 placed\n";
+  return volume;
+}
 
-  // Initial snow cover, layer by layer.
+// Initial snow cover, layer by layer; returns the total volume placed (m^3).
+double placeInitialSnow(const Scene& scene, RasterCache& rasters, SnowState& state, std::ostream& log) {
+  double total = 0.0;
   for (int l = 0; l < kSnowLayerCount; ++l) {
     const InitialSnowLayer& spec = scene.initialSnow[static_cast<size_t>(l)];
     if (spec.kind == InitialSnowLayer::Kind::None) continue;
-    const std::string role = std::string("initial_snow.") + snowLayerName(static_cast<SnowLayer>(l));
-    std::vector<float>& layer = state.layer(static_cast<SnowLayer>(l)).values();
-    const Grid<float>* raster = nullptr;
-    if (spec.kind == InitialSnowLayer::Kind::Raster) raster = &rasters.get(spec.raster, RasterUse::Depth, role);
-    if (spec.kind == InitialSnowLayer::Kind::Mask) raster = &rasters.get(spec.raster, RasterUse::Mask, role + ".mask");
-    double volume = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-      if (!valid[i]) {
-        layer[i] = 0.f;
-        continue;
-      }
-      switch (spec.kind) {
-        case InitialSnowLayer::Kind::Constant: layer[i] = static_cast<float>(spec.depthM); break;
-        case InitialSnowLayer::Kind::Raster: layer[i] = raster->values()[i]; break;
-        case InitialSnowLayer::Kind::Mask: layer[i] = static_cast<float>(raster->values()[i] * spec.depthM); break;
-        case InitialSnowLayer::Kind::None: break;
-      }
-      volume += static_cast<double>(layer[i]) * area;
-    }
-    plan.initialSnowM3 += volume;
-    if (spec.kind == InitialSnowLayer::Kind::Constant)
-      log << "  " << role << ": " << num(spec.depthM) << " m everywhere\n";
-    log << "  " << role << ": " << std::scientific << std::setprecision(4) << volume << std::defaultfloat << " m^3 placed\n";
+    total += placeInitialLayer(l, spec, rasters, state, log);
   }
+  return total;
+}
 
-  // Multipliers and the no-snow mask.
-  const Multipliers& mu = scene.multipliers;
+// A 0/1 grid of the valid cells where `mask` is at least 0.5; `cells` counts the ones.
+Grid<uint8_t> thresholdMask(const Grid<float>& mask, const SnowState& state, size_t& cells) {
+  const auto& valid = state.validCell.values();
+  Grid<uint8_t> out(state.spec.width, state.spec.height, 0);
+  cells = 0;
+  for (size_t i = 0; i < state.spec.cellCount(); ++i)
+    if (valid[i] && mask.values()[i] >= 0.5f) out.values()[i] = 1, ++cells;
+  return out;
+}
+
+std::string percentOfGrid(size_t cells, size_t n) { return num(100.0 * cells / std::max<size_t>(1, n)); }
+
+// The per-cell multipliers and the no-snow mask.
+void applyMultipliers(const Multipliers& mu, RasterCache& rasters, SnowState& state, std::ostream& log) {
   const std::pair<const std::optional<RasterRef>*, Grid<float>*> factors[] = {
       {&mu.snowfall, &state.snowfallFactor},
       {&mu.melt, &state.meltFactor},
@@ -136,56 +152,56 @@ ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terr
   const char* names[] = {"snowfall", "melt", "wind_erosion", "avalanche_release", "skier_spawn"};
   for (size_t k = 0; k < std::size(factors); ++k)
     if (*factors[k].first) *factors[k].second = rasters.get(**factors[k].first, RasterUse::Mask, std::string("multipliers.") + names[k]);
-  if (mu.noSnow) {
-    const Grid<float>& m = rasters.get(*mu.noSnow, RasterUse::Mask, "multipliers.no_snow");
-    state.noSnow = Grid<uint8_t>(state.spec.width, state.spec.height, 0);
-    size_t cells = 0;
-    for (size_t i = 0; i < n; ++i)
-      if (valid[i] && m.values()[i] >= 0.5f) state.noSnow.values()[i] = 1, ++cells;
-    log << "  multipliers.no_snow: " << cells << " cells kept bare (" << num(100.0 * cells / std::max<size_t>(1, n)) << " % of the grid)\n";
-  }
+  if (!mu.noSnow) return;
+  size_t cells = 0;
+  state.noSnow = thresholdMask(rasters.get(*mu.noSnow, RasterUse::Mask, "multipliers.no_snow"), state, cells);
+  log << "  multipliers.no_snow: " << cells << " cells kept bare (" << percentOfGrid(cells, state.spec.cellCount())
+      << " % of the grid)\n";
+}
 
-  // Where the wind bedforms run.
-  if (bedformMask) {
-    const Grid<float>& m = rasters.get(*scene.bedforms.mask, RasterUse::Mask, "bedforms.mask");
-    state.bedformMask = Grid<uint8_t>(state.spec.width, state.spec.height, 0);
-    size_t cells = 0;
-    for (size_t i = 0; i < n; ++i)
-      if (valid[i] && m.values()[i] >= 0.5f) state.bedformMask.values()[i] = 1, ++cells;
-    log << "  bedforms.mask: " << cells << " cells (" << num(100.0 * cells / std::max<size_t>(1, n)) << " % of the grid)\n";
-  }
+// Where the wind bedforms run.
+void applyBedformMask(const RasterRef& mask, RasterCache& rasters, SnowState& state, std::ostream& log) {
+  size_t cells = 0;
+  state.bedformMask = thresholdMask(rasters.get(mask, RasterUse::Mask, "bedforms.mask"), state, cells);
+  log << "  bedforms.mask: " << cells << " cells (" << percentOfGrid(cells, state.spec.cellCount()) << " % of the grid)\n";
+}
 
-  // Timeline edits.
-  for (size_t k = 0; k < scene.edits.size(); ++k) {
-    const EditSpec& e = scene.edits[k];
-    SeasonEdit edit;
-    edit.day = e.day;
-    edit.args.op = e.op;
-    edit.args.layer = layerIndex(e.layer);
-    edit.args.toLayer = e.to.empty() ? edit.args.layer : layerIndex(e.to);
-    edit.args.hasDepth = e.depthM.has_value();
-    edit.args.depthM = static_cast<float>(e.depthM.value_or(0.0));
-    ManifestEdit rec;
-    rec.day = e.day, rec.op = enumName(e.op), rec.layer = e.layer, rec.to = e.to, rec.depthM = e.depthM.value_or(-1.0);
-    if (e.mask) {
-      const std::string role = "edits[" + std::to_string(k) + "].mask";
-      edit.weights = std::make_shared<const std::vector<float>>(rasters.get(*e.mask, RasterUse::Mask, role).values());
-      rec.mask = e.mask->label();
-    }
-    std::ostringstream label;
-    label << "edit " << k + 1 << ": " << enumName(e.op) << " " << e.layer;
-    if (!e.to.empty()) label << " to " << e.to;
-    if (e.depthM) label << " " << num(*e.depthM) << " m";
-    label << (e.mask ? " within " + e.mask->label() : std::string(" everywhere")) << " on day " << num(e.day);
-    edit.label = rec.label = label.str();
-    plan.edits.push_back(std::move(edit));
-    plan.editRecords.push_back(rec);
-  }
+// The edit's one-line description, shared by the log and the manifest.
+std::string editLabel(size_t k, const EditSpec& e) {
+  std::ostringstream label;
+  label << "edit " << k + 1 << ": " << enumName(e.op) << " " << e.layer;
+  if (!e.to.empty()) label << " to " << e.to;
+  if (e.depthM) label << " " << num(*e.depthM) << " m";
+  label << (e.mask ? " within " + e.mask->label() : std::string(" everywhere")) << " on day " << num(e.day);
+  return label.str();
+}
 
-  // Masked events: an avalanche from every unstable cell inside the mask (>= 0.5), skiers from
-  // start cells drawn by the mask's values.
-  for (size_t k = 0; k < scene.userAvalanches.size(); ++k) {
-    const auto& a = scene.userAvalanches[k];
+// Timeline edit k, as the season runs it and as the manifest records it.
+void addEdit(size_t k, const EditSpec& e, RasterCache& rasters, ArtDirectionPlan& plan) {
+  SeasonEdit edit;
+  edit.day = e.day;
+  edit.args.op = e.op;
+  edit.args.layer = layerIndex(e.layer);
+  edit.args.toLayer = e.to.empty() ? edit.args.layer : layerIndex(e.to);
+  edit.args.hasDepth = e.depthM.has_value();
+  edit.args.depthM = static_cast<float>(e.depthM.value_or(0.0));
+  ManifestEdit rec;
+  rec.day = e.day, rec.op = enumName(e.op), rec.layer = e.layer, rec.to = e.to, rec.depthM = e.depthM.value_or(-1.0);
+  if (e.mask) {
+    const std::string role = "edits[" + std::to_string(k) + "].mask";
+    edit.weights = std::make_shared<const std::vector<float>>(rasters.get(*e.mask, RasterUse::Mask, role).values());
+    rec.mask = e.mask->label();
+  }
+  edit.label = rec.label = editLabel(k, e);
+  plan.edits.push_back(std::move(edit));
+  plan.editRecords.push_back(rec);
+}
+
+// A masked avalanche releases from every unstable cell inside the mask (>= 0.5).
+void addMaskedAvalanches(const Scene& scene, RasterCache& rasters, const SnowState& state, ArtDirectionPlan& plan) {
+  const size_t n = state.spec.cellCount();
+  const auto& valid = state.validCell.values();
+  for (const auto& a : scene.userAvalanches) {
     if (!a.mask) continue;
     const Grid<float>& m = rasters.get(*a.mask, RasterUse::Mask, "events (avalanche, line " + std::to_string(a.line) + ").mask");
     auto zone = std::make_shared<std::vector<uint8_t>>(n, 0);
@@ -200,8 +216,13 @@ ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terr
     u.zone = zone;
     plan.avalanches.push_back(u);
   }
-  for (size_t k = 0; k < scene.userSkiers.size(); ++k) {
-    const auto& a = scene.userSkiers[k];
+}
+
+// Masked skiers start from cells drawn by the mask's values.
+void addMaskedSkiers(const Scene& scene, RasterCache& rasters, const SnowState& state, ArtDirectionPlan& plan) {
+  const size_t n = state.spec.cellCount();
+  const auto& valid = state.validCell.values();
+  for (const auto& a : scene.userSkiers) {
     if (!a.mask) continue;
     const Grid<float>& m = rasters.get(*a.mask, RasterUse::Mask, "events (skier, line " + std::to_string(a.line) + ").mask");
     double total = 0.0;
@@ -214,6 +235,22 @@ ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terr
     u.startWeights = std::make_shared<const std::vector<float>>(m.values());
     plan.skiers.push_back(u);
   }
+}
+
+}  // namespace
+
+ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terrain, SnowState& state, std::ostream& log) {
+  ArtDirectionPlan plan;
+  if (!needsArtDirection(scene)) return plan;
+  log << "art direction:\n";
+  // The order below is the order of the log lines and of the manifest's raster records.
+  RasterCache rasters(terrain, state, log, plan.rasters);
+  plan.initialSnowM3 = placeInitialSnow(scene, rasters, state, log);
+  applyMultipliers(scene.multipliers, rasters, state, log);
+  if (scene.bedforms.enabled && scene.bedforms.mask) applyBedformMask(*scene.bedforms.mask, rasters, state, log);
+  for (size_t k = 0; k < scene.edits.size(); ++k) addEdit(k, scene.edits[k], rasters, plan);
+  addMaskedAvalanches(scene, rasters, state, plan);
+  addMaskedSkiers(scene, rasters, state, plan);
   return plan;
 }
 
