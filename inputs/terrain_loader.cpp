@@ -71,117 +71,154 @@ void updateTerrainStatistics(Terrain& t) {
   t.info.spec.height = t.heightsM.height();
 }
 
-Terrain loadDem(const std::string& path, TerrainCoordinates coordinates) {
+namespace {
+
+GdalDataset openDem(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": terrain file does not exist");
   if (std::filesystem::file_size(path, ec) == 0) throw InputError(path + ": terrain file is empty");
-  const GdalDataset ds = openGdalReadOnly(path);
+  GdalDataset ds = openGdalReadOnly(path);
   if (!ds) throw InputError(path + ": cannot read as a terrain: " + lastGdalError());
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
-  const int w = ds->GetRasterXSize(), h = ds->GetRasterYSize();
-  checkGridSize(path, w, h);
+  return ds;
+}
 
-  Terrain t;
-  TerrainInfo& info = t.info;
-  info.source = path;
-  info.format = "dem";
-  info.nativeWidth = w;
-  info.nativeHeight = h;
-  info.driver = ds->GetDriver() ? ds->GetDriver()->GetDescription() : "?";
-
+// Where the file sits in its own coordinates (a file without a geotransform gets 1-unit cells).
+struct DemPlacement {
   double gt[6] = {0, 1, 0, 0, 0, -1};
-  const bool hasTransform = ds->GetGeoTransform(gt) == CE_None;
-  if (hasTransform && (gt[2] != 0.0 || gt[4] != 0.0))
+  bool hasTransform = false;
+  double sizeX = 1.0, sizeY = 1.0;  // cell size in the file's units
+  double west = 0.0, north = 0.0;   // north-west corner
+  double centreX = 0.0, centreY = 0.0;
+};
+
+DemPlacement readPlacement(const std::string& path, GDALDataset& ds, int w, int h) {
+  DemPlacement p;
+  double* gt = p.gt;
+  p.hasTransform = ds.GetGeoTransform(gt) == CE_None;
+  if (p.hasTransform && (gt[2] != 0.0 || gt[4] != 0.0))
     throw InputError(path + ": rotated or sheared rasters are not supported; warp it north-up first (gdalwarp)");
-  const double sizeX = std::abs(gt[1]), sizeY = std::abs(gt[5]);
-  if (!(sizeX > 0.0) || !(sizeY > 0.0) || !std::isfinite(sizeX) || !std::isfinite(sizeY))
+  p.sizeX = std::abs(gt[1]), p.sizeY = std::abs(gt[5]);
+  if (!(p.sizeX > 0.0) || !(p.sizeY > 0.0) || !std::isfinite(p.sizeX) || !std::isfinite(p.sizeY))
     throw InputError(path + ": cell size is zero or invalid");
-  info.nativeCellSizeX = sizeX;
-  info.nativeCellSizeY = sizeY;
+  p.west = gt[0], p.north = gt[5] < 0 ? gt[3] : gt[3] + gt[5] * h;
+  p.centreY = gt[3] + gt[5] * h * 0.5, p.centreX = gt[0] + gt[1] * w * 0.5;
+  return p;
+}
 
-  // North-west corner and centre in the file's coordinates.
-  const double west = gt[0], north = gt[5] < 0 ? gt[3] : gt[3] + gt[5] * h;
-  const double centreY = gt[3] + gt[5] * h * 0.5, centreX = gt[0] + gt[1] * w * 0.5;
+// A projected coordinate system: cell sizes through its linear unit, the latitude by
+// transforming the centre to WGS84 (left unknown when that fails).
+void readProjectedCrs(const OGRSpatialReference& srs, const DemPlacement& p, TerrainInfo& info) {
+  const char* unitName = nullptr;
+  const double toMetre = srs.GetLinearUnits(&unitName);
+  info.coordinateSystem = std::string("projected (") + (srs.GetName() ? srs.GetName() : "?") + ", " +
+                          (unitName ? unitName : "?") + ")";
+  info.coordinateDecision = "read from the file's coordinate system; linear unit " + std::to_string(toMetre) + " m";
+  info.nativeUnit = unitName ? unitName : "?";
+  info.spec.cellSizeXM = p.sizeX * toMetre;
+  info.spec.cellSizeYM = p.sizeY * toMetre;
+  OGRSpatialReference wgs84;
+  wgs84.SetWellKnownGeogCS("WGS84");
+  wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+  std::unique_ptr<OGRCoordinateTransformation> ct(OGRCreateCoordinateTransformation(&srs, &wgs84));
+  double lon = p.centreX, lat = p.centreY;
+  if (ct && ct->Transform(1, &lon, &lat)) {
+    info.latitudeKnown = true;
+    info.centreLatitudeDeg = lat;
+  }
+}
 
-  const OGRSpatialReference* srs = ds->GetSpatialRef();
-  bool geographic = false;
+// The file's own coordinate system decides; returns whether it is geographic.
+bool readFileCrs(const OGRSpatialReference& srs, const DemPlacement& p, TerrainInfo& info) {
+  if (!srs.IsGeographic()) {
+    readProjectedCrs(srs, p, info);
+    return false;
+  }
+  info.coordinateSystem = std::string("geographic (") + (srs.GetName() ? srs.GetName() : "degrees") + ")";
+  info.coordinateDecision = "read from the file's coordinate system";
+  return true;
+}
+
+void takeCellSizeAsMetres(const DemPlacement& p, TerrainInfo& info) {
+  info.spec.cellSizeXM = p.sizeX;
+  info.spec.cellSizeYM = p.sizeY;
+}
+
+// No coordinate system: the scene's terrain.coordinates decides, else degrees if the numbers
+// only make sense as degrees, else metres. Returns whether it is geographic.
+bool chooseCoordinatesWithoutCrs(TerrainCoordinates coordinates, const DemPlacement& p, int w, int h, TerrainInfo& info) {
+  const double east = p.west + p.sizeX * w, south = p.north - p.sizeY * h;
+  const bool looksLikeDegrees = p.sizeX < 0.1 && p.sizeY < 0.1 && p.west >= -180.0 && east <= 180.0 && south >= -90.0 &&
+                                p.north <= 90.0 && p.hasTransform;
+  if (coordinates == TerrainCoordinates::Geographic) {
+    info.coordinateSystem = "none in the file; geographic (degrees) as the scene says";
+    info.coordinateDecision = "terrain.coordinates = \"geographic\"";
+    return true;
+  }
+  if (coordinates == TerrainCoordinates::Metres) {
+    info.coordinateSystem = "none in the file; metres as the scene says";
+    info.coordinateDecision = "terrain.coordinates = \"metres\"";
+    info.nativeUnit = "metre";
+    takeCellSizeAsMetres(p, info);
+    return false;
+  }
+  if (looksLikeDegrees) {
+    info.coordinateSystem = "none in the file; treated as geographic (degrees)";
+    std::ostringstream o;
+    o << "no coordinate system, but a cell size of " << p.sizeX << " and an extent inside longitude/latitude bounds only make "
+      << "sense as degrees (set terrain.coordinates = \"metres\" if they are metres)";
+    info.coordinateDecision = o.str();
+    return true;
+  }
+  info.coordinateSystem = "none in the file; treated as metres";
+  info.coordinateDecision = p.hasTransform ? "no coordinate system; cell size taken as metres" : "no georeference; 1 m cells assumed";
+  info.nativeUnit = "metre (assumed)";
+  takeCellSizeAsMetres(p, info);
+  return false;
+}
+
+// Geographic cells in metres at the centre's latitude.
+void setGeographicCellSize(const DemPlacement& p, TerrainInfo& info) {
+  info.nativeUnit = "degree";
+  info.latitudeKnown = true;
+  info.centreLatitudeDeg = p.centreY;
+  info.spec.cellSizeXM = p.sizeX * metresPerDegreeLongitude(p.centreY);
+  info.spec.cellSizeYM = p.sizeY * metresPerDegreeLatitude(p.centreY);
+}
+
+// Decides the units and fills the grid spec of `info` from the file's georeference.
+void describeDemCoordinates(const std::string& path, GDALDataset& ds, const DemPlacement& p, TerrainCoordinates coordinates,
+                            TerrainInfo& info) {
+  const OGRSpatialReference* srs = ds.GetSpatialRef();
   const bool hasSrs = srs && !srs->IsEmpty();
   if (hasSrs && coordinates != TerrainCoordinates::Auto)
     throw InputError(path + ": terrain.coordinates = \"" + enumName(coordinates) +
                      "\" only applies to files without a coordinate system; this one has " +
                      (srs->GetName() ? srs->GetName() : "one"));
-  if (hasSrs) {
-    if (srs->IsGeographic()) {
-      geographic = true;
-      info.coordinateSystem = std::string("geographic (") + (srs->GetName() ? srs->GetName() : "degrees") + ")";
-      info.coordinateDecision = "read from the file's coordinate system";
-    } else {
-      const char* unitName = nullptr;
-      const double toMetre = srs->GetLinearUnits(&unitName);
-      info.coordinateSystem = std::string("projected (") + (srs->GetName() ? srs->GetName() : "?") + ", " +
-                              (unitName ? unitName : "?") + ")";
-      info.coordinateDecision = "read from the file's coordinate system; linear unit " + std::to_string(toMetre) + " m";
-      info.nativeUnit = unitName ? unitName : "?";
-      info.spec.cellSizeXM = sizeX * toMetre;
-      info.spec.cellSizeYM = sizeY * toMetre;
-      OGRSpatialReference wgs84;
-      wgs84.SetWellKnownGeogCS("WGS84");
-      wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
-      std::unique_ptr<OGRCoordinateTransformation> ct(OGRCreateCoordinateTransformation(srs, &wgs84));
-      double lon = centreX, lat = centreY;
-      if (ct && ct->Transform(1, &lon, &lat)) {
-        info.latitudeKnown = true;
-        info.centreLatitudeDeg = lat;
-      }
-    }
-  } else {
-    // No coordinate system: degrees if the numbers only make sense as degrees.
-    const double east = west + sizeX * w, south = north - sizeY * h;
-    const bool looksLikeDegrees = sizeX < 0.1 && sizeY < 0.1 && west >= -180.0 && east <= 180.0 && south >= -90.0 &&
-                                  north <= 90.0 && hasTransform;
-    if (coordinates == TerrainCoordinates::Geographic) {
-      geographic = true;
-      info.coordinateSystem = "none in the file; geographic (degrees) as the scene says";
-      info.coordinateDecision = "terrain.coordinates = \"geographic\"";
-    } else if (coordinates == TerrainCoordinates::Metres) {
-      info.coordinateSystem = "none in the file; metres as the scene says";
-      info.coordinateDecision = "terrain.coordinates = \"metres\"";
-      info.nativeUnit = "metre";
-      info.spec.cellSizeXM = sizeX;
-      info.spec.cellSizeYM = sizeY;
-    } else if (looksLikeDegrees) {
-      geographic = true;
-      info.coordinateSystem = "none in the file; treated as geographic (degrees)";
-      std::ostringstream o;
-      o << "no coordinate system, but a cell size of " << sizeX << " and an extent inside longitude/latitude bounds only make "
-        << "sense as degrees (set terrain.coordinates = \"metres\" if they are metres)";
-      info.coordinateDecision = o.str();
-    } else {
-      info.coordinateSystem = "none in the file; treated as metres";
-      info.coordinateDecision = hasTransform ? "no coordinate system; cell size taken as metres"
-                                             : "no georeference; 1 m cells assumed";
-      info.nativeUnit = "metre (assumed)";
-      info.spec.cellSizeXM = sizeX;
-      info.spec.cellSizeYM = sizeY;
-    }
-  }
-  if (geographic) {
-    info.nativeUnit = "degree";
-    info.latitudeKnown = true;
-    info.centreLatitudeDeg = centreY;
-    info.spec.cellSizeXM = sizeX * metresPerDegreeLongitude(centreY);
-    info.spec.cellSizeYM = sizeY * metresPerDegreeLatitude(centreY);
-  }
+  const int w = info.nativeWidth, h = info.nativeHeight;
+  const bool geographic = hasSrs ? readFileCrs(*srs, p, info) : chooseCoordinatesWithoutCrs(coordinates, p, w, h, info);
+  if (geographic) setGeographicCellSize(p, info);
   info.spec.width = w;
   info.spec.height = h;
-  info.spec.originX = west;
-  info.spec.originY = north;
-  info.georeferenced = hasTransform;
-  info.geoCellX = sizeX;
-  info.geoCellY = sizeY;
-  info.crsWkt = crsWktOf(*ds);
+  info.spec.originX = p.west;
+  info.spec.originY = p.north;
+  info.georeferenced = p.hasTransform;
+  info.geoCellX = p.sizeX;
+  info.geoCellY = p.sizeY;
+  info.crsWkt = crsWktOf(ds);
+}
 
-  GDALRasterBand* band = ds->GetRasterBand(1);
+// Vertical unit of projected data (e.g. US feet) when the file declares one.
+double verticalUnitToMetre(GDALDataset& ds) {
+  const OGRSpatialReference* srs = ds.GetSpatialRef();
+  const bool hasSrs = srs && !srs->IsEmpty();
+  return hasSrs && !srs->IsGeographic() && srs->GetLinearUnits() > 0.0 ? srs->GetLinearUnits() : 1.0;
+}
+
+// Band 1 into t.heightsM (metres, north-up) and t.valid (0 where NODATA).
+void readDemHeights(const std::string& path, GDALDataset& ds, const DemPlacement& p, Terrain& t) {
+  const int w = t.info.nativeWidth, h = t.info.nativeHeight;
+  GDALRasterBand* band = ds.GetRasterBand(1);
   t.heightsM.resize(w, h);
   t.valid.resize(w, h, 1);
   std::vector<float> rows(static_cast<size_t>(w) * h);
@@ -191,10 +228,9 @@ Terrain loadDem(const std::string& path, TerrainCoordinates coordinates) {
   int hasNodata = 0;
   const double nodata = band->GetNoDataValue(&hasNodata);
   const float nodataF = static_cast<float>(nodata);
-  // Vertical unit of projected data (e.g. US feet) when the file declares one.
-  const double verticalToMetre = hasSrs && !srs->IsGeographic() && srs->GetLinearUnits() > 0.0 ? srs->GetLinearUnits() : 1.0;
+  const double verticalToMetre = verticalUnitToMetre(ds);
   for (int y = 0; y < h; ++y) {
-    const int srcY = gt[5] > 0 ? h - 1 - y : y;  // north-up: flip south-up rasters
+    const int srcY = p.gt[5] > 0 ? h - 1 - y : y;  // north-up: flip south-up rasters
     for (int x = 0; x < w; ++x) {
       const float v = rows[static_cast<size_t>(srcY) * w + x];
       if (hasNodata && (v == nodataF || (std::isnan(nodata) && std::isnan(v)))) {
@@ -209,6 +245,28 @@ Terrain loadDem(const std::string& path, TerrainCoordinates coordinates) {
       t.heightsM(x, y) = static_cast<float>(v * verticalToMetre);
     }
   }
+}
+
+}  // namespace
+
+Terrain loadDem(const std::string& path, TerrainCoordinates coordinates) {
+  const GdalDataset ds = openDem(path);
+  const int w = ds->GetRasterXSize(), h = ds->GetRasterYSize();
+  checkGridSize(path, w, h);
+
+  Terrain t;
+  TerrainInfo& info = t.info;
+  info.source = path;
+  info.format = "dem";
+  info.nativeWidth = w;
+  info.nativeHeight = h;
+  info.driver = ds->GetDriver() ? ds->GetDriver()->GetDescription() : "?";
+
+  const DemPlacement placement = readPlacement(path, *ds, w, h);
+  info.nativeCellSizeX = placement.sizeX;
+  info.nativeCellSizeY = placement.sizeY;
+  describeDemCoordinates(path, *ds, placement, coordinates, info);
+  readDemHeights(path, *ds, placement, t);
   updateTerrainStatistics(t);
   return t;
 }
