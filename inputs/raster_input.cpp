@@ -121,16 +121,21 @@ RasterImage readRasterImage(const std::string& path) {
   return readWithGdal(path);
 }
 
-MappedRaster mapRaster(const RasterRef& ref, RasterUse use, const TerrainInfo& terrain, const Grid<uint8_t>& valid) {
-  const std::string who = ref.declaredAt.empty() ? ref.file : ref.declaredAt + ": " + ref.file;
-  RasterImage img;
+namespace {
+
+// The raster file, its errors prefixed with where the scene names it.
+RasterImage readReferencedRaster(const RasterRef& ref) {
   try {
-    img = readRasterImage(ref.file);
+    return readRasterImage(ref.file);
   } catch (const InputError& e) {
     throw InputError(ref.declaredAt.empty() ? std::string(e.what()) : ref.declaredAt + ": " + e.what());
   }
+}
 
-  // Values: checked on the file's own pixels, so a message can say where.
+// Checks the values on the file's own pixels (so a message can say where) and maps them through
+// values/range/invert. Returns what 0 becomes outside a georeferenced raster (range's first value;
+// 0 without a range).
+float checkAndMapValues(const RasterRef& ref, RasterUse use, const std::string& who, RasterImage& img) {
   const bool transform = ref.values || ref.range || ref.invert || use == RasterUse::Mask;
   if (use == RasterUse::Depth && !transform && img.integer)
     throw InputError(who + ": an integer image holds no depths in metres: give range = [0, deepest_m] (its values 0..max map to it)");
@@ -157,69 +162,76 @@ MappedRaster mapRaster(const RasterRef& ref, RasterUse use, const TerrainInfo& t
     if (ref.invert) n = 1.0 - n;
     v = static_cast<float>(a + n * (b - a));
   }
-  // Outside a georeferenced raster: what 0 becomes (range's first value; 0 without a range).
-  const float outsideValue = transform ? static_cast<float>(a) : 0.f;
+  return transform ? static_cast<float>(a) : 0.f;
+}
 
+// Both name a coordinate system: they must be the same one.
+void checkSameCrs(const std::string& who, const RasterImage& img, const TerrainInfo& terrain) {
+  if (img.crsWkt.empty() || terrain.crsWkt.empty()) return;
+  OGRSpatialReference r1, r2;
+  r1.importFromWkt(img.crsWkt.c_str());
+  r2.importFromWkt(terrain.crsWkt.c_str());
+  if (!r1.IsSame(&r2))
+    throw InputError(who + ": its coordinate system (" + std::string(r1.GetName() ? r1.GetName() : "?") + ") is not the terrain's (" +
+                     (r2.GetName() ? r2.GetName() : "?") + "); reproject it (gdalwarp -t_srs) first");
+}
+
+// Samples each terrain cell where it falls in the raster; returns the cells inside it.
+size_t placeByGeoreference(const RasterImage& img, const TerrainInfo& terrain, const std::string& who, float outsideValue,
+                           MappedRaster& out, std::ostream& how) {
+  checkSameCrs(who, img, terrain);
   const GridSpec& g = terrain.spec;
-  MappedRaster out;
-  out.reader = img.reader;
-  out.sourceWidth = img.width;
-  out.sourceHeight = img.height;
-  out.values = Grid<float>(g.width, g.height, 0.f);
-  std::ostringstream how;
+  const double* gt = img.geoTransform;
+  const double spanX = terrain.geoCellX / std::abs(gt[1]), spanY = terrain.geoCellY / std::abs(gt[5]);
   size_t insideCells = 0;
-  if (img.georeferenced && terrain.georeferenced) {
-    if (!img.crsWkt.empty() && !terrain.crsWkt.empty()) {
-      OGRSpatialReference r1, r2;
-      r1.importFromWkt(img.crsWkt.c_str());
-      r2.importFromWkt(terrain.crsWkt.c_str());
-      if (!r1.IsSame(&r2))
-        throw InputError(who + ": its coordinate system (" + std::string(r1.GetName() ? r1.GetName() : "?") + ") is not the terrain's (" +
-                         (r2.GetName() ? r2.GetName() : "?") + "); reproject it (gdalwarp -t_srs) first");
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      const double X = g.originX + (x + 0.5) * terrain.geoCellX, Y = g.originY - (y + 0.5) * terrain.geoCellY;
+      const double px = (X - gt[0]) / gt[1] - 0.5, py = (Y - gt[3]) / gt[5] - 0.5;
+      bool inside = false;
+      out.values(x, y) = sampleRasterCell(img.values, img.width, img.height, px, py, spanX, spanY, false, outsideValue, &inside);
+      insideCells += inside;
     }
-    const double* gt = img.geoTransform;
-    const double spanX = terrain.geoCellX / std::abs(gt[1]), spanY = terrain.geoCellY / std::abs(gt[5]);
-    for (int y = 0; y < g.height; ++y)
-      for (int x = 0; x < g.width; ++x) {
-        const double X = g.originX + (x + 0.5) * terrain.geoCellX, Y = g.originY - (y + 0.5) * terrain.geoCellY;
-        const double px = (X - gt[0]) / gt[1] - 0.5, py = (Y - gt[3]) / gt[5] - 0.5;
-        bool inside = false;
-        out.values(x, y) = sampleRasterCell(img.values, img.width, img.height, px, py, spanX, spanY, false, outsideValue, &inside);
-        insideCells += inside;
-      }
-    if (insideCells == 0)
-      throw InputError(who + ": does not overlap the terrain (both are georeferenced; check the raster's extent and coordinate system)");
-    out.placement = "georeferenced";
-    how << "placed by georeference" << (img.crsWkt.empty() || terrain.crsWkt.empty() ? " (one of them names no coordinate system: assumed the same)" : "")
-        << ", " << num(spanX, 3) << " x " << num(spanY, 3) << " pixels a cell";
-  } else {
-    const double rasterAspect = static_cast<double>(img.width) / img.height;
-    const double terrainAspect = (g.width * g.cellSizeXM) / (g.height * g.cellSizeYM);
-    const double gridAspect = static_cast<double>(g.width) / g.height;
-    // One pixel of slack either way (a 1025 x 1024 painting of a 1024^2 terrain is fine).
-    const double tolerance = rasterAspect * (1.0 / img.width + 1.0 / img.height) + 1e-9;
-    const bool matches = std::abs(rasterAspect - terrainAspect) <= tolerance || std::abs(rasterAspect - gridAspect) <= tolerance;
-    if (!matches) {
-      std::ostringstream o;
-      o << who << ": is " << img.width << " x " << img.height << " pixels (aspect " << num(rasterAspect) << "), the terrain " << g.width << " x "
-        << g.height << " cells (aspect " << num(terrainAspect) << "), and "
-        << (img.georeferenced ? "the terrain has no georeference" : "the raster has no georeference")
-        << " to map it by: paint it at the terrain's aspect ratio or georeference both";
-      throw InputError(o.str());
-    }
-    const double spanX = static_cast<double>(img.width) / g.width, spanY = static_cast<double>(img.height) / g.height;
-    for (int y = 0; y < g.height; ++y)
-      for (int x = 0; x < g.width; ++x)
-        out.values(x, y) = sampleRasterCell(img.values, img.width, img.height, (x + 0.5) * spanX - 0.5, (y + 0.5) * spanY - 0.5, spanX, spanY,
-                                            true, 0.f);
-    insideCells = g.cellCount();
-    out.placement = "stretched";
-    how << "stretched over the terrain's extent, " << num(spanX, 3) << " x " << num(spanY, 3) << " pixels a cell";
-  }
-  out.coverage = static_cast<double>(insideCells) / static_cast<double>(g.cellCount());
-  how << " (" << img.width << " x " << img.height << " " << img.reader << " -> " << g.width << " x " << g.height << ")";
-  if (out.coverage < 1.0) how << "; covers " << num(100.0 * out.coverage, 3) << " % of the terrain, " << num(outsideValue) << " outside";
-  out.description = how.str();
+  if (insideCells == 0)
+    throw InputError(who + ": does not overlap the terrain (both are georeferenced; check the raster's extent and coordinate system)");
+  out.placement = "georeferenced";
+  how << "placed by georeference" << (img.crsWkt.empty() || terrain.crsWkt.empty() ? " (one of them names no coordinate system: assumed the same)" : "")
+      << ", " << num(spanX, 3) << " x " << num(spanY, 3) << " pixels a cell";
+  return insideCells;
+}
+
+// Without a shared georeference the raster must have the terrain's aspect ratio.
+void checkAspectMatches(const RasterImage& img, const GridSpec& g, const std::string& who) {
+  const double rasterAspect = static_cast<double>(img.width) / img.height;
+  const double terrainAspect = (g.width * g.cellSizeXM) / (g.height * g.cellSizeYM);
+  const double gridAspect = static_cast<double>(g.width) / g.height;
+  // One pixel of slack either way (a 1025 x 1024 painting of a 1024^2 terrain is fine).
+  const double tolerance = rasterAspect * (1.0 / img.width + 1.0 / img.height) + 1e-9;
+  const bool matches = std::abs(rasterAspect - terrainAspect) <= tolerance || std::abs(rasterAspect - gridAspect) <= tolerance;
+  if (matches) return;
+  std::ostringstream o;
+  o << who << ": is " << img.width << " x " << img.height << " pixels (aspect " << num(rasterAspect) << "), the terrain " << g.width << " x "
+    << g.height << " cells (aspect " << num(terrainAspect) << "), and "
+    << (img.georeferenced ? "the terrain has no georeference" : "the raster has no georeference")
+    << " to map it by: paint it at the terrain's aspect ratio or georeference both";
+  throw InputError(o.str());
+}
+
+// Stretches the raster over the terrain's whole extent; returns the cells covered (all).
+size_t stretchOverTerrain(const RasterImage& img, const GridSpec& g, const std::string& who, MappedRaster& out, std::ostream& how) {
+  checkAspectMatches(img, g, who);
+  const double spanX = static_cast<double>(img.width) / g.width, spanY = static_cast<double>(img.height) / g.height;
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x)
+      out.values(x, y) = sampleRasterCell(img.values, img.width, img.height, (x + 0.5) * spanX - 0.5, (y + 0.5) * spanY - 0.5, spanX, spanY,
+                                          true, 0.f);
+  out.placement = "stretched";
+  how << "stretched over the terrain's extent, " << num(spanX, 3) << " x " << num(spanY, 3) << " pixels a cell";
+  return g.cellCount();
+}
+
+// Zeroes the cells outside the terrain's valid mask and takes min, max and mean over the rest.
+void summariseValidCells(const Grid<uint8_t>& valid, MappedRaster& out) {
   double sum = 0.0, n = 0.0;
   out.minValue = std::numeric_limits<double>::infinity();
   out.maxValue = -out.minValue;
@@ -234,6 +246,29 @@ MappedRaster mapRaster(const RasterRef& ref, RasterUse use, const TerrainInfo& t
   }
   out.meanValue = n > 0 ? sum / n : 0.0;
   if (!(n > 0)) out.minValue = out.maxValue = 0.0;
+}
+
+}  // namespace
+
+MappedRaster mapRaster(const RasterRef& ref, RasterUse use, const TerrainInfo& terrain, const Grid<uint8_t>& valid) {
+  const std::string who = ref.declaredAt.empty() ? ref.file : ref.declaredAt + ": " + ref.file;
+  RasterImage img = readReferencedRaster(ref);
+  const float outsideValue = checkAndMapValues(ref, use, who, img);
+
+  const GridSpec& g = terrain.spec;
+  MappedRaster out;
+  out.reader = img.reader;
+  out.sourceWidth = img.width;
+  out.sourceHeight = img.height;
+  out.values = Grid<float>(g.width, g.height, 0.f);
+  std::ostringstream how;
+  const size_t insideCells = img.georeferenced && terrain.georeferenced ? placeByGeoreference(img, terrain, who, outsideValue, out, how)
+                                                                         : stretchOverTerrain(img, g, who, out, how);
+  out.coverage = static_cast<double>(insideCells) / static_cast<double>(g.cellCount());
+  how << " (" << img.width << " x " << img.height << " " << img.reader << " -> " << g.width << " x " << g.height << ")";
+  if (out.coverage < 1.0) how << "; covers " << num(100.0 * out.coverage, 3) << " % of the terrain, " << num(outsideValue) << " outside";
+  out.description = how.str();
+  summariseValidCells(valid, out);
   return out;
 }
 
