@@ -12,7 +12,10 @@
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "core/errors.h"
 #include "bake/bake.h"
@@ -20,67 +23,141 @@
 #include "scene/scene_reference.h"
 #include "tools/info.h"
 
-int main(int argc, char** argv) {
-  using namespace snow;
-  CLI::App app{"snowbake: turns a terrain into a season of snow, and bakes it into maps, meshes and volumes."};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("snowbake ") + programVersion());
+namespace {
 
+using namespace snow;
+
+// Each subcommand's values live in one struct that CLI11 writes into while parsing, so it must
+// outlive app.parse().
+struct BakeCommand {
+  CLI::App* cmd = nullptr;
   BakeOptions bake;
   std::string scene;
   std::string terrainFile, backend;
   uint64_t seed = 0;
   int threads = 0;
   bool quiet = false;
-  CLI::App* bakeCmd = app.add_subcommand("bake", "Simulate a season on a scene's terrain and write its outputs.");
-  bakeCmd->add_option("SCENE", scene, "Scene file (TOML), or preset:NAME (preset:default)")->required();
-  bakeCmd->add_option("--terrain", terrainFile, "Terrain file that replaces the scene's terrain");
-  bakeCmd->add_option("--out", bake.outDir, "Output folder (created if missing)")->capture_default_str();
-  bakeCmd->add_option("--seed", seed, "Random seed (overrides run.seed)");
-  bakeCmd->add_option("--threads", threads, "CPU threads, 0 = all cores (overrides run.threads)");
-  bakeCmd->add_option("--backend", backend, "cpu, cuda or auto (CUDA when a device works)")
-      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
-  bakeCmd->add_option("--set", bake.sets, "Override a scene key by its dotted path, e.g. --set season.days=30 (repeatable)");
-  bakeCmd->add_flag("--quiet", quiet, "No progress bar");
   std::string cacheDir;
   bool noCache = false;
-  bakeCmd->add_option("--cache-dir", cacheDir, "Precompute cache folder (default $XDG_CACHE_HOME/snowbake or ~/.cache/snowbake)");
-  bakeCmd->add_flag("--no-cache", noCache, "Neither read nor write the precompute cache");
+};
 
-  std::string demoOut = "snowbake-demo";
-  CLI::App* demoCmd = app.add_subcommand("demo", "Run the main job on the embedded default terrain (no input needed).");
-  demoCmd->add_option("--out", demoOut, "Output folder")->capture_default_str();
+struct DemoCommand {
+  CLI::App* cmd = nullptr;
+  std::string out = "snowbake-demo";
+};
 
-  std::string infoFile;
-  bool infoJson = false;
-  CLI::App* infoCmd = app.add_subcommand("info", "Show what snowbake understands of a terrain file.");
-  std::vector<std::string> infoSets;
-  infoCmd->add_option("FILE", infoFile, "A DEM (any GDAL raster), a scene file or preset:NAME (for heightmaps, raw files and "
-                                        "meshes, whose reading options live in the scene), or builtin:ridged")->required();
-  infoCmd->add_flag("--json", infoJson, "Print JSON");
-  infoCmd->add_option("--set", infoSets, "Override a scene key (as for bake)");
+struct InfoCommand {
+  CLI::App* cmd = nullptr;
+  std::string file;
+  bool json = false;
+  std::vector<std::string> sets;
+};
 
-  std::string helpTopic;
-  bool helpMarkdown = false;
-  CLI::App* helpCmd = app.add_subcommand("help", "Print a reference: `help scene` lists every scene key and model parameter.");
-  helpCmd->add_option("TOPIC", helpTopic, "scene")->required()->check(CLI::IsMember({"scene"}));
-  helpCmd->add_flag("--markdown", helpMarkdown, "As Markdown (docs/scene.md is this output)");
+struct HelpCommand {
+  CLI::App* cmd = nullptr;
+  std::string topic;
+  bool markdown = false;
+};
 
-  BenchOptions benchOptions;
-  std::string benchSizes;
-  CLI::App* benchCmd = app.add_subcommand("bench", "The benchmark suite: error against time per stage, scaling, machine limit, CPU against CUDA.");
-  benchCmd->add_option("--sizes", benchSizes, "Comma-separated grid sizes of the scaling stage (default 256,512,1024,2048,4096)");
-  benchCmd->add_option("--days", benchOptions.days, "Season length in days")->capture_default_str();
-  benchCmd->add_option("--backend", benchOptions.backend, "cpu, cuda or auto")->check(CLI::IsMember({"cpu", "cuda", "auto"}))
+struct BenchCommand {
+  CLI::App* cmd = nullptr;
+  BenchOptions options;
+  std::string sizes;
+};
+
+void addBakeCommand(CLI::App& app, BakeCommand& c) {
+  c.cmd = app.add_subcommand("bake", "Simulate a season on a scene's terrain and write its outputs.");
+  c.cmd->add_option("SCENE", c.scene, "Scene file (TOML), or preset:NAME (preset:default)")->required();
+  c.cmd->add_option("--terrain", c.terrainFile, "Terrain file that replaces the scene's terrain");
+  c.cmd->add_option("--out", c.bake.outDir, "Output folder (created if missing)")->capture_default_str();
+  c.cmd->add_option("--seed", c.seed, "Random seed (overrides run.seed)");
+  c.cmd->add_option("--threads", c.threads, "CPU threads, 0 = all cores (overrides run.threads)");
+  c.cmd->add_option("--backend", c.backend, "cpu, cuda or auto (CUDA when a device works)")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+  c.cmd->add_option("--set", c.bake.sets, "Override a scene key by its dotted path, e.g. --set season.days=30 (repeatable)");
+  c.cmd->add_flag("--quiet", c.quiet, "No progress bar");
+  c.cmd->add_option("--cache-dir", c.cacheDir, "Precompute cache folder (default $XDG_CACHE_HOME/snowbake or ~/.cache/snowbake)");
+  c.cmd->add_flag("--no-cache", c.noCache, "Neither read nor write the precompute cache");
+}
+
+void addDemoCommand(CLI::App& app, DemoCommand& c) {
+  c.cmd = app.add_subcommand("demo", "Run the main job on the embedded default terrain (no input needed).");
+  c.cmd->add_option("--out", c.out, "Output folder")->capture_default_str();
+}
+
+void addInfoCommand(CLI::App& app, InfoCommand& c) {
+  c.cmd = app.add_subcommand("info", "Show what snowbake understands of a terrain file.");
+  c.cmd->add_option("FILE", c.file, "A DEM (any GDAL raster), a scene file or preset:NAME (for heightmaps, raw files and "
+                                    "meshes, whose reading options live in the scene), or builtin:ridged")->required();
+  c.cmd->add_flag("--json", c.json, "Print JSON");
+  c.cmd->add_option("--set", c.sets, "Override a scene key (as for bake)");
+}
+
+void addHelpCommand(CLI::App& app, HelpCommand& c) {
+  c.cmd = app.add_subcommand("help", "Print a reference: `help scene` lists every scene key and model parameter.");
+  c.cmd->add_option("TOPIC", c.topic, "scene")->required()->check(CLI::IsMember({"scene"}));
+  c.cmd->add_flag("--markdown", c.markdown, "As Markdown (docs/scene.md is this output)");
+}
+
+void addBenchCommand(CLI::App& app, BenchCommand& c) {
+  BenchOptions& o = c.options;
+  c.cmd = app.add_subcommand("bench", "The benchmark suite: error against time per stage, scaling, machine limit, CPU against CUDA.");
+  c.cmd->add_option("--sizes", c.sizes, "Comma-separated grid sizes of the scaling stage (default 256,512,1024,2048,4096)");
+  c.cmd->add_option("--days", o.days, "Season length in days")->capture_default_str();
+  c.cmd->add_option("--backend", o.backend, "cpu, cuda or auto")->check(CLI::IsMember({"cpu", "cuda", "auto"}))
       ->capture_default_str();
-  benchCmd->add_option("--threads", benchOptions.threads, "CPU threads, 0 = all cores");
-  benchCmd->add_option("--sun-size", benchOptions.sunSize, "Grid size of the sun-exposure timing table")->capture_default_str();
-  benchCmd->add_option("--stage", benchOptions.stage, "sun, wind, season, avalanche, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all")
+  c.cmd->add_option("--threads", o.threads, "CPU threads, 0 = all cores");
+  c.cmd->add_option("--sun-size", o.sunSize, "Grid size of the sun-exposure timing table")->capture_default_str();
+  c.cmd->add_option("--stage", o.stage, "sun, wind, season, avalanche, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all")
       ->check(CLI::IsMember({"sun", "season", "wind", "avalanche", "occlusion", "mesh", "bedforms", "skiers", "meshsnow", "scaling", "bandwidth", "agreement", "bake", "all", "scaling-child"}))
       ->capture_default_str();
-  benchCmd->add_option("--csv-dir", benchOptions.csvDir, "Folder for the CSV files (empty: none)")->capture_default_str();
-  benchCmd->add_option("--data", benchOptions.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();
+  c.cmd->add_option("--csv-dir", o.csvDir, "Folder for the CSV files (empty: none)")->capture_default_str();
+  c.cmd->add_option("--data", o.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();
+}
 
+// The command line's values over the scene's; unset options leave the scene's choice.
+void runBakeCommand(BakeCommand& c) {
+  BakeOptions& bake = c.bake;
+  bake.scene = c.scene;
+  if (!c.terrainFile.empty()) bake.terrainFile = c.terrainFile;
+  if (c.cmd->count("--seed")) bake.seed = c.seed;
+  if (c.cmd->count("--threads")) bake.threads = c.threads;
+  if (!c.backend.empty()) bake.backend = c.backend;
+  bake.progress = !c.quiet;
+  if (!c.cacheDir.empty()) bake.cacheDir = c.cacheDir;
+  bake.useCache = !c.noCache;
+  runBake(bake, std::cerr);
+}
+
+void runDemoCommand(const DemoCommand& c) {
+  BakeOptions demo;
+  demo.outDir = c.out;
+  runBake(demo, std::cerr);
+  std::cerr << "demo: outputs and manifest.json are in " << c.out << "\n";
+}
+
+// "256,512" -> {256, 512}; throws InputError naming the item that is not a number.
+std::vector<int> parseSizeList(const std::string& text) {
+  std::vector<int> sizes;
+  std::stringstream list(text);
+  for (std::string item; std::getline(list, item, ',');) {
+    try {
+      sizes.push_back(std::stoi(item));
+    } catch (const std::exception&) {
+      throw InputError("--sizes: '" + item + "' is not a whole number");
+    }
+  }
+  return sizes;
+}
+
+void runBenchCommand(BenchCommand& c) {
+  if (!c.sizes.empty()) c.options.scalingSizes = parseSizeList(c.sizes);
+  std::cout << runBench(c.options, std::cerr);
+}
+
+// Parses the command line; returns the exit status when it ends the program (help, version,
+// a usage error), nothing when a subcommand is to run.
+std::optional<int> parseCommandLine(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -93,40 +170,38 @@ int main(int argc, char** argv) {
     std::cerr << "snowbake: " << e.what() << " (see snowbake --help)\n";
     return 2;
   }
+  return std::nullopt;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"snowbake: turns a terrain into a season of snow, and bakes it into maps, meshes and volumes."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("snowbake ") + programVersion());
+  BakeCommand bake;
+  DemoCommand demo;
+  InfoCommand info;
+  HelpCommand help;
+  BenchCommand bench;
+  addBakeCommand(app, bake);
+  addDemoCommand(app, demo);
+  addInfoCommand(app, info);
+  addHelpCommand(app, help);
+  addBenchCommand(app, bench);
+  if (const std::optional<int> status = parseCommandLine(app, argc, argv)) return *status;
 
   try {
-    if (*bakeCmd) {
-      bake.scene = scene;
-      if (!terrainFile.empty()) bake.terrainFile = terrainFile;
-      if (bakeCmd->count("--seed")) bake.seed = seed;
-      if (bakeCmd->count("--threads")) bake.threads = threads;
-      if (!backend.empty()) bake.backend = backend;
-      bake.progress = !quiet;
-      if (!cacheDir.empty()) bake.cacheDir = cacheDir;
-      bake.useCache = !noCache;
-      runBake(bake, std::cerr);
-    } else if (*demoCmd) {
-      BakeOptions demo;
-      demo.outDir = demoOut;
-      runBake(demo, std::cerr);
-      std::cerr << "demo: outputs and manifest.json are in " << demoOut << "\n";
-    } else if (*benchCmd) {
-      if (!benchSizes.empty()) {
-        benchOptions.scalingSizes.clear();
-        std::stringstream list(benchSizes);
-        for (std::string item; std::getline(list, item, ',');) {
-          try {
-            benchOptions.scalingSizes.push_back(std::stoi(item));
-          } catch (const std::exception&) {
-            throw InputError("--sizes: '" + item + "' is not a whole number");
-          }
-        }
-      }
-      std::cout << runBench(benchOptions, std::cerr);
-    } else if (*infoCmd) {
-      std::cout << describeTerrain(infoFile, infoJson, infoSets);
-    } else if (*helpCmd) {
-      std::cout << (helpMarkdown ? sceneReferenceMarkdown() : sceneReferenceText());
+    if (*bake.cmd) {
+      runBakeCommand(bake);
+    } else if (*demo.cmd) {
+      runDemoCommand(demo);
+    } else if (*bench.cmd) {
+      runBenchCommand(bench);
+    } else if (*info.cmd) {
+      std::cout << describeTerrain(info.file, info.json, info.sets);
+    } else if (*help.cmd) {
+      std::cout << (help.markdown ? sceneReferenceMarkdown() : sceneReferenceText());
     }
   } catch (const InputError& e) {
     std::cerr << "snowbake: error: " << e.what() << "\n";
