@@ -83,7 +83,7 @@ GdalDataset openDem(const std::string& path) {
   return ds;
 }
 
-// Where the file sits in its own coordinates (a file without a geotransform gets 1-unit cells).
+// Where the file sits in its own coordinates: its geotransform, cell size, corner and centre.
 struct DemPlacement {
   double gt[6] = {0, 1, 0, 0, 0, -1};
   bool hasTransform = false;
