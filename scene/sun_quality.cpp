@@ -6,9 +6,9 @@ namespace snow {
 
 const std::vector<SunQuality>& sunQualities() {
   static const std::vector<SunQuality> table{
-      {"draft", 8, 6, 1.0, 30.0, 8, 4, 200.0},
-      {"production", 16, 9, 0.5, 10.0, 16, 8, 400.0},
-      {"reference", 64, 12, 0.125, 5.0, 32, 16, 800.0},
+      {"draft", 8, 6, 1.0, 30.0, 8, 4, 200.0, 64},
+      {"production", 16, 9, 0.5, 10.0, 16, 8, 400.0, 256},
+      {"reference", 64, 12, 0.125, 5.0, 32, 16, 800.0, 1024},
   };
   return table;
 }

@@ -1,4 +1,5 @@
-// precompute.sun_quality: the named sample counts of the sun exposure (precompute/exposure.h).
+// precompute.sun_quality: the named sample counts of the sun exposure (precompute/exposure.h) and
+// of occlusion mode's ambient occlusion (static_snow/occlusion.h).
 #pragma once
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@ struct SunQuality {
   int indirectDirections;   // indirect: directions per ring (0 = no indirect pass)
   int indirectRings;        // indirect: rings out to the radius
   double indirectRadiusM;   // indirect: sampling radius, metres
+  int occlusionAoRays;      // occlusion mode: ambient-occlusion rays per cell (occlusion.ao_rays = 0)
 };
 
 // The named qualities, in the order the scene reference lists them.

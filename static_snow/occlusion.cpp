@@ -11,6 +11,7 @@
 #include "core/errors.h"
 #include "core/util.h"
 #include "core/mesh_normals.h"
+#include "scene/sun_quality.h"
 #include "precompute/exposure.h"
 #include "precompute/solar.h"
 
@@ -49,9 +50,8 @@ double f(double x) { return 0.91 + 10.0 * std::exp(-3.0 * x) + 0.45 * std::cos(x
 }  // namespace
 
 int occlusionRaysForQuality(const std::string& quality) {
-  if (quality == "draft") return 64;
-  if (quality == "production") return 256;
-  if (quality == "reference") return 1024;
+  for (const SunQuality& q : sunQualities())
+    if (q.name == quality) return q.occlusionAoRays;
   throw InputError("occlusion quality '" + quality + "' is not one of: draft, production, reference");
 }
 
