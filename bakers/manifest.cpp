@@ -148,7 +148,7 @@ std::string meshSnowManifestToJson(const MeshSnowManifest& m) {
                {"triangles", m.triangles},
                {"bounds_min_m", {m.boundsMin[0], m.boundsMin[1], m.boundsMin[2]}},
                {"bounds_max_m", {m.boundsMax[0], m.boundsMax[1], m.boundsMax[2]}},
-               {"axes", "the input mesh's: x, y, z up, metres (glb, obj and fbx outputs are y-up, see README)"}};
+               {"axes", "the input mesh's: x, y, z up, metres (glb, obj and fbx outputs are y-up, see docs/outputs.md)"}};
   const FallenSnowSettings& p = m.placement;
   const FallenSnowStability& s = m.stability;
   const FallenSnowStabilityReport& r = m.stabilityReport;
