@@ -11,7 +11,8 @@ packages=(
   libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
 )
-if [ "${1:-}" = "--with-blender" ]; then packages+=(blender); fi
+# Blender's glTF importer imports numpy, which Debian's blender only recommends.
+if [ "${1:-}" = "--with-blender" ]; then packages+=(blender python3-numpy); fi
 
 missing=()
 for p in "${packages[@]}"; do
