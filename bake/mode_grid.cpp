@@ -29,12 +29,6 @@ SnowState initialState(const BakeTerrain& t) {
   return state;
 }
 
-void createOutputFolder(const std::string& dir) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw InputError(dir + ": cannot create the output folder: " + ec.message());
-}
-
 // The scene's layers, and valid_mask with them where the terrain has NODATA cells.
 std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti) {
   std::vector<std::string> layers = scene.outputs.layers;
@@ -43,6 +37,12 @@ std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti
 }
 
 }  // namespace
+
+void createOutputFolder(const std::string& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw InputError(dir + ": cannot create the output folder: " + ec.message());
+}
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
   const BakeTerrain terrain = loadBakeTerrain(scene, log);

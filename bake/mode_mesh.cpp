@@ -6,7 +6,6 @@
 #include "bakers/mesh_snow_body.h"
 #include "bakers/mesh_writer.h"
 #include "core/atomic_file.h"
-#include "core/errors.h"
 #include "core/format.h"
 #include "core/hash.h"
 #include "modes.h"
@@ -71,9 +70,7 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
       << fixed(st.overEdgesM3, 4) << " m^3 over edges, " << fixed(st.leftTheWorldM3, 4) << " m^3 left the world, " << fixed(st.finalM3, 4)
       << " m^3 kept (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   t0 = WallClock::now();
-  std::error_code ec;
-  fs::create_directories(options.outDir, ec);
-  if (ec) throw InputError(options.outDir + ": cannot create the output folder: " + ec.message());
+  createOutputFolder(options.outDir);
   const MeshSnowBodyOptions& bo = scene.meshSnow.body;
   const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / "snow.vdb").string() : std::string();
   const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo, vdbPath);

@@ -1,11 +1,14 @@
 // The bake's modes, each a driver over the stages (stages.h); bake.cpp picks one by scene.mode.
 #pragma once
 #include <ostream>
+#include <string>
 
 #include "stages.h"
 
 namespace snow {
 
+// The output folder (and its parents), or an InputError naming it.
+void createOutputFolder(const std::string& dir);
 // mode = "season" and mode = "occlusion" (mode_grid.cpp).
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart);
 // mode = "mesh" (mode_mesh.cpp): Fearing's snow on the mesh itself, no grid and no season.

@@ -12,6 +12,9 @@
 namespace snow {
 namespace {
 
+// The season day of the sun trajectory: occlusion.day, or the season's middle.
+double occlusionSunDay(const Scene& scene) { return scene.occlusion.day.value_or(scene.days / 2.0); }
+
 OcclusionSettings occlusionSettings(const Scene& scene, double latitudeDeg) {
   const OcclusionParameters& op = scene.occlusion;
   OcclusionSettings os;
@@ -23,8 +26,7 @@ OcclusionSettings occlusionSettings(const Scene& scene, double latitudeDeg) {
   os.aoRadiusM = op.aoRadiusM;
   os.latitudeDeg = latitudeDeg;
   os.turbidity = op.turbidity;
-  const double sunDay = op.day.value_or(scene.days / 2.0);
-  os.dayOfYear = std::fmod(scene.startDayOfYear() - 1 + sunDay, 365.0) + 1.0;
+  os.dayOfYear = std::fmod(scene.startDayOfYear() - 1 + occlusionSunDay(scene), 365.0) + 1.0;
   return os;
 }
 
@@ -64,7 +66,7 @@ TriangleMesh snowOnInputMesh(const Scene& scene, const BakeTerrain& terrain, con
 
 void runOcclusion(const Scene& scene, const BakeTerrain& terrain, SnowState& state, OcclusionResult& result, std::ostream& log) {
   const OcclusionSettings os = occlusionSettings(scene, terrain.latitudeDeg);
-  const double sunDay = scene.occlusion.day.value_or(scene.days / 2.0);
+  const double sunDay = occlusionSunDay(scene);
   const auto tOcc = WallClock::now();
   const RayScene rays(state.bedrockM, state.spec, terrain.occluders);
   const double buildSeconds = elapsedSeconds(tOcc);

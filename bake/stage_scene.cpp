@@ -1,5 +1,6 @@
 // Stage 1: the scene, with the command line's overrides.
 #include <filesystem>
+#include <optional>
 
 #include "core/errors.h"
 #include "stages.h"
@@ -19,9 +20,11 @@ Scene resolveScene(const BakeOptions& options) {
   }
   if (options.seed) scene.seed = *options.seed;
   if (options.threads) scene.threads = *options.threads;
-  if (options.backend && !enumFromName<BackendChoice>(*options.backend))
-    throw InputError("--backend " + *options.backend + ": must be cpu, cuda or auto");
-  if (options.backend) scene.backend = *enumFromName<BackendChoice>(*options.backend);
+  if (options.backend) {
+    const std::optional<BackendChoice> backend = enumFromName<BackendChoice>(*options.backend);
+    if (!backend) throw InputError("--backend " + *options.backend + ": must be cpu, cuda or auto");
+    scene.backend = *backend;
+  }
   if (scene.threads < 0) throw InputError("--threads " + std::to_string(scene.threads) + ": must be 0 (all cores) or more");
   return scene;
 }

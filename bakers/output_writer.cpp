@@ -22,6 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 thread_local OutputSink* tlSink = nullptr;
+const char* const kRgbPngFormat = "PNG, 3 channels uint8, sRGB";  // previews and the contact sheet
 }  // namespace
 
 OutputSink& currentSink() { return *tlSink; }
@@ -36,9 +37,9 @@ std::string OutputWriter::Day::base(const std::string& stem, const std::string& 
 }
 
 OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std::move(sources)), scene_(*src_.scene), log_(log) {
-  floatImageFormat_ = scene_.outputs.format == ImageFormat::Exr
-                          ? "OpenEXR, 1 channel float32 (" + exrCompressionName(scene_.outputs.compressionLevel) + "), linear"
-                          : "TIFF, 1 channel float32 (zip), linear";
+  exrCompression_ = exrCompressionName(scene_.outputs.compressionLevel);
+  floatImageFormat_ = scene_.outputs.format == ImageFormat::Exr ? "OpenEXR, 1 channel float32 (" + exrCompression_ + "), linear"
+                                                                : "TIFF, 1 channel float32 (zip), linear";
 }
 
 void OutputWriter::listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
@@ -162,7 +163,7 @@ void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
     const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
     writeRgbPng(path, s.spec.width, s.spec.height,
                 avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM), level);
-    listFile(path, layer.content, layer.unit, "PNG, 3 channels uint8, sRGB", d.day, 0.f, 255.f);
+    listFile(path, layer.content, layer.unit, kRgbPngFormat, d.day, 0.f, 255.f);
     return;
   }
   // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
@@ -172,7 +173,7 @@ void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
   const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
   writeRgbPng(path, s.spec.width, s.spec.height, rgb, level);
-  listFile(path, layer.content, layer.unit, "PNG, 3 channels uint8, sRGB", d.day, 0.f, 255.f);
+  listFile(path, layer.content, layer.unit, kRgbPngFormat, d.day, 0.f, 255.f);
   // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
   const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
   const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
@@ -209,8 +210,7 @@ void OutputWriter::writeMultiChannel(const Day& d, const std::vector<std::string
   std::string list;
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
   listFile(path, "all layers as named channels: " + list, "per channel, as the single-layer files",
-           "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompressionName(scene_.outputs.compressionLevel) +
-               "), linear",
+           "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression_ + "), linear",
            d.day, 0.f, 0.f);
 }
 
@@ -238,7 +238,7 @@ void OutputWriter::writeContactSheet() {
   listFile(path,
            "contact sheet of the season: the previews of the frame days in order, then the season's end, " + std::to_string(columns) +
                " to a row",
-           "sRGB", "PNG, 3 channels uint8, sRGB", -1.0, 0.f, 255.f);
+           "sRGB", kRgbPngFormat, -1.0, 0.f, 255.f);
 }
 
 }  // namespace snow

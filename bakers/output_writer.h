@@ -83,6 +83,7 @@ class OutputWriter {
   OutputSources src_;
   const Scene& scene_;
   std::ostream& log_;
+  std::string exrCompression_;    // the EXR compression name of the scene's level
   std::string floatImageFormat_;  // the manifest's format line of every float image
   std::string occluderNotes_;
   std::vector<std::vector<uint8_t>> previews_;  // every preview written, subsampled, for the contact sheet
