@@ -8,16 +8,13 @@
 namespace snow {
 
 Scene resolveScene(const BakeOptions& options) {
-  Scene scene = loadScene(options.scene, options.sets);
   if (options.terrainFile) {
     std::error_code ec;
     if (!std::filesystem::exists(*options.terrainFile, ec))
       throw InputError(*options.terrainFile + ": terrain file does not exist (--terrain)");
-    // The scene's reading options (cell size, height range, resampling...) still apply.
-    scene.terrain.builtin = false;
-    scene.terrain.file = *options.terrainFile;
-    scene.terrain.declaredAt = "--terrain";
   }
+  // --terrain replaces the scene's whole [terrain] table; --set terrain.KEY still applies to it.
+  Scene scene = loadScene(options.scene, options.sets, options.terrainFile);
   if (options.seed) scene.seed = *options.seed;
   if (options.threads) scene.threads = *options.threads;
   if (options.backend) {

@@ -51,6 +51,14 @@ double requireCellSize(const TerrainSource& src, const std::string& what) {
   return *src.cellSizeM;
 }
 
+// The channel (from 0) that holds the heights: the only one, or terrain.band's.
+int heightChannel(const TerrainSource& src, int channels) {
+  if (src.band == 0 && channels > 1)
+    throw InputError(src.file + ": has " + std::to_string(channels) + " channels: set terrain.band to the one that holds the heights (from 1)");
+  if (src.band > channels) throw InputError(src.file + ": terrain.band = " + std::to_string(src.band) + ", but the image has " + std::to_string(channels) + " channels");
+  return src.band == 0 ? 0 : src.band - 1;
+}
+
 void fillTerrain(Terrain& t, const std::vector<float>& values, int w, int h, const HeightMapping& m, const std::string& what) {
   t.heightsM.resize(w, h);
   t.valid.resize(w, h, 1);
@@ -93,15 +101,17 @@ Terrain loadHeightmapImage(const TerrainSource& src) {
   checkGridSize(path, spec.width, spec.height);
   const bool integerData = !spec.format.is_floating_point();
   const HeightMapping mapping = heightMapping(src, integerData, path);
+  const int channel = heightChannel(src, spec.nchannels);
   std::vector<float> pixels(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
     throw InputError(path + ": read failed (truncated or corrupt?): " + in->geterror());
   std::vector<float> first(static_cast<size_t>(spec.width) * spec.height);
-  for (size_t i = 0; i < first.size(); ++i) first[i] = pixels[i * spec.nchannels];
+  for (size_t i = 0; i < first.size(); ++i) first[i] = pixels[i * spec.nchannels + channel];
   Terrain t;
   t.info.source = path;
   t.info.format = "heightmap";
-  t.info.driver = std::string(in->format_name()) + ", " + spec.format.c_str() + (spec.nchannels > 1 ? ", first channel" : "");
+  t.info.driver = std::string(in->format_name()) + ", " + spec.format.c_str() +
+                  (spec.nchannels > 1 ? ", channel " + std::to_string(channel + 1) + " of " + std::to_string(spec.nchannels) : "");
   fillTerrain(t, first, spec.width, spec.height, mapping, path);
   setMetricSpec(t, cell, spec.width, spec.height);
   t.info.heightMapping = mapping.description;

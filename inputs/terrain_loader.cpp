@@ -14,6 +14,7 @@
 #include "core/errors.h"
 #include "core/util.h"
 #include "gdal_support.h"
+#include "terrain_checks.h"
 
 namespace snow {
 
@@ -80,7 +81,26 @@ GdalDataset openDem(const std::string& path) {
   GdalDataset ds = openGdalReadOnly(path);
   if (!ds) throw InputError(path + ": cannot read as a terrain: " + lastGdalError());
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
+  if (ds->GetDriver() && std::string(ds->GetDriver()->GetDescription()) == "AAIGrid") checkEsriAsciiGrid(path);
   return ds;
+}
+
+// The band that holds the heights: the only one, or terrain.band's.
+GDALRasterBand* heightBand(const std::string& path, GDALDataset& ds, int band) {
+  const int bands = ds.GetRasterCount();
+  if (band == 0 && bands > 1)
+    throw InputError(path + ": has " + std::to_string(bands) + " bands: set terrain.band to the one that holds the heights (from 1)");
+  if (band > bands) throw InputError(path + ": terrain.band = " + std::to_string(band) + ", but the file has " + std::to_string(bands));
+  return ds.GetRasterBand(band == 0 ? 1 : band);
+}
+
+// A file with neither a geotransform nor a coordinate system is an image, not a map.
+void requireGeoreference(const std::string& path, GDALDataset& ds) {
+  double gt[6];
+  const OGRSpatialReference* srs = ds.GetSpatialRef();
+  if (ds.GetGeoTransform(gt) == CE_None || (srs && !srs->IsEmpty())) return;
+  throw InputError(path + ": has no georeference (no geotransform or coordinate system), so no cell size: read it as a heightmap "
+                          "with terrain.cell_size_m (metres between pixel centres), and terrain.height_range_m for integer pixels");
 }
 
 // Where the file sits in its own coordinates: its geotransform, cell size, corner and centre.
@@ -171,7 +191,7 @@ bool chooseCoordinatesWithoutCrs(TerrainCoordinates coordinates, const DemPlacem
     return true;
   }
   info.coordinateSystem = "none in the file; treated as metres";
-  info.coordinateDecision = p.hasTransform ? "no coordinate system; cell size taken as metres" : "no georeference; 1 m cells assumed";
+  info.coordinateDecision = "no coordinate system; cell size taken as metres";
   info.nativeUnit = "metre (assumed)";
   takeCellSizeAsMetres(p, info);
   return false;
@@ -215,20 +235,43 @@ double verticalUnitToMetre(GDALDataset& ds) {
   return hasSrs && !srs->IsGeographic() && srs->GetLinearUnits() > 0.0 ? srs->GetLinearUnits() : 1.0;
 }
 
-// Band 1 into t.heightsM (metres, north-up) and t.valid (0 where NODATA).
-void readDemHeights(const std::string& path, GDALDataset& ds, const DemPlacement& p, Terrain& t) {
+// GDAL's scale and offset of a band (value = offset + scale x stored), when it has them.
+struct BandScaling {
+  bool given = false;
+  double scale = 1.0, offset = 0.0;
+};
+
+BandScaling bandScaling(const std::string& path, GDALRasterBand& band) {
+  int hasScale = 0, hasOffset = 0;
+  BandScaling b;
+  const double scale = band.GetScale(&hasScale), offset = band.GetOffset(&hasOffset);
+  if (hasScale) b.scale = scale;
+  if (hasOffset) b.offset = offset;
+  if (!std::isfinite(b.scale) || !std::isfinite(b.offset) || b.scale == 0.0)
+    throw InputError(path + ": the band's scale or offset is zero or not finite");
+  b.given = b.scale != 1.0 || b.offset != 0.0;
+  return b;
+}
+
+// The band into t.heightsM (metres, north-up) and t.valid (0 where NODATA).
+void readDemHeights(const std::string& path, GDALDataset& ds, GDALRasterBand& band, const DemPlacement& p, Terrain& t) {
   const int w = t.info.nativeWidth, h = t.info.nativeHeight;
-  GDALRasterBand* band = ds.GetRasterBand(1);
   t.heightsM.resize(w, h);
   t.valid.resize(w, h, 1);
   std::vector<float> rows(static_cast<size_t>(w) * h);
   CPLErrorReset();
-  if (band->RasterIO(GF_Read, 0, 0, w, h, rows.data(), w, h, GDT_Float32, 0, 0) != CE_None)
+  if (band.RasterIO(GF_Read, 0, 0, w, h, rows.data(), w, h, GDT_Float32, 0, 0) != CE_None)
     throw InputError(path + ": read failed (truncated or corrupt?): " + lastGdalError());
   int hasNodata = 0;
-  const double nodata = band->GetNoDataValue(&hasNodata);
+  const double nodata = band.GetNoDataValue(&hasNodata);
   const float nodataF = static_cast<float>(nodata);
   const double verticalToMetre = verticalUnitToMetre(ds);
+  const BandScaling scaling = bandScaling(path, band);
+  if (scaling.given) {
+    std::ostringstream o;
+    o << "height = " << scaling.offset << " + " << scaling.scale << " x stored value (the band's GDAL offset and scale)";
+    t.info.heightMapping = o.str();
+  }
   for (int y = 0; y < h; ++y) {
     const int srcY = p.gt[5] > 0 ? h - 1 - y : y;  // north-up: flip south-up rasters
     for (int x = 0; x < w; ++x) {
@@ -242,15 +285,19 @@ void readDemHeights(const std::string& path, GDALDataset& ds, const DemPlacement
         o << path << ": height at column " << x << ", row " << srcY << " is " << v << " (not finite); mark it NODATA or fix the file";
         throw InputError(o.str());
       }
-      t.heightsM(x, y) = static_cast<float>(v * verticalToMetre);
+      // Without a scale and offset the value is used as read (the same bytes as before they were read).
+      const double stored = scaling.given ? scaling.offset + scaling.scale * static_cast<double>(v) : v;
+      t.heightsM(x, y) = static_cast<float>(stored * verticalToMetre);
     }
   }
 }
 
 }  // namespace
 
-Terrain loadDem(const std::string& path, TerrainCoordinates coordinates) {
+Terrain loadDem(const std::string& path, TerrainCoordinates coordinates, int bandNumber) {
   const GdalDataset ds = openDem(path);
+  GDALRasterBand* band = heightBand(path, *ds, bandNumber);
+  requireGeoreference(path, *ds);
   const int w = ds->GetRasterXSize(), h = ds->GetRasterYSize();
   checkGridSize(path, w, h);
 
@@ -266,9 +313,17 @@ Terrain loadDem(const std::string& path, TerrainCoordinates coordinates) {
   info.nativeCellSizeX = placement.sizeX;
   info.nativeCellSizeY = placement.sizeY;
   describeDemCoordinates(path, *ds, placement, coordinates, info);
-  readDemHeights(path, *ds, placement, t);
+  readDemHeights(path, *ds, *band, placement, t);
   updateTerrainStatistics(t);
   return t;
+}
+
+bool hasGeoreference(const std::string& path) {
+  const GdalDataset ds = openGdalReadOnly(path);
+  if (!ds) return false;
+  double gt[6];
+  const OGRSpatialReference* srs = ds->GetSpatialRef();
+  return ds->GetGeoTransform(gt) == CE_None || (srs && !srs->IsEmpty());
 }
 
 Terrain makeBuiltinTerrain(const DefaultTerrainOptions& options) {
@@ -311,12 +366,14 @@ Terrain loadTerrain(const TerrainSource& src) {
   Terrain t;
   if (format == TerrainFormat::Builtin) {
     t = makeBuiltinTerrain(src.builtinOptions);
+  } else if (format == TerrainFormat::Dem && src.cellSizeM && src.format == TerrainFormat::Auto && !hasGeoreference(src.file)) {
+    t = loadHeightmapImage(src);  // an image without georeference: the scene gives its cell size
   } else if (format == TerrainFormat::Dem) {
     if (src.cellSizeM)
       throw InputError(src.file + ": a DEM carries its own cell size: use terrain.resample_cell_size_m to bake at another one");
     if (src.hasHeightmapKeys())
       throw InputError(src.file + ": terrain.height_range_m/height_scale_m apply to heightmaps; set terrain.format = \"heightmap\"");
-    t = loadDem(src.file, src.coordinates);
+    t = loadDem(src.file, src.coordinates, src.band);
   } else if (format == TerrainFormat::Heightmap) {
     t = loadHeightmapImage(src);
   } else if (format == TerrainFormat::Raw) {
@@ -326,6 +383,7 @@ Terrain loadTerrain(const TerrainSource& src) {
   } else {
     throw InputError(src.file + ": unknown terrain.format '" + enumName(format) + "'");
   }
+  checkHeightLimits(t, src);
   if (src.fillNodata && t.info.nodataCells > 0) fillNodata(t);
   if (src.cropM) t = cropTerrain(t, src);
   if (src.resampleCellSizeM || src.resampleSize) t = resampleTerrain(t, src);

@@ -51,7 +51,11 @@ TerrainFormat detectTerrainFormat(const TerrainSource& source);
 // Reads the terrain the source describes, fills or masks NODATA, resamples if asked.
 Terrain loadTerrain(const TerrainSource& source);
 
-Terrain loadDem(const std::string& path, TerrainCoordinates coordinates = TerrainCoordinates::Auto);
+// `band` from 1; 0 when the file must have a single band. A file without georeference is refused
+// (it is an image: a heightmap with terrain.cell_size_m).
+Terrain loadDem(const std::string& path, TerrainCoordinates coordinates = TerrainCoordinates::Auto, int band = 0);
+// Whether GDAL reads a geotransform or a coordinate system in the file (false when it cannot open it).
+bool hasGeoreference(const std::string& path);
 Terrain loadHeightmapImage(const TerrainSource& source);
 Terrain loadRawHeightmap(const TerrainSource& source);
 Terrain loadMeshTerrain(const TerrainSource& source);

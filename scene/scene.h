@@ -141,13 +141,17 @@ struct Scene {
 };
 
 // Loads and validates a scene file. `overrides` are "dotted.key=VALUE" strings from --set,
-// applied before validation with the same rules. Throws InputError naming the file (or the
-// --set argument), the line and the key.
-Scene loadSceneFile(const std::string& path, const std::vector<std::string>& overrides = {});
+// applied before validation with the same rules. `terrainFile` (--terrain) replaces the whole
+// [terrain] table by `file = terrainFile` (relative to the working folder) before the --set
+// overrides, so the scene's builtin keys (size, cell_size_m...) go with it. Throws InputError
+// naming the file (or the --set argument), the line and the key.
+Scene loadSceneFile(const std::string& path, const std::vector<std::string>& overrides = {},
+                    const std::optional<std::string>& terrainFile = std::nullopt);
 // Same, from text: `sourceName` names it in messages, `baseDir` resolves relative paths.
 Scene loadSceneText(const std::string& text, const std::string& sourceName, const std::string& baseDir,
-                    const std::vector<std::string>& overrides = {});
+                    const std::vector<std::string>& overrides = {}, const std::optional<std::string>& terrainFile = std::nullopt);
 // "preset:NAME" or a path.
-Scene loadScene(const std::string& pathOrPreset, const std::vector<std::string>& overrides = {});
+Scene loadScene(const std::string& pathOrPreset, const std::vector<std::string>& overrides = {},
+                const std::optional<std::string>& terrainFile = std::nullopt);
 
 }  // namespace snow

@@ -85,6 +85,15 @@ class Validator {
     fail(source_, node, path, "'" + v + "' is not one of: " + list);
   }
 
+  // Every list of names names files (layers, encodings, mesh formats and parts): a repeat would
+  // write one file from two tasks at once.
+  void checkNoRepeats(const toml::array& list, const std::string& path) {
+    for (size_t i = 0; i < list.size(); ++i)
+      for (size_t j = 0; j < i; ++j)
+        if (list[i].as_string()->get() == list[j].as_string()->get())
+          fail(source_, list[i], path, "'" + list[i].as_string()->get() + "' is listed twice (each names its own files)");
+  }
+
   void checkValue(const toml::node& node, const std::string& path, const Rule& rule) {
     auto wrongType = [&] { fail(source_, node, path, std::string("must be ") + kindName(rule.kind) + ", not " + typeName(node)); };
     switch (rule.kind) {
@@ -128,6 +137,7 @@ class Validator {
           if (!e.is_string()) fail(source_, e, path, "every element must be a string, not " + typeName(e));
           checkChoice(e, path, rule, e.as_string()->get());
         }
+        checkNoRepeats(*node.as_array(), path);
         break;
     }
   }
@@ -317,6 +327,8 @@ void readEvents(Scene& scene, const toml::table& root, const std::string& source
     EventSpec ev;
     applyBindings(ev, e, "events", source, scene);
     if (ev.type != EventType::Snowfall) {
+      if (ev.day > scene.days)
+        fail(source, *e.get("day"), "events.day", "day " + numberText(ev.day) + " is after the season's end (season.days = " + numberText(scene.days) + ")");
       addPointEvent(scene, ev, e, source);
       continue;
     }
@@ -367,12 +379,23 @@ void validateTerrain(Scene& scene, const toml::table& root, const std::string& s
     throw InputError(where(source, terrain.source()) + ": terrain.max_altitude_m: must be above terrain.min_altitude_m");
 }
 
+// A frame's files are tagged with its day rounded to a whole day (frames/STEM.DDDD): two frame
+// days with one tag would write the same files.
 void validateOutputs(const Scene& scene, const toml::table& root, const std::string& source) {
-  if (const toml::array* frames = root["outputs"]["frames_days"].as_array())
-    for (auto&& e : *frames) {
-      const double day = e.value<double>().value();
-      if (day > scene.days) fail(source, e, "outputs.frames_days", "day " + std::to_string(day) + " is after the season's end");
+  const toml::array* frames = root["outputs"]["frames_days"].as_array();
+  if (!frames) return;
+  for (size_t i = 0; i < frames->size(); ++i) {
+    const toml::node& e = (*frames)[i];
+    const double day = e.value<double>().value();
+    if (day > scene.days) fail(source, e, "outputs.frames_days", "day " + std::to_string(day) + " is after the season's end");
+    for (size_t j = 0; j < i; ++j) {
+      const double other = (*frames)[j].value<double>().value();
+      if (std::lround(other) == std::lround(day))
+        fail(source, e, "outputs.frames_days",
+             "day " + numberText(day) + " and day " + numberText(other) + " would both write the frame files of day " +
+                 std::to_string(std::lround(day)) + " (frames are named by the whole day)");
     }
+  }
 }
 
 bool wantsLayer(const Scene& scene, const std::string& layer) {
@@ -479,11 +502,22 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   return scene;
 }
 
+// --terrain FILE: a [terrain] table of its own, so that no key the scene wrote for its terrain
+// (a builtin's size and cell size, a heightmap's mapping) is applied to another file.
+void replaceTerrainTable(toml::table& root, const std::string& terrainFile) {
+  toml::table terrain;
+  terrain.insert("file", fs::absolute(terrainFile).lexically_normal().string());
+  root.insert_or_assign("terrain", std::move(terrain));
+}
+
 Scene parseAndBuild(toml::table root, const std::string& source, const std::string& baseDir,
-                    const std::vector<std::string>& overrides) {
+                    const std::vector<std::string>& overrides, const std::optional<std::string>& terrainFile) {
+  if (terrainFile) replaceTerrainTable(root, *terrainFile);
   for (const auto& o : overrides) applyOverride(root, o);
   Validator(source).checkTable(root, "");
-  return buildScene(root, source, baseDir);
+  Scene scene = buildScene(root, source, baseDir);
+  if (terrainFile) scene.terrain.declaredAt = "--terrain";
+  return scene;
 }
 
 [[noreturn]] void rethrowParseError(const toml::parse_error& e, const std::string& source) {
@@ -495,17 +529,17 @@ Scene parseAndBuild(toml::table root, const std::string& source, const std::stri
 }  // namespace
 
 Scene loadSceneText(const std::string& text, const std::string& sourceName, const std::string& baseDir,
-                    const std::vector<std::string>& overrides) {
+                    const std::vector<std::string>& overrides, const std::optional<std::string>& terrainFile) {
   toml::table root;
   try {
     root = toml::parse(text, std::string_view(sourceName));
   } catch (const toml::parse_error& e) {
     rethrowParseError(e, sourceName);
   }
-  return parseAndBuild(std::move(root), sourceName, baseDir, overrides);
+  return parseAndBuild(std::move(root), sourceName, baseDir, overrides, terrainFile);
 }
 
-Scene loadSceneFile(const std::string& path, const std::vector<std::string>& overrides) {
+Scene loadSceneFile(const std::string& path, const std::vector<std::string>& overrides, const std::optional<std::string>& terrainFile) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path + ": scene file does not exist");
   if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not a scene file");
@@ -514,17 +548,17 @@ Scene loadSceneFile(const std::string& path, const std::vector<std::string>& ove
   std::stringstream buffer;
   buffer << in.rdbuf();
   const std::string base = fs::path(path).parent_path().string();
-  return loadSceneText(buffer.str(), path, base.empty() ? "." : base, overrides);
+  return loadSceneText(buffer.str(), path, base.empty() ? "." : base, overrides, terrainFile);
 }
 
-Scene loadScene(const std::string& pathOrPreset, const std::vector<std::string>& overrides) {
+Scene loadScene(const std::string& pathOrPreset, const std::vector<std::string>& overrides, const std::optional<std::string>& terrainFile) {
   const std::string prefix = "preset:";
   if (pathOrPreset.rfind(prefix, 0) == 0) {
     const std::string name = pathOrPreset.substr(prefix.size());
     if (name != "default") throw InputError(pathOrPreset + ": unknown preset (available: preset:default)");
-    return loadSceneText(presets::kDefault, pathOrPreset, fs::current_path().string(), overrides);
+    return loadSceneText(presets::kDefault, pathOrPreset, fs::current_path().string(), overrides, terrainFile);
   }
-  return loadSceneFile(pathOrPreset, overrides);
+  return loadSceneFile(pathOrPreset, overrides, terrainFile);
 }
 
 }  // namespace snow

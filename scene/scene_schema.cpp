@@ -65,6 +65,15 @@ Bind<Scene> heightRange() {
       },
       [](const Scene& s) { return show(s.terrain.heightRangeM); });
 }
+Bind<Scene> heightLimits() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        const auto r = numbersOf(n, 2, c);
+        if (!(r[1] > r[0])) fail(c.source, n, c.path, "needs [lowest, highest] with highest > lowest");
+        s.terrain.heightLimitsM = {r[0], r[1]};
+      },
+      [](const Scene& s) { return show(s.terrain.heightLimitsM); });
+}
 Bind<Scene> coverageDepths() {
   return custom<Scene>(
       [](Scene& s, const toml::node& n, const BindContext& c) {
@@ -95,8 +104,14 @@ Bind<Scene> resampleSize() {
 }
 Bind<Scene> startDate() {
   return custom<Scene>(
-      [](Scene& s, const toml::node& n, const BindContext&) {
+      [](Scene& s, const toml::node& n, const BindContext& c) {
         const auto date = n.is_date() ? std::optional<toml::date>(n.as_date()->get()) : parseDate(n.as_string()->get());
+        if (!isCalendarDate(*date)) {
+          std::ostringstream o;
+          o << *date << " is not a date: month " << int(date->month) << " of " << date->year << " has " << daysInMonth(date->year, date->month)
+            << " days";
+          fail(c.source, n, c.path, o.str());
+        }
         s.startYear = date->year, s.startMonth = date->month, s.startDay = date->day;
       },
       [](const Scene& s) {
@@ -317,6 +332,10 @@ void terrainRules(std::vector<Rule>& r) {
   r.push_back({"terrain.raw_height", Kind::Integer, 1, 1 << 20, {}, "cells", "raw files: rows", at<S>(&S::terrain, &TS::rawHeight), "required for raw files"});
   r.push_back({"terrain.byte_order", Kind::String, -kInf, kInf, enumNames<ByteOrder>(), "", "raw files: byte order", at<S>(&S::terrain, &TS::byteOrder)});
   r.push_back({"terrain.up_axis", Kind::String, -kInf, kInf, enumNames<UpAxis>(), "", "meshes: which axis is up (glTF is y-up)", at<S>(&S::terrain, &TS::upAxis)});
+  r.push_back({"terrain.height_limits_m", Kind::NumberArray, -1e9, 1e9, {}, "m",
+       "[lowest, highest] heights allowed after scale and offset; a terrain outside is refused (the default is the Earth's surface with a margin: widen it for other planets or units)", heightLimits()});
+  r.push_back({"terrain.band", Kind::Integer, 1, 1 << 16, {}, "", "which band of a multi-band DEM, or channel of a multi-channel heightmap, holds the heights (from 1); such files are refused without it",
+       at<S>(&S::terrain, &TS::band), "none (the file must have one band)"});
   r.push_back({"terrain.resample_cell_size_m", Kind::Number, 0.01, 100000, {}, "m", "bake at another cell size (or give terrain.resample_size)", at<S>(&S::terrain, &TS::resampleCellSizeM)});
   r.push_back({"terrain.crop_m", Kind::NumberArray, 0, 1e8, {}, "m",
        "bake a window [west, north, east, south]: the cells whose centres lie in it, metres east and south of the grid's north-west corner (before any resampling)", cropWindow()});
@@ -541,6 +560,14 @@ std::string numberText(double v) {
   o << std::setprecision(15) << v;
   return o.str();
 }
+
+int daysInMonth(int year, int month) {
+  static const int days[12] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+  return month < 1 || month > 12 ? 0 : days[month - 1] + (month == 2 && leap ? 1 : 0);
+}
+
+bool isCalendarDate(const toml::date& d) { return d.day >= 1 && d.day <= daysInMonth(d.year, d.month); }
 
 std::optional<toml::date> parseDate(const std::string& s) {
   int y, m, d;

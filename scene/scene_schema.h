@@ -84,6 +84,9 @@ std::string where(const std::string& fallbackSource, const toml::source_region& 
 RasterRef rasterRef(const toml::node& node, const std::string& source, const Scene& scene, const std::string& key);
 RasterRef rasterFromTable(const toml::table& t, const std::string& source, const std::string& baseDir, const std::string& key);
 std::optional<toml::date> parseDate(const std::string& s);
+// The Gregorian calendar's days in a month (0 for no month), and whether a date is one of them.
+int daysInMonth(int year, int month);
+bool isCalendarDate(const toml::date& d);
 // A number as the reference prints it (15 significant digits: ranges and defaults exactly).
 std::string numberText(double v);
 // `file` against the scene file's folder when relative, normalised.

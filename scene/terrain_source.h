@@ -32,6 +32,10 @@ struct TerrainSource {
   // A window [west, north, east, south] in metres east and south of the grid's north-west corner:
   // the cells whose centres lie inside it (applied before resampling).
   std::optional<std::array<double, 4>> cropM;
+  // Heights allowed after scale and offset, metres (the Earth's surface with a margin): a file
+  // outside them is refused as hostile or in other units.
+  std::array<double, 2> heightLimitsM{-12000.0, 10000.0};
+  int band = 0;  // which band (DEMs) or channel (heightmaps), from 1; 0: the file must have one
   std::optional<double> resampleCellSizeM;        // bake at another cell size ...
   std::optional<std::array<int, 2>> resampleSize; // ... or another grid size [width, height]
 
