@@ -2,6 +2,7 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include "core/errors.h"
@@ -66,6 +67,14 @@ Header readHeader(const std::string& path, std::istream& in) {
 }
 
 }  // namespace
+
+bool isEsriAsciiGrid(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string first;
+  if (!(in >> std::setw(16) >> first)) return false;
+  const std::string k = lower(first);
+  return k == "ncols" || k == "nrows" || k == "xllcorner" || k == "xllcenter" || k == "yllcorner" || k == "yllcenter" || k == "cellsize";
+}
 
 void checkEsriAsciiGrid(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

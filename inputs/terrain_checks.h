@@ -12,6 +12,8 @@ namespace snow {
 // An ESRI ASCII grid (.asc) read as text: GDAL reads a `nan` in an integer grid as 0 and a
 // negative cellsize as another grid, so the text is checked before GDAL reads it.
 void checkEsriAsciiGrid(const std::string& path);
+// Whether the file starts as an ESRI ASCII grid does (its first word a header key).
+bool isEsriAsciiGrid(const std::string& path);
 
 // Every valid height within source.heightLimitsM (metres, after scale and offset).
 void checkHeightLimits(const Terrain& terrain, const TerrainSource& source);

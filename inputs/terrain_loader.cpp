@@ -78,10 +78,10 @@ GdalDataset openDem(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": terrain file does not exist");
   if (std::filesystem::file_size(path, ec) == 0) throw InputError(path + ": terrain file is empty");
+  if (isEsriAsciiGrid(path)) checkEsriAsciiGrid(path);  // before GDAL, which reads some hostile grids as others
   GdalDataset ds = openGdalReadOnly(path);
   if (!ds) throw InputError(path + ": cannot read as a terrain: " + lastGdalError());
   if (ds->GetRasterCount() < 1) throw InputError(path + ": has no raster band");
-  if (ds->GetDriver() && std::string(ds->GetDriver()->GetDescription()) == "AAIGrid") checkEsriAsciiGrid(path);
   return ds;
 }
 
