@@ -277,6 +277,24 @@ TEST(Cli, InfoJsonReportsWhatTheSimulationWillUse) {
   fs::remove_all(dir);
 }
 
+// --terrain replaces the preset's [terrain] table: its builtin size and cell_size_m do not reach
+// the DEM (they made every DEM fail), --set terrain.KEY still applies to the file.
+TEST(Cli, TerrainFlagBakesARealDemOnThePresetReplacingItsTerrainTable) {
+  const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaKot_5m.asc";
+  if (!fs::exists(dem)) GTEST_SKIP() << "shared data not found: " << dem;
+  const fs::path dir = workDir();
+  const ProcessResult r = snowbake(dir, "bake preset:default --terrain " + dem + " --set season.days=10 --set outputs.frames_days=[5] --no-cache --out " + (dir / "o").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("439 x 517 cells of 5.00 x 5.00 m"), std::string::npos) << r.err;
+  EXPECT_EQ(snow::readFloatImage((dir / "o" / "depth.exr").string()).width(), 439);
+  const ProcessResult resampled =
+      snowbake(dir, "bake preset:default --terrain " + dem + " --set terrain.resample_cell_size_m=10 --set season.days=2 --set outputs.frames_days=[1] --no-cache --out " +
+                        (dir / "o2").string());
+  ASSERT_EQ(resampled.status, 0) << resampled.err;
+  EXPECT_EQ(snow::readFloatImage((dir / "o2" / "depth.exr").string()).width(), 219);  // 439 cells of 5 m: 2195 m at 10 m
+  fs::remove_all(dir);
+}
+
 TEST(Cli, RealDemWithNodataBakesWithAMaskAndNoSnowInTheHoles) {
   const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaWog_5m.asc";
   if (!fs::exists(dem)) GTEST_SKIP() << "shared data not found: " << dem;

@@ -378,3 +378,84 @@ TEST(TerrainFormats, HeightmapsNeedTheirCellSizeAndHeightMapping) {
   const std::string huge = inputErrorOf(raw);
   EXPECT_NE(huge.find("GiB"), std::string::npos) << huge;
 }
+
+namespace {
+// A projected GeoTIFF of the hill in `bands` bands (band b holds the hill + 100 (b - 1) m),
+// with a band scale and offset when given (stored = (height - offset) / scale).
+void writeScaledGeoTiff(const std::string& path, int bands, double scale, double offset, bool georeferenced = true) {
+  GDALAllRegister();
+  GDALDataset* ds = GetGDALDriverManager()->GetDriverByName("GTiff")->Create(path.c_str(), kW, kH, bands, GDT_Float32, nullptr);
+  if (georeferenced) {
+    double gt[6] = {500000, kCell, 0, 5200000, 0, -kCell};
+    ds->SetGeoTransform(gt);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(32632);
+    ds->SetSpatialRef(&srs);
+  }
+  for (int b = 1; b <= bands; ++b) {
+    std::vector<float> v(kW * kH);
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) v[y * kW + x] = static_cast<float>((hillAtCell(x, y) + 100.0 * (b - 1) - offset) / scale);
+    GDALRasterBand* band = ds->GetRasterBand(b);
+    EXPECT_EQ(band->RasterIO(GF_Write, 0, 0, kW, kH, v.data(), kW, kH, GDT_Float32, 0, 0), CE_None);
+    if (scale != 1.0) band->SetScale(scale);
+    if (offset != 0.0) band->SetOffset(offset);
+  }
+  GDALClose(ds);
+}
+}  // namespace
+
+TEST(TerrainFormats, GdalScaleAndOffsetAreAppliedAndReported) {
+  TempDir dir;
+  writeScaledGeoTiff(dir / "scaled.tif", 1, 0.1, 500.0);
+  TerrainSource src;
+  src.file = dir / "scaled.tif";
+  const Terrain t = loadTerrain(src);
+  expectHill(t, 1e-3);
+  EXPECT_NE(t.info.heightMapping.find("GDAL offset and scale"), std::string::npos) << t.info.heightMapping;
+}
+
+TEST(TerrainFormats, MultiBandDemNeedsTerrainBandAndReadsThatBand) {
+  TempDir dir;
+  writeScaledGeoTiff(dir / "bands.tif", 3, 1.0, 0.0);
+  TerrainSource src;
+  src.file = dir / "bands.tif";
+  try {
+    loadTerrain(src);
+    ADD_FAILURE() << "a 3-band file without terrain.band was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("terrain.band"), std::string::npos) << e.what();
+  }
+  src.band = 3;
+  const Terrain t = loadTerrain(src);
+  EXPECT_NEAR(t.heightsM(0, 0), hillAtCell(0, 0) + 200.0, 1e-3);  // band 3: the hill + 200 m
+  EXPECT_NEAR(t.heightsM(28, 22), hillAtCell(28, 22) + 200.0, 1e-3);
+}
+
+TEST(TerrainFormats, ImageWithoutGeoreferenceIsAHeightmapNeedingACellSize) {
+  TempDir dir;
+  writeScaledGeoTiff(dir / "plain.tif", 1, 1.0, 0.0, false);
+  TerrainSource src;
+  src.file = dir / "plain.tif";
+  try {
+    loadTerrain(src);
+    ADD_FAILURE() << "a plain image was read as a DEM";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("terrain.cell_size_m"), std::string::npos) << e.what();
+  }
+  src.cellSizeM = kCell;
+  const Terrain t = loadTerrain(src);
+  EXPECT_EQ(t.info.format, "heightmap");
+  expectHill(t, 1e-3);
+}
+
+TEST(TerrainFormats, HeightLimitsRefuseAbsurdHeightsAndWiden) {
+  TempDir dir;
+  writeScaledGeoTiff(dir / "hill.tif", 1, 1.0, 0.0);
+  TerrainSource src;
+  src.file = dir / "hill.tif";
+  src.heightLimitsM = {0.0, 1500.0};  // the hill's top is 1600 m
+  EXPECT_THROW(loadTerrain(src), InputError);
+  src.heightLimitsM = {0.0, 1601.0};
+  expectHill(loadTerrain(src), 1e-3);
+}
