@@ -1,6 +1,7 @@
 // Avalanches (paper §6.1): angle of repose, static friction, wet against dry, mass, stability,
 // thread independence.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <cstdio>
@@ -168,6 +169,8 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
     p.avalancheStopSpeedMps = draw(5, 1e-4, 1.0);
     if (k % 2) p.avalancheDryTemperatureC = 50.0, p.avalancheWetTemperatureC = 60.0;  // all wet
     const Outcome o = runAvalanche(s, rx, ry, p);
+    EXPECT_TRUE(o.record.released) << k << ": " << o.record.why;  // 1-3 m of unstable snow at every valid cell
+    EXPECT_GT(o.record.releasedM3, 0.0) << k;
     expectFiniteNonNegative(o.state);
     const double err = std::abs(totalSnow(o.state) - before) / before;
     worst = std::max(worst, err);
@@ -184,6 +187,7 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
     for (int x = 5; x < 25; ++x) cliff.unstableM(x, y) = 1.f;
   const double before = totalSnow(cliff);
   const Outcome o = runAvalanche(cliff, 15, 18);
+  ASSERT_TRUE(o.record.released) << o.record.why;
   expectFiniteNonNegative(o.state);
   EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before);
   EXPECT_LT(o.record.maxSpeedMps, std::sqrt(2.0 * 9.8 * 400.0));
@@ -191,8 +195,8 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
               o.record.steps, o.record.why.c_str(), o.record.runoutM);
 }
 
-// The TBB backend (2 threads) and the serial one give the same bytes.
-TEST(Avalanche, SameBytesSerialAndThreaded) {
+// The serial executor and TBB limited to 1 and to 2 threads give the same bytes.
+TEST(Avalanche, SameBytesSerialAndOnOneAndTwoThreads) {
   SnowState s = test::makeRoughState(64, 50, 7);
   for (int y = 0; y < 50; ++y)
     for (int x = 0; x < 64; ++x)
@@ -200,10 +204,13 @@ TEST(Avalanche, SameBytesSerialAndThreaded) {
   int rx = 30, ry = 25;
   while (!s.validCell(rx, ry)) ++rx;
   const Outcome a = runAvalanche(s, rx, ry, ModelParameters{}, createSerialBackend());
-  const Outcome b = runAvalanche(s, rx, ry, ModelParameters{}, createCpuBackend());
   ASSERT_GT(a.record.steps, 1);
-  test::expectSameBytes(a.state, b.state);
-  EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float)));
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+    const Outcome b = runAvalanche(s, rx, ry, ModelParameters{}, createCpuBackend());
+    test::expectSameBytes(a.state, b.state);
+    EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float))) << threads;
+  }
 }
 
 // No unstable snow at the rupture point: nothing is released and the record says why.

@@ -389,6 +389,14 @@ TEST(WindTransport, DiagonalWindSplitsTheDepositAndEdgesKeepTheirSnow) {
   const float eroded = s.windScourM(10, 4);
   ASSERT_GT(eroded, 0.f);
   EXPECT_NEAR(totalDepth(s), before, 1e-5 * before);
-  // The crest's bottom row (y = 8) cannot send south: nothing leaves the grid.
+  // The top row (y = 0) receives only from its west neighbour, its east share 6/14.
+  for (int x = 2; x < 20; ++x) EXPECT_NEAR(s.windDepositM(x, 0), 6.f / 14.f * s.windScourM(x - 1, 0), 1e-7f) << x;
+  // The west column (x = 0) receives only from its north neighbour, its south share 8/14.
+  for (int y = 1; y < 9; ++y) EXPECT_NEAR(s.windDepositM(0, y), 8.f / 14.f * s.windScourM(0, y - 1), 1e-7f) << y;
+  // The crest's bottom row (y = 8) cannot send south and the east column cannot send east: what
+  // they scour lands inside the grid, so nothing leaves it.
+  double scour = 0, deposit = 0;
+  for (size_t i = 0; i < s.windScourM.size(); ++i) scour += s.windScourM.values()[i], deposit += s.windDepositM.values()[i];
+  EXPECT_NEAR(deposit, scour, 1e-5 * scour);  // float sums of 189 cells
   for (float v : s.powderM.values()) ASSERT_GE(v, 0.f);
 }

@@ -180,10 +180,11 @@ FrontRange frontRangeWinter() {
 TEST(SeasonPhysics, FrontRangeDepthFollowsAltitudeAndAspect) {
   const FrontRange r = frontRangeWinter();
   if (!r.available) GTEST_SKIP() << "shared data not found: ../shared/data/dem/front_range_srtm3.asc";
-  for (int b = 1; b < 5; ++b)
-    if (r.bandCount[b] > 200 && r.bandCount[b - 1] > 200) {
-      EXPECT_GT(r.bandMean[b], r.bandMean[b - 1]) << b;
-    }
+  for (int b = 1; b < 5; ++b) {
+    ASSERT_GT(r.bandCount[b - 1], 200) << b - 1;  // every band is well sampled on this DEM
+    ASSERT_GT(r.bandCount[b], 200) << b;
+    EXPECT_GT(r.bandMean[b], r.bandMean[b - 1]) << b;
+  }
   ASSERT_GT(r.northN, 100);
   ASSERT_GT(r.southN, 100);
   EXPECT_GT(r.north / r.northN, 1.2 * r.south / r.southN);

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "core/cpu_backend.h"
 #include "core/default_terrain.h"
@@ -194,4 +195,16 @@ TEST(Season, WindScoursRidgesLoadsLeesAndConservesMass) {
     if (s.windEffectZM.values()[i] - s.bedrockM.values()[i] > 30.f) {
       ASSERT_EQ(s.windScourM.values()[i], 0.f);
     }
+  // Ridges scoured, lees loaded: the scour sits on the higher ground, the deposit in the shadow
+  // (weighted by metres moved: the mean altitude and shadow depth of each).
+  double scourZ = 0, depositZ = 0, scourShadow = 0, depositShadow = 0;
+  for (size_t i = 0; i < s.windScourM.size(); ++i) {
+    const double shadow = s.windEffectZM.values()[i] - s.bedrockM.values()[i];
+    scourZ += s.windScourM.values()[i] * s.bedrockM.values()[i], depositZ += s.windDepositM.values()[i] * s.bedrockM.values()[i];
+    scourShadow += s.windScourM.values()[i] * shadow, depositShadow += s.windDepositM.values()[i] * shadow;
+  }
+  std::printf("[ measure ] scour at %.1f m mean altitude, %.2f m mean shadow; deposit at %.1f m, %.2f m\n", scourZ / scour, scourShadow / scour,
+              depositZ / deposit, depositShadow / deposit);
+  EXPECT_GT(scourZ / scour, depositZ / deposit);
+  EXPECT_GT(depositShadow / deposit, scourShadow / scour);
 }

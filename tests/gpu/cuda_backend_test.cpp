@@ -9,6 +9,7 @@
 // tolerance here.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 
 #include "core/reference_scenario.h"
@@ -84,8 +85,9 @@ TEST(CudaBackend, LongSequencesStayIdentical) {
 }
 
 // Not a benchmark (those live in the bench suite): prints the time of each step on a 1024^2 grid
-// so a run on a GPU machine records what it saw, and checks the steps finish without a CUDA error.
-TEST(CudaBackend, StepTimesOn1024Squared) {
+// so a run on a GPU machine records what it saw; asserts only that after 51 runs of every step
+// the snow layers are finite and not negative.
+TEST(CudaBackend, EveryStepRunsOn1024SquaredLeavingFiniteSnowAndPrintsItsTime) {
   SKIP_WITHOUT_CUDA();
   const SnowState initial = test::makeRoughState(1024, 1024, 3, 10.0, 10.0);
   auto gpu = cuda::createCudaBackend();
@@ -99,8 +101,10 @@ TEST(CudaBackend, StepTimesOn1024Squared) {
     gpu->totals();  // synchronises
     const double ms = 1e3 * elapsedSeconds(t0) / repeats;
     std::printf("[ timing ] %-18s %8.3f ms per step (1024 x 1024, including its fixed-order reduction)\n", step.name.c_str(), ms);
-    EXPECT_GT(ms, 0.0);
   }
+  gpu->download(b);
+  for (const Grid<float>* layer : {&b.compactedM, &b.stableM, &b.unstableM, &b.powderM})
+    for (float v : layer->values()) ASSERT_TRUE(std::isfinite(v) && v >= 0.f) << v;
 }
 
 
@@ -156,9 +160,10 @@ AvalancheRecord avalancheOn(SnowBackend& backend, SnowState& s, int rx, int ry) 
 }
 }  // namespace
 
-// Not a benchmark gate: the time per avalanche step of the same release on a 512^2 and a
-// 4096^2 terrain (the active box keeps it independent of the terrain size); printed for the notes.
-TEST(CudaBackend, AvalancheStepTimeDoesNotGrowWithTheTerrain) {
+// Not a benchmark gate: prints the time per avalanche step of the same release on a 512^2 and a
+// 4096^2 terrain for the notes (the active box should keep it independent of the terrain size;
+// timing is not asserted here); asserts that both released and ran.
+TEST(CudaBackend, AvalancheOn512And4096SquaredReleasesAndPrintsItsStepTime) {
   SKIP_WITHOUT_CUDA();
   double perStep[2] = {0, 0};
   int k = 0;
@@ -169,8 +174,9 @@ TEST(CudaBackend, AvalancheStepTimeDoesNotGrowWithTheTerrain) {
     perStep[k++] = r.secondsPerStep();
     std::printf("[ timing ] avalanche on %d^2: %d steps, %.3f ms a step, largest box %d cells\n", size, r.steps,
                 r.secondsPerStep() * 1e3, r.boxCellsMax);
+    EXPECT_TRUE(r.released) << size << ": " << r.why;
+    EXPECT_GT(r.steps, 0) << size;
   }
-  EXPECT_GT(perStep[0], 0.0);
 }
 
 // The skiers' route map: the paper's cellular automaton on the GPU gives the host's one-pass
