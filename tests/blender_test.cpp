@@ -7,6 +7,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -64,7 +65,9 @@ TEST(Blender, LoadsTheMeshVolumeAndDisplacementAndRenders) {
 
   // Displacement: every checked vertex of the modified grid sits at its texel's depth.
   EXPECT_GT(r["displacement"]["checked_vertices"].get<int>(), 500);
-  EXPECT_LT(r["displacement"]["max_abs_error_m"].get<double>(), 1e-4);
+  std::printf("[ measure ] Blender's Displace modifier: max |error| %.3g m over %d vertices\n", r["displacement"]["max_abs_error_m"].get<double>(),
+              r["displacement"]["checked_vertices"].get<int>());
+  EXPECT_LT(r["displacement"]["max_abs_error_m"].get<double>(), 1e-6);
   EXPECT_NEAR(r["displacement"]["max_pixel_m"].get<double>(), depthMax, 1e-4);
 
   // Cycles: a 96 x 64 image with something in it.

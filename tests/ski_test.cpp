@@ -72,7 +72,8 @@ TEST(Ski, RefinedTrackKeepsTheTargetSlopeOnSteepGroundAndRunsStraightOnGentle) {
     for (int k = 0; k <= 60; ++k) path.push_back({300.0, 10.0 * k});
     const Path2 t = refineTrack(path, z, p, 0.5 * texel);
     const double se = alongCurveSlopeDeg(t, z);
-    EXPECT_NEAR(se, p.skierTargetSlopeDeg, 1.0) << "terrain " << slopeDeg << " deg";
+    // Within 0.1 deg (measured 30.02, 29.99, 30.02; the paper's closed form gives 29.0 at 45 deg).
+    EXPECT_NEAR(se, p.skierTargetSlopeDeg, 0.1) << "terrain " << slopeDeg << " deg";
     double maxGap = 0.0, maxRise = -1e9, lateral = 0.0;
     for (size_t i = 1; i < t.size(); ++i) {
       maxGap = std::max(maxGap, std::hypot(t[i][0] - t[i - 1][0], t[i][1] - t[i - 1][1]));
