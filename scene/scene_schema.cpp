@@ -362,7 +362,7 @@ void seasonRules(std::vector<Rule>& r) {  // [site], [season] and [weather]
   r.push_back({"site.latitude_deg", Kind::Number, -90, 90, {}, "deg", "site latitude", at<S>(&S::latitudeDeg), "the DEM's latitude when known, else 45"});
   r.push_back({"site.longitude_deg", Kind::Number, -180, 180, {}, "deg", "site longitude", at<S>(&S::longitudeDeg)});
   r.push_back({"season", Kind::Table, -kInf, kInf, {}, "", "when the season starts and how long it runs"});
-  r.push_back({"season.start_date", Kind::Date, -kInf, kInf, {}, "", "first day (a TOML date or \"YYYY-MM-DD\")", startDate()});
+  r.push_back({"season.start_date", Kind::Date, -kInf, kInf, {}, "", "first day (a TOML date or \"YYYY-MM-DD\", a day of the calendar)", startDate()});
   r.push_back({"season.days", Kind::Number, 0.01, 3650, {}, "day", "season length", at<S>(&S::days)});
   r.push_back({"weather", Kind::Table, -kInf, kInf, {}, "", "the weather timeline: keyframes and fixed snowfall periods"});
   r.push_back({"weather.keyframe", Kind::TableArray, -kInf, kInf, {}, "",
@@ -388,7 +388,7 @@ void eventRules(std::vector<Rule>& r) {  // [[events]]
   r.push_back({"events.position_m", Kind::NumberArray, -1e7, 1e7, {}, "m",
        "avalanche or skier: [x, y] metres east and south of the grid's north-west corner (a point outside the terrain or on NODATA is refused with the scene's line)", pair<EV>(&EV::positionM)});
   r.push_back({"events.map_position", Kind::NumberArray, -1e9, 1e9, {}, "m", "avalanche or skier: [easting, northing] in the DEM's own projected coordinates (refused for geographic DEMs)", pair<EV>(&EV::mapPosition)});
-  r.push_back({"events.day", Kind::Number, 0, 3650, {}, "day", "the day it happens", at<EV>(&EV::day), "required"});
+  r.push_back({"events.day", Kind::Number, 0, 3650, {}, "day", "the day it happens (an avalanche or skier after season.days is refused)", at<EV>(&EV::day), "required"});
   r.push_back({"events.duration_days", Kind::Number, 0.001, 365, {}, "day", "snowfall: how long the storm lasts (required for a snowfall)", at<EV>(&EV::durationDays)});
   r.push_back({"events.mask", Kind::Any, -kInf, kInf, {}, "",
        "avalanche or skier, instead of a point: release every unstable cell inside the mask, or draw each skier's start cell from it (docs/models/art-direction.md)", maskOf<EV>(&EV::mask), "none"});
@@ -488,7 +488,7 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
        "write frames of each avalanche's motion at this interval of simulated time (avalanches/NNN/depth.FFFF.exr; implies the maps)", at<S>(&S::outputs, &OR::avalancheFrameIntervalS), "none"});
   r.push_back({"outputs.coverage_depths_m", Kind::NumberArray, 0, 100, {}, "m",
        "the snow_coverage layer's [bare, covered] snow depths: 0 at or below the first, 1 at or above the second, a smooth step between", coverageDepths()});
-  r.push_back({"outputs.frames_days", Kind::NumberArray, 0, 3650, {}, "day", "also write the layers at these days (0: the season's start)", at<S>(&S::outputs, &OR::frameDays)});
+  r.push_back({"outputs.frames_days", Kind::NumberArray, 0, 3650, {}, "day", "also write the layers at these days (0: the season's start); frames are named by the whole day, so two days that round to the same one are refused", at<S>(&S::outputs, &OR::frameDays)});
   r.push_back({"run", Kind::Table, -kInf, kInf, {}, "", "how the bake runs"});
   r.push_back({"run.seed", Kind::Integer, 0, 9.007199254740992e15, {}, "", "random seed", at<S>(&S::seed)});
   r.push_back({"run.backend", Kind::String, -kInf, kInf, enumNames<BackendChoice>(), "", "compute backend (auto: CUDA when a device works)", at<S>(&S::backend)});
