@@ -575,7 +575,8 @@ TEST(ArtDirection, ExamplePresetBakes) {
   o.backend = "cpu";
   o.useCache = false;
   o.progress = false;
-  o.sets = {"season.days=46", "outputs.frames_days=[0]", "outputs.layers=[\"depth\"]"};
+  // 50 days: the preset's skiers come on day 50 (an event after the season's end is refused).
+  o.sets = {"season.days=50", "outputs.frames_days=[0]", "outputs.layers=[\"depth\"]"};
   std::ostringstream log;
   const BakeResult r = runBake(o, log);
   ASSERT_EQ(r.season.edits.size(), 2u);
