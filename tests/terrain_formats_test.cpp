@@ -14,6 +14,7 @@
 #include "core/errors.h"
 #include "inputs/mesh.h"
 #include "inputs/terrain_loader.h"
+#include "tools/info.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -405,7 +406,7 @@ void writeScaledGeoTiff(const std::string& path, int bands, double scale, double
 }
 }  // namespace
 
-TEST(TerrainFormats, GdalScaleAndOffsetAreAppliedAndReported) {
+TEST(TerrainFormats, GdalScaleAndOffsetAreAppliedAndReportedByInfo) {
   TempDir dir;
   writeScaledGeoTiff(dir / "scaled.tif", 1, 0.1, 500.0);
   TerrainSource src;
@@ -413,6 +414,8 @@ TEST(TerrainFormats, GdalScaleAndOffsetAreAppliedAndReported) {
   const Terrain t = loadTerrain(src);
   expectHill(t, 1e-3);
   EXPECT_NE(t.info.heightMapping.find("GDAL offset and scale"), std::string::npos) << t.info.heightMapping;
+  const std::string info = describeTerrain(dir / "scaled.tif", false);  // `snowbake info`
+  EXPECT_NE(info.find("height = 500 + 0.1 x stored value"), std::string::npos) << info;
 }
 
 TEST(TerrainFormats, MultiBandDemNeedsTerrainBandAndReadsThatBand) {
