@@ -40,6 +40,14 @@ WrittenImage writeNormalised(const std::string& pathWithoutExtension, const std:
 // How writeNormalised encodes, for the manifest.
 std::string normalisedFormat(const std::string& encoding, int width, int height);
 
+// The extension an encoding's files take (".16.png", ".8.png", ".r16").
+std::string encodingExtension(const std::string& encoding);
+// A grid quantised over [lo, hi] (values outside clamp; lo == hi writes 0 everywhere) in an
+// encoding of writeNormalised, to `path` as given; cells where `valid` (when given, of the grid's
+// size) is 0 are written as pixel `nodataPixel`. Written atomically.
+void writeQuantised(const std::string& path, const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid,
+                    double lo, double hi, int nodataPixel, int compressionLevel = kDefaultCompressionLevel);
+
 // Bilinear resampling of a cell-centred grid to width x height cells over the same extent (the
 // displacement maps at a requested resolution). Edge cells clamp. Exact for linear fields.
 Grid<float> resampleBilinear(const Grid<float>& grid, int width, int height);
@@ -49,6 +57,8 @@ Grid<float> resampleBilinear(const Grid<float>& grid, int width, int height);
 void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids,
                           int compressionLevel = kDefaultCompressionLevel);
 
+// The manifest's format line of writeRgbPng's files (previews and the contact sheet).
+constexpr const char* kRgbPngFormat = "PNG, 3 channels uint8, sRGB";
 // An 8-bit sRGB PNG preview, three bytes per pixel, row 0 at the north edge. Written atomically.
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
                  int compressionLevel = kDefaultCompressionLevel);

@@ -15,6 +15,7 @@
 #include "scene/layers.h"
 #include "scene.h"
 #include "scene_schema.h"
+#include "tile_sizes.h"
 
 namespace snow {
 namespace {
@@ -367,7 +368,26 @@ void validateTerrain(Scene& scene, const toml::table& root, const std::string& s
     throw InputError(where(source, terrain.source()) + ": terrain.max_altitude_m: must be above terrain.min_altitude_m");
 }
 
+// [outputs.tiles]: a convention and a size it allows.
+void validateTiles(const Scene& scene, const toml::table& root, const std::string& source) {
+  const toml::table* t = root["outputs"]["tiles"].as_table();
+  if (!t) return;
+  const OutputTiles& tiles = scene.outputs.tiles;
+  if (!t->contains("convention")) throw InputError(where(source, t->source()) + ": outputs.tiles: needs convention = \"unreal\", \"unity\" or \"grid\"");
+  if (!t->contains("size_px")) throw InputError(where(source, t->source()) + ": outputs.tiles: needs size_px");
+  const std::vector<int> allowed = allowedTileSizes(tiles.convention);
+  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), tiles.sizePx) == allowed.end())
+    fail(source, *t->get("size_px"), "outputs.tiles.size_px",
+         std::to_string(tiles.sizePx) + " is not a " + enumName(tiles.convention) + " tile size (allowed: " + tileSizeList(tiles.convention) + ")");
+  if (t->contains("overlap_px")) {
+    if (tiles.convention != TileConvention::Grid)
+      fail(source, *t->get("overlap_px"), "outputs.tiles.overlap_px", std::string(enumName(tiles.convention)) + " tiles always share one row and column");
+    if (tiles.overlapPx >= tiles.sizePx) fail(source, *t->get("overlap_px"), "outputs.tiles.overlap_px", "must be less than size_px");
+  }
+}
+
 void validateOutputs(const Scene& scene, const toml::table& root, const std::string& source) {
+  validateTiles(scene, root, source);
   if (const toml::array* frames = root["outputs"]["frames_days"].as_array())
     for (auto&& e : *frames) {
       const double day = e.value<double>().value();

@@ -126,6 +126,31 @@ Bind<Scene> displacementSize() {
         return s.outputs.displacementWidth > 0 ? show(std::vector<int>{s.outputs.displacementWidth, s.outputs.displacementHeight}) : "none";
       });
 }
+// [outputs.ranges] LAYER = "own" | "season" | [lo, hi]; a layer not given takes its kind's default.
+Bind<Scene> layerRange(const std::string& layer) {
+  return custom<Scene>(
+      [layer](Scene& s, const toml::node& n, const BindContext& c) {
+        LayerRange r;
+        if (const auto* text = n.as_string()) {
+          if (text->get() != "own" && text->get() != "season") fail(c.source, n, c.path, "needs \"own\", \"season\" or [lo, hi]");
+          r.mode = text->get() == "own" ? RangeMode::Own : RangeMode::Season;
+        } else if (n.is_array()) {
+          const auto* a = n.as_array();
+          if (a->size() != 2 || !(*a)[0].is_number() || !(*a)[1].is_number()) fail(c.source, n, c.path, "needs [lo, hi], two numbers");
+          r.mode = RangeMode::Fixed, r.lo = (*a)[0].value<double>().value(), r.hi = (*a)[1].value<double>().value();
+          if (!std::isfinite(r.lo) || !std::isfinite(r.hi) || !(r.hi > r.lo)) fail(c.source, n, c.path, "needs [lo, hi] with hi > lo");
+        } else {
+          fail(c.source, n, c.path, "needs \"own\", \"season\" or [lo, hi]");
+        }
+        s.outputs.ranges[layer] = r;
+      },
+      [layer](const Scene& s) {
+        const auto it = s.outputs.ranges.find(layer);
+        if (it == s.outputs.ranges.end()) return std::string("the layer kind's (see Value ranges)");
+        const LayerRange& r = it->second;
+        return r.mode == RangeMode::Own ? show(std::string("own")) : r.mode == RangeMode::Season ? show(std::string("season")) : show(std::vector<double>{r.lo, r.hi});
+      });
+}
 Bind<Scene> bedformMask() {
   return custom<Scene>([](Scene& s, const toml::node& n, const BindContext& c) { s.bedforms.mask = rasterRef(n, c.source, s, c.path); },
                        [](const Scene& s) { return s.bedforms.mask ? s.bedforms.mask->label() : "none"; });
@@ -470,6 +495,21 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
   r.push_back({"outputs.coverage_depths_m", Kind::NumberArray, 0, 100, {}, "m",
        "the snow_coverage layer's [bare, covered] snow depths: 0 at or below the first, 1 at or above the second, a smooth step between", coverageDepths()});
   r.push_back({"outputs.frames_days", Kind::NumberArray, 0, 3650, {}, "day", "also write the layers at these days (0: the season's start)", at<S>(&S::outputs, &OR::frameDays)});
+  r.push_back({"outputs.ranges", Kind::Table, -kInf, kInf, {}, "",
+       "per layer, how its png16, png8 and r16 files map values to pixels: [lo, hi] in the layer's unit (fixed), \"season\" (one range over every frame and tile of the bake) or \"own\" (each day's own range over all its tiles); "
+       "NODATA cells are left out of every range and written as pixel 0. Default: [0, 1] for layers in unit 1 (masks and fractions), \"season\" for the others (docs/outputs.md)"});
+  for (const LayerInfo& l : layerTable())
+    if (l.kind == LayerKind::Float)
+      r.push_back({std::string("outputs.ranges.") + l.name, Kind::Any, -kInf, kInf, {}, l.unit, std::string("the ") + l.name + " layer's range", layerRange(l.name),
+           std::string(l.unit) == "1" ? "[0, 1]" : "\"season\""});
+  r.push_back({"outputs.tiles", Kind::Table, -kInf, kInf, {}, "",
+       "cut every raster output (layers, encodings, previews, displacement maps) into equal tiles for an engine's importer (docs/outputs.md)"});
+  r.push_back({"outputs.tiles.convention", Kind::String, -kInf, kInf, {"unreal", "unity", "grid"}, "",
+       "unreal: <name>_x<column>_y<row> from the north-west, sizes 127, 253, 505, 1009, 2017, 4033, 8129, one shared edge row and column; "
+       "unity: <name>_<column>_<row> from the south-west (Unity's terrain grid), 2^n + 1 from 33 to 4097, one shared edge; grid: <name>_x<column>_y<row>, any size and overlap",
+       at<S>(&S::outputs, &OR::tiles, &OutputTiles::convention), "required with [outputs.tiles]"});
+  r.push_back({"outputs.tiles.size_px", Kind::Integer, 2, 65536, {}, "pixels", "each tile's width and height", at<S>(&S::outputs, &OR::tiles, &OutputTiles::sizePx), "required with [outputs.tiles]"});
+  r.push_back({"outputs.tiles.overlap_px", Kind::Integer, 0, 65535, {}, "pixels", "grid: rows and columns neighbouring tiles share (unreal and unity share 1)", at<S>(&S::outputs, &OR::tiles, &OutputTiles::overlapPx)});
   r.push_back({"run", Kind::Table, -kInf, kInf, {}, "", "how the bake runs"});
   r.push_back({"run.seed", Kind::Integer, 0, 9.007199254740992e15, {}, "", "random seed", at<S>(&S::seed)});
   r.push_back({"run.backend", Kind::String, -kInf, kInf, enumNames<BackendChoice>(), "", "compute backend (auto: CUDA when a device works)", at<S>(&S::backend)});
