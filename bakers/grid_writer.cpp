@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -54,6 +55,15 @@ WrittenImage writeFloatImage(const std::string& base, const std::string& format,
       throw std::runtime_error("cannot write " + result.path + ": " + out->geterror());
   });
   return result;
+}
+
+void writeRawFloat32(const std::string& path, const Grid<float>& grid) {
+  static_assert(std::endian::native == std::endian::little, "r32 is written as the machine's floats");
+  writeAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(grid.data()), static_cast<std::streamsize>(grid.size() * sizeof(float)));
+    if (!out) throw std::runtime_error("cannot write " + path);
+  });
 }
 
 std::string encodingExtension(const std::string& encoding) {
@@ -138,6 +148,30 @@ Grid<float> resampleBilinear(const Grid<float>& g, int width, int height) {
   return out;
 }
 
+Grid<float> resampleValid(const Grid<float>& g, const Grid<uint8_t>& valid, int width, int height, Grid<uint8_t>& validOut) {
+  Grid<float> out(width, height, 0.f);
+  validOut = Grid<uint8_t>(width, height, 0);
+  const int sw = g.width(), sh = g.height();
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const double fx = (x + 0.5) * sw / width - 0.5, fy = (y + 0.5) * sh / height - 0.5;
+      const int nx = std::clamp(static_cast<int>(std::lround(fx)), 0, sw - 1), ny = std::clamp(static_cast<int>(std::lround(fy)), 0, sh - 1);
+      if (!valid(nx, ny)) continue;
+      const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+      const double tx = fx - x0, ty = fy - y0;
+      double sum = 0, weight = 0;
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          const int cx = std::clamp(x0 + i, 0, sw - 1), cy = std::clamp(y0 + j, 0, sh - 1);
+          const double w = (i ? tx : 1 - tx) * (j ? ty : 1 - ty);
+          if (valid(cx, cy)) sum += w * g(cx, cy), weight += w;
+        }
+      validOut(x, y) = 1;
+      out(x, y) = static_cast<float>(weight > 0 ? sum / weight : g(nx, ny));
+    }
+  return out;
+}
+
 void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids,
                           int compressionLevel) {
   if (grids.empty()) return;
@@ -165,15 +199,20 @@ void writeMultiChannelExr(const std::string& path, const std::vector<std::string
 }
 
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, int compressionLevel) {
+  writePng8(path, width, height, 3, rgb, compressionLevel);
+}
+
+void writePng8(const std::string& path, int width, int height, int channels, const std::vector<uint8_t>& pixels, int compressionLevel) {
   writeAtomically(path, [&](const std::string& temp) {
     auto out = OIIO::ImageOutput::create("png");
     if (!out) throw std::runtime_error("cannot create a PNG writer for " + path + ": " + OIIO::geterror());
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+    if (channels == 4) spec.alpha_channel = -1, spec.attribute("oiio:UnassociatedAlpha", 1);  // weights, not colour with alpha
     spec.attribute("png:compressionLevel", compressionLevel);
     setPngFilter(spec, compressionLevel);
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
-    if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close())
+    if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close())
       throw std::runtime_error("cannot write " + path + ": " + out->geterror());
   });
 }

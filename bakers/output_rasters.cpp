@@ -72,23 +72,42 @@ void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std:
 }
 
 void OutputWriter::writeRgbRaster(const BaseOf& base, double day, const std::string& stem, int width, int height,
-                                  const std::vector<uint8_t>& rgb, const std::string& content, const std::string& unit) {
+                                  const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels,
+                                  const std::string& format) {
   const TileLayout l = tileLayout(scene_.outputs.tiles, width, height);
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".png";
-      writeRgbPng(path, l.tileWidth, l.tileHeight, l.tiled() ? cutTile(rgb.data(), width, height, 3, l, c, r) : rgb,
-                  scene_.outputs.compressionLevel);
-      listFile(path, content, unit, kRgbPngFormat, day, 0.f, 255.f);
+      writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), width, height, channels, l, c, r) : pixels,
+                scene_.outputs.compressionLevel);
+      listFile(path, content, unit, format.empty() ? kRgbPngFormat : format, day, 0.f, 255.f);
       noteTile(l, c, r, width, height);
     }
 }
 
-void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const std::string& content) {
+void OutputWriter::writeRawFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+                                       const std::string& content, const std::string& unit) {
+  const TileLayout l = tileLayout(scene_.outputs.tiles, grid.width(), grid.height());
+  for (int r = 0; r < l.rows; ++r)
+    for (int c = 0; c < l.columns; ++c) {
+      const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
+      const Grid<float> tile = cutTile(grid, l, c, r);
+      writeRawFloat32(path, tile);
+      SeenRange seen;
+      seen.widen(tile, nullptr);
+      listFile(path, content, unit,
+               "raw float32 little-endian, " + std::to_string(l.tileWidth) + " x " + std::to_string(l.tileHeight) +
+                   ", row 0 north, no header, in the layer's unit (NODATA 0)",
+               day, static_cast<float>(seen.mapping(RangeMode::Own).lo), static_cast<float>(seen.mapping(RangeMode::Own).hi));
+      noteTile(l, c, r, grid.width(), grid.height());
+    }
+}
+
+void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid,
+                                  const std::string& content) {
   const auto& out = scene_.outputs;
   if (out.encodings.empty()) return;
   const LayerRange range = rangeOf(out, layer);
-  const Grid<uint8_t>* valid = &d.s.validCell;
   ValueMapping m{range.mode, range.lo, range.hi};
   if (range.mode != RangeMode::Fixed) {
     SeenRange seen;
@@ -101,6 +120,10 @@ void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Gr
   }
   const bool now = range.mode != RangeMode::Season;
   for (const std::string& encoding : out.encodings) {
+    if (encoding == "r32") {  // floats as they are: no range
+      writeRawFloatRaster(baseOf(d), d.day, layer.name, grid, content, layer.unit);
+      continue;
+    }
     writeEncodedRaster(baseOf(d), d.day, layer.name, encoding, grid, valid, m, content, layer.unit, now);
     if (now) continue;
     const std::lock_guard lock(seasonMutex_);

@@ -135,8 +135,17 @@ void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<fl
   // The ski-track texture is finer than the grid: its texels per cell, listed with each file.
   if (layer.needs & kNeedsSkiTracks)
     content += " (" + std::to_string(src_.skiTrackFactor) + " x " + std::to_string(src_.skiTrackFactor) + " texels per cell)";
-  writeFloatRaster(baseOf(d), d.day, layer.name, grid, &d.s.validCell, layer.name, content, layer.unit);
-  writeEncodings(d, layer, grid, content);
+  // outputs.resize: the grid's layers at the requested size, over valid cells (finer textures keep theirs).
+  const auto& out = scene_.outputs;
+  Grid<uint8_t> resizedValid;
+  const Grid<uint8_t>* valid = &d.s.validCell;
+  if (out.resizeWidth > 0 && !ownSize) {
+    grid = resampleValid(grid, d.s.validCell, out.resizeWidth, out.resizeHeight, resizedValid);
+    valid = &resizedValid;
+    content += ", resampled (bilinear over valid cells) to " + std::to_string(grid.width()) + " x " + std::to_string(grid.height()) + " over the same extent";
+  }
+  writeFloatRaster(baseOf(d), d.day, layer.name, grid, valid, layer.name, content, layer.unit);
+  writeEncodings(d, layer, grid, valid, content);
   if (scene_.outputs.multichannelExr && !ownSize) {
     channelNames.push_back(layer.name);
     channels.push_back(std::move(grid));
@@ -145,6 +154,8 @@ void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<fl
 
 void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   const SnowState& s = d.s;
+  if (std::string(layer.name) == "splat_map") return writeSplatMap(d, layer);
+  if (std::string(layer.name) == "snow_normal") return writeNormalMap(d, layer);
   if (std::string(layer.name) == "avalanche_preview") {
     const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
     writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height,

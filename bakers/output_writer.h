@@ -88,11 +88,16 @@ class OutputWriter {
   void writeEncodedRaster(const BaseOf& base, double day, const std::string& stem, const std::string& encoding, const Grid<float>& grid,
                           const Grid<uint8_t>* valid, const ValueMapping& mapping, const std::string& content, const std::string& unit,
                           bool write);
-  void writeRgbRaster(const BaseOf& base, double day, const std::string& stem, int width, int height, const std::vector<uint8_t>& rgb,
-                      const std::string& content, const std::string& unit);
+  void writeRgbRaster(const BaseOf& base, double day, const std::string& stem, int width, int height, const std::vector<uint8_t>& pixels,
+                      const std::string& content, const std::string& unit, int channels = 3, const std::string& format = {});
+  void writeRawFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid, const std::string& content,
+                           const std::string& unit);
+  // The splat map and the snow surface's normal map (output_engine_maps.cpp).
+  void writeSplatMap(const Day& d, const LayerInfo& layer);
+  void writeNormalMap(const Day& d, const LayerInfo& layer);
   // The tile fields of the file just listed.
   void noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const;
-  void writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const std::string& content);
+  void writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content);
   void writeLayers(const Day& d);
   void writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
                        std::vector<Grid<float>>& channels);

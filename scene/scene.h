@@ -54,6 +54,8 @@ struct OutputRequest {
   std::array<double, 2> coverageDepthsM{0.02, 0.15};  // snow_coverage: 0 up to the first depth, 1 from the second
   std::map<std::string, LayerRange> ranges;  // [outputs.ranges] as given; other layers take their kind's default
   OutputTiles tiles;                         // [outputs.tiles]
+  int resizeWidth = 0, resizeHeight = 0;     // outputs.resize: the grid layers at this size (0: the grid's)
+  std::string normalMapConvention = "opengl";  // snow_normal: opengl (G = +v, north) or directx (G flipped)
 };
 
 // mode = "occlusion": Foldes & Benes 2007 (static_snow/occlusion.h), no season.

@@ -151,6 +151,16 @@ Bind<Scene> layerRange(const std::string& layer) {
         return r.mode == RangeMode::Own ? show(std::string("own")) : r.mode == RangeMode::Season ? show(std::string("season")) : show(std::vector<double>{r.lo, r.hi});
       });
 }
+Bind<Scene> resize() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        std::vector<double> a;
+        read(n, a);
+        if (a.size() != 2 || !whole(a)) fail(c.source, n, c.path, "needs whole numbers [width, height], each at least 1");
+        s.outputs.resizeWidth = static_cast<int>(a[0]), s.outputs.resizeHeight = static_cast<int>(a[1]);
+      },
+      [](const Scene& s) { return s.outputs.resizeWidth > 0 ? show(std::vector<int>{s.outputs.resizeWidth, s.outputs.resizeHeight}) : "none"; });
+}
 Bind<Scene> bedformMask() {
   return custom<Scene>([](Scene& s, const toml::node& n, const BindContext& c) { s.bedforms.mask = rasterRef(n, c.source, s, c.path); },
                        [](const Scene& s) { return s.bedforms.mask ? s.bedforms.mask->label() : "none"; });
@@ -469,8 +479,8 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
   r.push_back({"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices, "",
        "grids to write: the layers listed under Output layers below (a layer the mode does not make is an error; bedform_cohesion needs [bedforms])", at<S>(&S::outputs, &OR::layers)});
   r.push_back({"outputs.format", Kind::String, -kInf, kInf, enumNames<ImageFormat>(), "", "the layers' image format: 32-bit float, one channel", at<S>(&S::outputs, &OR::format)});
-  r.push_back({"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}, "",
-       "also write each layer normalised to its own range: 16-bit PNG, 8-bit PNG mask, raw 16-bit heightmap (the float file is always written)", at<S>(&S::outputs, &OR::encodings)});
+  r.push_back({"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16", "r32"}, "",
+       "also write each layer quantised over its range (outputs.ranges): 16-bit PNG, 8-bit PNG mask, raw 16-bit heightmap; or r32: raw float32 as it is (the float file is always written)", at<S>(&S::outputs, &OR::encodings)});
   r.push_back({"outputs.multichannel_exr", Kind::Bool, -kInf, kInf, {}, "", "also write all layers in one EXR (layers.exr), a channel <layer>.Y each", at<S>(&S::outputs, &OR::multichannelExr)});
   r.push_back({"outputs.vdb", Kind::Bool, -kInf, kInf, {}, "", "also write the snow body as snow.vdb (OpenVDB)", at<S>(&S::outputs, &OR::vdb)});
   r.push_back({"outputs.ski_track_factor", Kind::Integer, 1, 16, {}, "", "texels of the ski_tracks texture per simulation cell, each way", at<S>(&S::outputs, &OR::skiTrackFactor)});
@@ -510,6 +520,10 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
        at<S>(&S::outputs, &OR::tiles, &OutputTiles::convention), "required with [outputs.tiles]"});
   r.push_back({"outputs.tiles.size_px", Kind::Integer, 2, 65536, {}, "pixels", "each tile's width and height", at<S>(&S::outputs, &OR::tiles, &OutputTiles::sizePx), "required with [outputs.tiles]"});
   r.push_back({"outputs.tiles.overlap_px", Kind::Integer, 0, 65535, {}, "pixels", "grid: rows and columns neighbouring tiles share (unreal and unity share 1)", at<S>(&S::outputs, &OR::tiles, &OutputTiles::overlapPx)});
+  r.push_back({"outputs.resize", Kind::NumberArray, 1, 65536, {}, "pixels",
+       "write the grid's layers, their encodings and the multi-channel EXR at [width, height] over the same extent (bilinear over valid cells; the simulation grid is untouched; previews stay at the grid's size)", resize()});
+  r.push_back({"outputs.normal_map_convention", Kind::String, -kInf, kInf, {"opengl", "directx"}, "",
+       "the snow_normal layer's green channel: opengl (+v, north: Blender, Unity) or directx (flipped: Unreal)", at<S>(&S::outputs, &OR::normalMapConvention)});
   r.push_back({"run", Kind::Table, -kInf, kInf, {}, "", "how the bake runs"});
   r.push_back({"run.seed", Kind::Integer, 0, 9.007199254740992e15, {}, "", "random seed", at<S>(&S::seed)});
   r.push_back({"run.backend", Kind::String, -kInf, kInf, enumNames<BackendChoice>(), "", "compute backend (auto: CUDA when a device works)", at<S>(&S::backend)});

@@ -360,3 +360,105 @@ TEST(Deliverables, EsriAsciiGeoreferenceSurvivesToGeoTiffOutputs) {
   GDALClose(out);
   fs::remove_all(b.dir);
 }
+
+namespace {
+std::string engineScene(const std::string& extra) {
+  return "name = \"engine\"\n[terrain]\n" + terrainOf("builtin") +
+         "[season]\ndays = 10\n[precompute]\nsun = false\n[[weather.snowfall]]\nstart_day = 0\nend_day = 8\n"
+         "[outputs]\nlayers = [\"depth\", \"surface\", \"snow_coverage\", \"snow_coverage_hard\", \"weight_snow\", \"weight_rock\", "
+         "\"weight_ground\", \"splat_map\", \"snow_normal\"]\nencodings = [\"png8\", \"r32\"]\n" + extra + "[run]\nseed = 5\n";
+}
+}  // namespace
+
+// Splat channels sum to 255 at every pixel; weights in [0, 255] summing to about 255; coverage 0 on
+// bare ground and 1 under deep snow; the hard mask is the soft one cut at 0.5; r32 holds the floats.
+TEST(Deliverables, SplatSumsTo255AndWeightsAndCoverageFollowTheSnow) {
+  const test::Bake b = test::bakeSceneText("engine", engineScene(""));
+  const fs::path o = b.out();
+  const Grid<float> depth = readFloatImage((o / "depth.exr").string()), coverage = readFloatImage((o / "snow_coverage.exr").string()),
+                    hard = readFloatImage((o / "snow_coverage_hard.exr").string());
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);  // as stored: OIIO would multiply by A = 0
+  auto in = OIIO::ImageInput::open((o / "splat_map.png").string(), &config);
+  ASSERT_TRUE(in);
+  ASSERT_EQ(in->spec().nchannels, 4);
+  std::vector<uint8_t> splat(depth.size() * 4);
+  ASSERT_TRUE(in->read_image(0, 0, 0, 4, OIIO::TypeDesc::UINT8, splat.data()));
+  const Pixels ws = readPixels(o / "weight_snow.8.png"), wr = readPixels(o / "weight_rock.8.png"), wg = readPixels(o / "weight_ground.8.png");
+  size_t bare = 0, deep = 0, rock = 0;
+  for (size_t i = 0; i < depth.size(); ++i) {
+    ASSERT_EQ(splat[4 * i] + splat[4 * i + 1] + splat[4 * i + 2], 255) << i;
+    ASSERT_EQ(splat[4 * i + 3], 0);
+    EXPECT_LE(ws.v[i], 255u);
+    EXPECT_NEAR(static_cast<int>(ws.v[i] + wr.v[i] + wg.v[i]), 255, 1) << i;  // each rounded alone
+    EXPECT_NEAR(splat[4 * i], static_cast<int>(ws.v[i]), 1);
+    if (depth.values()[i] <= 0.02f) {
+      ++bare;
+      ASSERT_EQ(coverage.values()[i], 0.f);
+    }
+    if (depth.values()[i] >= 0.15f) {
+      ++deep;
+      ASSERT_EQ(coverage.values()[i], 1.f);
+      ASSERT_EQ(splat[4 * i], 255);
+    }
+    ASSERT_EQ(hard.values()[i], coverage.values()[i] >= 0.5f ? 1.f : 0.f);
+    rock += wr.v[i] > 128;
+  }
+  EXPECT_GT(bare, 100u);  // the test sees both ends
+  EXPECT_GT(deep, 100u);
+  EXPECT_GT(rock, 10u);
+  // r32: the floats of the EXR, byte for byte.
+  std::ifstream r32(o / "depth.r32", std::ios::binary);
+  std::vector<float> raw(depth.size());
+  r32.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size() * 4));
+  EXPECT_EQ(raw, depth.values());
+  fs::remove_all(b.dir);
+}
+
+// The normal map: flat snow (128, 128, 255); on a slope rising east R < 128; DirectX flips G only.
+// outputs.resize writes the layers and the maps at the asked size, the simulation grid untouched.
+TEST(Deliverables, NormalMapAndResizeAtTheOutputSize) {
+  const test::Bake gl = test::bakeSceneText("normal_gl", engineScene("resize = [300, 250]\n"));
+  const test::Bake dx = test::bakeSceneText("normal_dx", engineScene("resize = [300, 250]\nnormal_map_convention = \"directx\"\n"));
+  const test::Bake whole = test::bakeSceneText("normal_whole", engineScene(""));
+  auto rgbOf = [](const fs::path& p, int& w, int& h) {
+    auto in = OIIO::ImageInput::open(p.string());
+    w = in->spec().width, h = in->spec().height;
+    std::vector<uint8_t> v(static_cast<size_t>(w) * h * 3);
+    in->read_image(0, 0, 0, 3, OIIO::TypeDesc::UINT8, v.data());
+    return v;
+  };
+  int w = 0, h = 0, w2 = 0, h2 = 0;
+  const auto a = rgbOf(gl.out() / "snow_normal.png", w, h), b = rgbOf(dx.out() / "snow_normal.png", w2, h2);
+  EXPECT_EQ(w, 300);
+  EXPECT_EQ(h, 250);
+  const Grid<float> surface = readFloatImage((gl.out() / "surface.exr").string());
+  EXPECT_EQ(surface.width(), 300);
+  EXPECT_EQ(surface.height(), 250);
+  EXPECT_EQ(readFloatImage((whole.out() / "surface.exr").string()).width(), 200);
+  EXPECT_EQ(manifestOf(gl.out())["terrain"]["width"], 200);  // the simulation grid
+  size_t checked = 0;
+  for (int y = 1; y < h - 1; ++y)
+    for (int x = 1; x < w - 1; ++x) {
+      const size_t i = (static_cast<size_t>(y) * w + x) * 3;
+      EXPECT_EQ(a[i], b[i]);
+      EXPECT_EQ(a[i + 2], b[i + 2]);
+      EXPECT_NEAR(a[i + 1] + b[i + 1], 255, 1);  // G flipped
+      // n = (-dz/dx, -dz/dnorth, 1) / |...| from the surface's central differences.
+      const double dxm = 4000.0 / 300, dym = 4000.0 / 250;
+      const double gx = (surface(x + 1, y) - surface(x - 1, y)) / (2 * dxm), gn = (surface(x, y - 1) - surface(x, y + 1)) / (2 * dym);
+      const double n = std::sqrt(gx * gx + gn * gn + 1);
+      ASSERT_NEAR(a[i], 127.5 - 127.5 * gx / n, 0.51);
+      ASSERT_NEAR(a[i + 1], 127.5 - 127.5 * gn / n, 0.51);
+      ASSERT_NEAR(a[i + 2], 127.5 + 127.5 / n, 0.51);
+      ++checked;
+    }
+  EXPECT_EQ(checked, 298u * 248u);
+  for (const auto* bake : {&gl, &dx, &whole}) fs::remove_all(bake->dir);
+}
+
+TEST(Deliverables, ResizeToZeroIsASceneError) {
+  const std::string zero = sceneError("resize = [0, 100]\n");
+  EXPECT_NE(zero.find("scene.toml:5"), std::string::npos) << zero;
+  EXPECT_NE(zero.find("outputs.resize"), std::string::npos) << zero;
+}
