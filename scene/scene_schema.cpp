@@ -490,7 +490,7 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
        "surface: the snow-covered surface (snow_surface.<ext>); body: the snow body alone, closed (snow_body.<ext>)", meshParts()});
   r.push_back({"outputs.mesh_max_error_m", Kind::Number, 0, 10000, {}, "m", "the adaptive triangulation's vertical error bound (0: only exactly planar areas merge)", at<S>(&S::outputs, &OR::meshMaxErrorM)});
   r.push_back({"outputs.mesh_tile_size_m", Kind::Number, 0, 1e7, {}, "m",
-       "split the surface mesh into square tiles of this size (snow_surface_x<column>_y<row>.<ext>, columns from the west, rows from the north; 0: one file)", at<S>(&S::outputs, &OR::meshTileSizeM)});
+       "split the surface mesh into square tiles of this size, cut along the tile borders so neighbours share their border vertices (snow_surface_x<column>_y<row>.<ext>, columns from the west, rows from the north; 0: one file)", at<S>(&S::outputs, &OR::meshTileSizeM)});
   r.push_back({"outputs.vdb_voxel_size_m", Kind::Number, 0.01, 1000, {}, "m", "the VDB's voxel size", at<S>(&S::outputs, &OR::vdbVoxelSizeM), "the grid's smaller cell size"});
   r.push_back({"outputs.compression_level", Kind::Integer, 0, 9, {}, "",
        "deflate effort of the lossless images: PNG's zlib level and EXR's zip level (0: EXR uncompressed; TIFF is always zip at its default level). "
