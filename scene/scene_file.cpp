@@ -431,9 +431,9 @@ void validateMeshMode(const Scene& scene, const toml::table& root, const std::st
   const OutputRequest& out = scene.outputs;
   if (scene.terrain.builtin) throw InputError(source + ": mode = \"mesh\" needs terrain.file to name a mesh (.obj, .ply, .glb, .gltf, .fbx)");
   if (root["outputs"]["layers"].node() || !out.encodings.empty() || out.multichannelExr || out.displacementWidth > 0 || !out.frameDays.empty() ||
-      out.avalancheMaps)
+      out.avalancheMaps || out.resizeWidth > 0 || root["outputs"]["tiles"].node() || root["outputs"]["ranges"].node())
     throw InputError(source + ": outputs: mode = \"mesh\" writes the snow body only (outputs.meshes, outputs.vdb); grid layers, "
-                     "encodings, displacement maps and frames need a height field");
+                     "encodings, displacement maps, frames, resize, tiles and ranges need a height field");
   if (root["outputs"]["mesh_parts"].node()) throw InputError(source + ": outputs.mesh_parts: mode = \"mesh\" writes the snow body (snow_body.EXT)");
   if (out.meshes.empty() && !out.vdb) throw InputError(source + ": outputs: mode = \"mesh\" needs outputs.meshes or outputs.vdb = true");
   if (!scene.userAvalanches.empty() || !scene.userSkiers.empty() || !scene.edits.empty() || scene.bedforms.enabled)
