@@ -36,6 +36,18 @@ std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti
   return layers;
 }
 
+// The terrain's georeference for the raster outputs (metres from the north-west corner without one).
+GeoFrame geoFrameOf(const TerrainInfo& ti) {
+  GeoFrame g;
+  g.georeferenced = ti.georeferenced;
+  g.crsWkt = ti.crsWkt;
+  g.originX = ti.spec.originX, g.originY = ti.spec.originY;
+  g.cellX = ti.georeferenced ? ti.geoCellX : ti.spec.cellSizeXM;
+  g.cellY = ti.georeferenced ? ti.geoCellY : ti.spec.cellSizeYM;
+  g.gridWidth = ti.spec.width, g.gridHeight = ti.spec.height;
+  return g;
+}
+
 }  // namespace
 
 void createOutputFolder(const std::string& dir) {
@@ -69,7 +81,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   OcclusionResult occlusion;
   SeasonOutputs seasonOutputs;
   OutputWriter writer({&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,
-                       &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr},
+                       &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())},
                       log);
   SeasonReport report;
   if (occlusionMode) {
@@ -84,6 +96,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const auto t0 = WallClock::now();
   writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
+  writer.writeSeasonEncodings();
   writer.writeContactSheet();
   writer.writeAvalancheMaps(report.avalanches, state.spec);
   BakeResult result;

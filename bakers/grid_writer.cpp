@@ -3,6 +3,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -56,36 +57,48 @@ WrittenImage writeFloatImage(const std::string& base, const std::string& format,
   return result;
 }
 
-WrittenImage writeNormalised(const std::string& base, const std::string& encoding, const Grid<float>& grid, int compressionLevel) {
-  if (encoding != "png16" && encoding != "png8" && encoding != "r16") throw std::invalid_argument("unknown encoding '" + encoding + "'");
-  WrittenImage result;
-  result.path = base + (encoding == "png16" ? ".16.png" : encoding == "png8" ? ".8.png" : ".r16");
-  if (!grid.empty()) {
-    const auto [lo, hi] = std::minmax_element(grid.values().begin(), grid.values().end());
-    result.minValue = *lo;
-    result.maxValue = *hi;
-  }
-  const double levels = encoding == "png8" ? 255.0 : 65535.0;
-  const double span = static_cast<double>(result.maxValue) - result.minValue;
-  auto quantise = [&](float v) {
-    return span > 0.0 ? std::lround((static_cast<double>(v) - result.minValue) / span * levels) : 0L;
+void writeRawFloat32(const std::string& path, const Grid<float>& grid) {
+  static_assert(std::endian::native == std::endian::little, "r32 is written as the machine's floats");
+  writeAtomically(path, [&](const std::string& temp) {
+    std::ofstream out(temp, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(grid.data()), static_cast<std::streamsize>(grid.size() * sizeof(float)));
+    if (!out) throw std::runtime_error("cannot write " + path);
+  });
+}
+
+std::string encodingExtension(const std::string& encoding) {
+  if (encoding == "png16") return ".16.png";
+  if (encoding == "png8") return ".8.png";
+  if (encoding == "r16") return ".r16";
+  throw std::invalid_argument("unknown encoding '" + encoding + "'");
+}
+
+void writeQuantised(const std::string& path, const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid,
+                    double lo, double hi, int nodataPixel, int compressionLevel) {
+  encodingExtension(encoding);  // refuses an unknown encoding
+  const bool eight = encoding == "png8";
+  const double levels = eight ? 255.0 : 65535.0, span = hi - lo;
+  const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
+  auto quantise = [&](size_t i) -> long {
+    if (masked && !valid->values()[i]) return nodataPixel;
+    if (!(span > 0.0)) return 0L;
+    return std::lround(std::clamp((static_cast<double>(grid.values()[i]) - lo) / span, 0.0, 1.0) * levels);
   };
-  writeAtomically(result.path, [&](const std::string& temp) {
+  writeAtomically(path, [&](const std::string& temp) {
     if (encoding == "r16") {
       std::string bytes(grid.size() * 2, '\0');
       for (size_t i = 0; i < grid.size(); ++i) {
-        const auto q = static_cast<uint16_t>(quantise(grid.values()[i]));
+        const auto q = static_cast<uint16_t>(quantise(i));
         bytes[2 * i] = static_cast<char>(q & 0xff);
         bytes[2 * i + 1] = static_cast<char>(q >> 8);
       }
       std::ofstream out(temp, std::ios::binary);
       out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-      if (!out) throw std::runtime_error("cannot write " + result.path);
+      if (!out) throw std::runtime_error("cannot write " + path);
       return;
     }
     auto out = OIIO::ImageOutput::create("png");
-    if (!out) throw std::runtime_error("cannot create a PNG writer for " + result.path + ": " + OIIO::geterror());
-    const bool eight = encoding == "png8";
+    if (!out) throw std::runtime_error("cannot create a PNG writer for " + path + ": " + OIIO::geterror());
     OIIO::ImageSpec spec(grid.width(), grid.height(), 1, eight ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
     spec.attribute("oiio:ColorSpace", "Linear");
     spec.attribute("png:compressionLevel", compressionLevel);
@@ -95,22 +108,34 @@ WrittenImage writeNormalised(const std::string& base, const std::string& encodin
     std::vector<uint16_t> wide(eight ? 0 : grid.size());
     std::vector<uint8_t> narrow(eight ? grid.size() : 0);
     for (size_t i = 0; i < grid.size(); ++i) {
-      if (eight) narrow[i] = static_cast<uint8_t>(quantise(grid.values()[i]));
-      else wide[i] = static_cast<uint16_t>(quantise(grid.values()[i]));
+      if (eight) narrow[i] = static_cast<uint8_t>(quantise(i));
+      else wide[i] = static_cast<uint16_t>(quantise(i));
     }
     const bool ok = out->open(temp, spec) &&
                     (eight ? out->write_image(OIIO::TypeDesc::UINT8, narrow.data()) : out->write_image(OIIO::TypeDesc::UINT16, wide.data())) &&
                     out->close();
-    if (!ok) throw std::runtime_error("cannot write " + result.path + ": " + out->geterror());
+    if (!ok) throw std::runtime_error("cannot write " + path + ": " + out->geterror());
   });
+}
+
+WrittenImage writeNormalised(const std::string& base, const std::string& encoding, const Grid<float>& grid, int compressionLevel) {
+  WrittenImage result;
+  result.path = base + encodingExtension(encoding);
+  if (!grid.empty()) {
+    const auto [lo, hi] = std::minmax_element(grid.values().begin(), grid.values().end());
+    result.minValue = *lo;
+    result.maxValue = *hi;
+  }
+  writeQuantised(result.path, encoding, grid, nullptr, result.minValue, result.maxValue, 0, compressionLevel);
   return result;
 }
 
 std::string normalisedFormat(const std::string& encoding, int width, int height) {
-  if (encoding == "png16") return "PNG, 1 channel uint16, linear: value = min + (max - min) * p / 65535";
-  if (encoding == "png8") return "PNG, 1 channel uint8, linear: value = min + (max - min) * p / 255";
-  return "raw uint16 little-endian, " + std::to_string(width) + " x " + std::to_string(height) +
-         ", row 0 north, no header: value = min + (max - min) * p / 65535";
+  // min and max: the file's mapping (the manifest's range: its lo and hi); NODATA cells are pixel 0.
+  const std::string mapping = ": value = min + (max - min) * p / " + std::string(encoding == "png8" ? "255" : "65535");
+  if (encoding == "png16") return "PNG, 1 channel uint16, linear" + mapping;
+  if (encoding == "png8") return "PNG, 1 channel uint8, linear" + mapping;
+  return "raw uint16 little-endian, " + std::to_string(width) + " x " + std::to_string(height) + ", row 0 north, no header" + mapping;
 }
 
 Grid<float> resampleBilinear(const Grid<float>& g, int width, int height) {
@@ -120,6 +145,30 @@ Grid<float> resampleBilinear(const Grid<float>& g, int width, int height) {
     for (int x = 0; x < width; ++x)
       out(x, y) = static_cast<float>(
           sampleBilinearClamped(g.data(), sw, sh, (x + 0.5) * sw / width - 0.5, (y + 0.5) * sh / height - 0.5));
+  return out;
+}
+
+Grid<float> resampleValid(const Grid<float>& g, const Grid<uint8_t>& valid, int width, int height, Grid<uint8_t>& validOut) {
+  Grid<float> out(width, height, 0.f);
+  validOut = Grid<uint8_t>(width, height, 0);
+  const int sw = g.width(), sh = g.height();
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const double fx = (x + 0.5) * sw / width - 0.5, fy = (y + 0.5) * sh / height - 0.5;
+      const int nx = std::clamp(static_cast<int>(std::lround(fx)), 0, sw - 1), ny = std::clamp(static_cast<int>(std::lround(fy)), 0, sh - 1);
+      if (!valid(nx, ny)) continue;
+      const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+      const double tx = fx - x0, ty = fy - y0;
+      double sum = 0, weight = 0;
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          const int cx = std::clamp(x0 + i, 0, sw - 1), cy = std::clamp(y0 + j, 0, sh - 1);
+          const double w = (i ? tx : 1 - tx) * (j ? ty : 1 - ty);
+          if (valid(cx, cy)) sum += w * g(cx, cy), weight += w;
+        }
+      validOut(x, y) = 1;
+      out(x, y) = static_cast<float>(weight > 0 ? sum / weight : g(nx, ny));
+    }
   return out;
 }
 
@@ -150,15 +199,20 @@ void writeMultiChannelExr(const std::string& path, const std::vector<std::string
 }
 
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb, int compressionLevel) {
+  writePng8(path, width, height, 3, rgb, compressionLevel);
+}
+
+void writePng8(const std::string& path, int width, int height, int channels, const std::vector<uint8_t>& pixels, int compressionLevel) {
   writeAtomically(path, [&](const std::string& temp) {
     auto out = OIIO::ImageOutput::create("png");
     if (!out) throw std::runtime_error("cannot create a PNG writer for " + path + ": " + OIIO::geterror());
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+    if (channels == 4) spec.alpha_channel = -1, spec.attribute("oiio:UnassociatedAlpha", 1);  // weights, not colour with alpha
     spec.attribute("png:compressionLevel", compressionLevel);
     setPngFilter(spec, compressionLevel);
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
-    if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, rgb.data()) || !out->close())
+    if (!out->open(temp, spec) || !out->write_image(OIIO::TypeDesc::UINT8, pixels.data()) || !out->close())
       throw std::runtime_error("cannot write " + path + ": " + out->geterror());
   });
 }

@@ -40,18 +40,37 @@ WrittenImage writeNormalised(const std::string& pathWithoutExtension, const std:
 // How writeNormalised encodes, for the manifest.
 std::string normalisedFormat(const std::string& encoding, int width, int height);
 
+// The grid as raw little-endian float32, row 0 north, no header (encoding "r32"). Written atomically.
+void writeRawFloat32(const std::string& path, const Grid<float>& grid);
+// The extension an encoding's files take (".16.png", ".8.png", ".r16").
+std::string encodingExtension(const std::string& encoding);
+// A grid quantised over [lo, hi] (values outside clamp; lo == hi writes 0 everywhere) in an
+// encoding of writeNormalised, to `path` as given; cells where `valid` (when given, of the grid's
+// size) is 0 are written as pixel `nodataPixel`. Written atomically.
+void writeQuantised(const std::string& path, const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid,
+                    double lo, double hi, int nodataPixel, int compressionLevel = kDefaultCompressionLevel);
+
 // Bilinear resampling of a cell-centred grid to width x height cells over the same extent (the
 // displacement maps at a requested resolution). Edge cells clamp. Exact for linear fields.
 Grid<float> resampleBilinear(const Grid<float>& grid, int width, int height);
+// outputs.resize: the same over valid cells only. A pixel is valid where the cell nearest its
+// centre is (`validOut`); its value is the bilinear weights of the valid cells among the four,
+// renormalised, so NODATA's zeros do not pull the edge of a heightmap down. 0 at invalid pixels.
+Grid<float> resampleValid(const Grid<float>& grid, const Grid<uint8_t>& valid, int width, int height, Grid<uint8_t>& validOut);
 
 // Several grids of one size in one 32-bit float EXR (zip at `compressionLevel`), channel
 // "<name>.Y" per grid (an EXR layer per grid). Written atomically.
 void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids,
                           int compressionLevel = kDefaultCompressionLevel);
 
+// The manifest's format line of writeRgbPng's files (previews and the contact sheet).
+constexpr const char* kRgbPngFormat = "PNG, 3 channels uint8, sRGB";
 // An 8-bit sRGB PNG preview, three bytes per pixel, row 0 at the north edge. Written atomically.
 void writeRgbPng(const std::string& path, int width, int height, const std::vector<uint8_t>& rgb,
                  int compressionLevel = kDefaultCompressionLevel);
+// The same with 1 to 4 interleaved 8-bit channels (the splat map's RGBA, linear). Written atomically.
+void writePng8(const std::string& path, int width, int height, int channels, const std::vector<uint8_t>& pixels,
+               int compressionLevel = kDefaultCompressionLevel);
 
 // A shaded-relief preview of the snow surface (bedrock + snow, lit from the north-west), with
 // avalanche scour tinted red (full at 1 m) and deposit tinted blue (full at 2 m); NODATA black.

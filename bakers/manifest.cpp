@@ -114,6 +114,11 @@ ordered_json filesJson(const Manifest& m) {
     e["max"] = f.maxValue;
     e["width"] = f.width > 0 ? f.width : m.grid.width;
     e["height"] = f.height > 0 ? f.height : m.grid.height;
+    if (!f.rangeMode.empty())
+      e["range"] = {{"mode", f.rangeMode}, {"lo", f.rangeLo}, {"hi", f.rangeHi}, {"nodata_pixel", f.nodataPixel}};
+    if (!f.tileConvention.empty())
+      e["tile"] = {{"convention", f.tileConvention}, {"column", f.tileColumn}, {"row", f.tileRow}, {"x", f.tileX}, {"y", f.tileY},
+                   {"origin_x", f.tileOriginX}, {"origin_y", f.tileOriginY}, {"pixel_size_x", f.pixelSizeX}, {"pixel_size_y", f.pixelSizeY}};
     files.push_back(e);
   }
   return files;

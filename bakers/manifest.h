@@ -19,6 +19,16 @@ struct ManifestFile {
   double day = -1.0;     // season day of the frame; -1 for the end of the season
   float minValue = 0.f, maxValue = 0.f;
   int width = 0, height = 0;  // 0: the grid's
+  // Quantised encodings (png16, png8, r16): value = lo + (hi - lo) p / (2^bits - 1), NODATA cells
+  // written as `nodataPixel`; rangeMode "fixed", "season" or "own" (empty: not quantised).
+  std::string rangeMode;
+  double rangeLo = 0, rangeHi = 0;
+  int nodataPixel = 0;
+  // [outputs.tiles]: which tile of the output this file is, its first pixel in the untiled image,
+  // and its georeference (its north-west corner in the terrain's coordinates, and a pixel's size).
+  std::string tileConvention;  // empty: not a tile
+  int tileColumn = 0, tileRow = 0, tileX = 0, tileY = 0;
+  double tileOriginX = 0, tileOriginY = 0, pixelSizeX = 0, pixelSizeY = 0;
 };
 
 struct ManifestSkier {

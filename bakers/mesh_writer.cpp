@@ -444,38 +444,4 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
   return m;
 }
 
-std::vector<MeshTile> splitIntoTiles(const MeshData& mesh, const GridSpec& spec, int tileCells) {
-  if (tileCells < 1) throw std::invalid_argument("splitIntoTiles: a tile needs at least one cell");
-  std::map<std::pair<int, int>, std::vector<uint32_t>> trianglesOf;  // (row, column) -> triangles
-  for (uint32_t k = 0; k < mesh.triangles.size(); ++k) {
-    double cx = 0, cy = 0;
-    for (uint32_t v : mesh.triangles[k]) cx += mesh.positions[v][0] / 3.0, cy += mesh.positions[v][1] / 3.0;
-    const int column = static_cast<int>(std::floor(cx / spec.cellSizeXM / tileCells));
-    const int row = static_cast<int>(std::floor((spec.height * spec.cellSizeYM - cy) / spec.cellSizeYM / tileCells));
-    trianglesOf[{row, column}].push_back(k);
-  }
-  std::vector<MeshTile> tiles;
-  for (const auto& [rc, tris] : trianglesOf) {
-    MeshTile t;
-    t.row = rc.first, t.column = rc.second;
-    std::unordered_map<uint32_t, uint32_t> local;
-    for (uint32_t k : tris) {
-      std::array<uint32_t, 3> v;
-      for (int c = 0; c < 3; ++c) {
-        const uint32_t g = mesh.triangles[k][c];
-        auto [it, fresh] = local.emplace(g, static_cast<uint32_t>(t.mesh.positions.size()));
-        if (fresh) {
-          t.mesh.positions.push_back(mesh.positions[g]);
-          if (mesh.normals.size() == mesh.positions.size()) t.mesh.normals.push_back(mesh.normals[g]);
-          if (mesh.uvs.size() == mesh.positions.size()) t.mesh.uvs.push_back(mesh.uvs[g]);
-        }
-        v[c] = it->second;
-      }
-      t.mesh.triangles.push_back(v);
-    }
-    tiles.push_back(std::move(t));
-  }
-  return tiles;
-}
-
 }  // namespace snow

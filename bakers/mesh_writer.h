@@ -50,13 +50,10 @@ MeshData surfaceMesh(const RtinMesh& triangulation, const Grid<float>& altitude,
 MeshData snowBodyMesh(const RtinMesh& triangulation, const Grid<float>& bedrock, const Grid<float>& depth, const Grid<uint8_t>& valid,
                       const GridSpec& spec);
 
-// Splits a mesh made from the grid into square tiles of `tileCells` cells by triangle centroid
-// (vertices on a tile edge are in both tiles; no triangle is cut). Tiles with no triangle are left
-// out. `column`/`row` count from the west and the north.
+// One tile of a mesh cut into tiles (mesh_tiles.h): `column`/`row` from the west and the north.
 struct MeshTile {
   int column = 0, row = 0;
   MeshData mesh;
 };
-std::vector<MeshTile> splitIntoTiles(const MeshData& mesh, const GridSpec& spec, int tileCells);
 
 }  // namespace snow

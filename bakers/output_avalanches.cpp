@@ -1,10 +1,12 @@
 // OutputWriter's per-avalanche maps (outputs.avalanche_maps, outputs.avalanche_frame_interval_s),
 // full-size so they line up with the layers: avalanches/NNN_<map>, avalanches/NNN/depth.FFFF.
+#include <algorithm>
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
 
 #include "core/format.h"
+#include "geotiff_writer.h"
 #include "grid_writer.h"
 #include "output_writer.h"
 
@@ -26,8 +28,14 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
       for (int y = 0; y < c.grid.height(); ++y)
         for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
       fs::create_directories((fs::path(src_.outDir) / rel).parent_path());
-      const WrittenImage img =
-          writeFloatImage((fs::path(src_.outDir) / rel).string(), enumName(scene_.outputs.format), full, "value", scene_.outputs.compressionLevel);
+      const std::string base = (fs::path(src_.outDir) / rel).string();
+      if (scene_.outputs.format == ImageFormat::Tiff) {
+        writeGeoTiff(base + ".tif", full, src_.geo, "value");
+        const auto [lo, hi] = std::minmax_element(full.values().begin(), full.values().end());
+        listFile(base + ".tif", content, unit, floatImageFormat_, day, *lo, *hi);
+        return;
+      }
+      const WrittenImage img = writeFloatImage(base, "exr", full, "value", scene_.outputs.compressionLevel);
       listFile(img.path, content, unit, floatImageFormat_, day, img.minValue, img.maxValue);
     };
     const Grid<float> zero(spec.width, spec.height, 0.f);

@@ -10,6 +10,7 @@
 #include "core/format.h"
 #include "core/util.h"
 #include "mesh_snow_body.h"
+#include "mesh_tiles.h"
 #include "mesh_writer.h"
 #include "output_writer.h"
 #include "static_snow/fallen_snow.h"
@@ -130,7 +131,7 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
     currentSink().addSeconds("mesh building", elapsedSeconds(tm));
     const int tileCells = out.meshTileSizeM > 0.0 ? std::max(1, static_cast<int>(std::lround(out.meshTileSizeM / s.spec.cellSizeXM))) : 0;
     if (tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height)) return writeAll("snow_surface", mesh, "snow surface B+C+S+U+P");
-    for (const MeshTile& t : splitIntoTiles(mesh, s.spec, tileCells))
+    for (const MeshTile& t : cutIntoTiles(mesh, s.spec, tileCells))
       writeAll("snow_surface_x" + std::to_string(t.column) + "_y" + std::to_string(t.row), t.mesh,
                "snow surface B+C+S+U+P, tile column " + std::to_string(t.column) + " (from the west), row " + std::to_string(t.row) +
                    " (from the north) of " + std::to_string(tileCells) + " x " + std::to_string(tileCells) + " cells");

@@ -22,7 +22,6 @@ namespace fs = std::filesystem;
 
 namespace {
 thread_local OutputSink* tlSink = nullptr;
-const char* const kRgbPngFormat = "PNG, 3 channels uint8, sRGB";  // previews and the contact sheet
 }  // namespace
 
 OutputSink& currentSink() { return *tlSink; }
@@ -39,7 +38,7 @@ std::string OutputWriter::Day::base(const std::string& stem, const std::string& 
 OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std::move(sources)), scene_(*src_.scene), log_(log) {
   exrCompression_ = exrCompressionName(scene_.outputs.compressionLevel);
   floatImageFormat_ = scene_.outputs.format == ImageFormat::Exr ? "OpenEXR, 1 channel float32 (" + exrCompression_ + "), linear"
-                                                                : "TIFF, 1 channel float32 (zip), linear";
+                                                                : "GeoTIFF (GDAL), 1 band float32 (deflate, floating-point predictor), linear, the terrain's coordinate system and the file's geotransform";
 }
 
 void OutputWriter::listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
@@ -131,39 +130,37 @@ void OutputWriter::writeLayers(const Day& d) {
 
 void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
                                    std::vector<Grid<float>>& channels) {
-  const auto& out = scene_.outputs;
-  const std::string base = d.base(layer.name, src_.outDir);
   std::string content = layer.content;
   const bool ownSize = grid.width() != d.s.spec.width || grid.height() != d.s.spec.height;
   // The ski-track texture is finer than the grid: its texels per cell, listed with each file.
   if (layer.needs & kNeedsSkiTracks)
     content += " (" + std::to_string(src_.skiTrackFactor) + " x " + std::to_string(src_.skiTrackFactor) + " texels per cell)";
-  auto sized = [&] {
-    if (ownSize) currentSink().files.back().width = grid.width(), currentSink().files.back().height = grid.height();
-  };
-  const WrittenImage img = writeFloatImage(base, enumName(out.format), grid, layer.name, out.compressionLevel);
-  listFile(img.path, content, layer.unit, floatImageFormat_, d.day, img.minValue, img.maxValue);
-  sized();
-  for (const std::string& encoding : out.encodings) {
-    const WrittenImage e = writeNormalised(base, encoding, grid, out.compressionLevel);
-    listFile(e.path, content, layer.unit, normalisedFormat(encoding, grid.width(), grid.height()), d.day, e.minValue, e.maxValue);
-    sized();
+  // outputs.resize: the grid's layers at the requested size, over valid cells (finer textures keep theirs).
+  const auto& out = scene_.outputs;
+  Grid<uint8_t> resizedValid;
+  const Grid<uint8_t>* valid = &d.s.validCell;
+  if (out.resizeWidth > 0 && !ownSize) {
+    grid = resampleValid(grid, d.s.validCell, out.resizeWidth, out.resizeHeight, resizedValid);
+    valid = &resizedValid;
+    content += ", resampled (bilinear over valid cells) to " + std::to_string(grid.width()) + " x " + std::to_string(grid.height()) + " over the same extent";
   }
-  if (out.multichannelExr && !ownSize) {
+  writeFloatRaster(baseOf(d), d.day, layer.name, grid, valid, layer.name, content, layer.unit);
+  writeEncodings(d, layer, grid, valid, content);
+  if (scene_.outputs.multichannelExr && !ownSize) {
     channelNames.push_back(layer.name);
     channels.push_back(std::move(grid));
   }
 }
 
 void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
-  const std::string path = d.base(layer.name, src_.outDir) + ".png";
   const SnowState& s = d.s;
-  const int level = scene_.outputs.compressionLevel;
+  if (std::string(layer.name) == "splat_map") return writeSplatMap(d, layer);
+  if (std::string(layer.name) == "snow_normal") return writeNormalMap(d, layer);
   if (std::string(layer.name) == "avalanche_preview") {
     const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
-    writeRgbPng(path, s.spec.width, s.spec.height,
-                avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM), level);
-    listFile(path, layer.content, layer.unit, kRgbPngFormat, d.day, 0.f, 255.f);
+    writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height,
+                   avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM),
+                   layer.content, layer.unit);
     return;
   }
   // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
@@ -172,8 +169,7 @@ void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
   if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
   const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
-  writeRgbPng(path, s.spec.width, s.spec.height, rgb, level);
-  listFile(path, layer.content, layer.unit, kRgbPngFormat, d.day, 0.f, 255.f);
+  writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, rgb, layer.content, layer.unit);
   // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
   const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
   const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
@@ -193,11 +189,10 @@ void OutputWriter::writeDisplacement(const Day& d) {
   for (const std::string what : {"depth", "surface"}) {
     const LayerInfo& layer = *findLayer(what);
     const Grid<float> g = resampleBilinear(layer.compute(LayerInputs{&d.s}), out.displacementWidth, out.displacementHeight);
-    const WrittenImage img = writeFloatImage(d.base("displacement_" + what, src_.outDir), enumName(out.format), g, what, out.compressionLevel);
-    listFile(img.path,
-             std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                 " over the same extent",
-             "m", floatImageFormat_, d.day, img.minValue, img.maxValue);
+    writeFloatRaster(baseOf(d), d.day, "displacement_" + std::string(what), g, nullptr, what,
+                     std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                         " over the same extent",
+                     "m");
   }
 }
 

@@ -4,13 +4,19 @@
 // current sink (output_sink.h), which becomes the manifest's file list.
 #pragma once
 #include <cstdint>
+#include <functional>
+#include <map>
+#include <mutex>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "core/avalanche_runs.h"
 #include "core/snow_state.h"
+#include "georeference.h"
 #include "output_sink.h"
+#include "raster_tiles.h"
+#include "value_range.h"
 #include "precompute/exposure.h"
 #include "inputs/mesh.h"
 #include "scene/scene.h"
@@ -33,6 +39,7 @@ struct OutputSources {
   int skiTrackFactor = 0;                 // the ski-track texture's texels per cell, 0 without one
   const std::vector<TriangleMesh>* occluders = nullptr;
   const TriangleMesh* snowMesh = nullptr;  // occlusion mode on a mesh terrain: the mesh with its snow
+  GeoFrame geo;                            // the terrain's georeference (tiles and GeoTIFFs)
 };
 
 class OutputWriter {
@@ -42,6 +49,9 @@ class OutputWriter {
   // The outputs of season day `day` (a frame, under frames/ with a .DDDD tag), or of the
   // season's end for day < 0. `skiDepth`: the ski-track texture of that day (null without one).
   void writeDay(const SnowState& s, double day, const Grid<float>* skiDepth);
+  // After the last day: the encodings of layers with "season" ranges, over the range of every
+  // day and tile (their manifest entries, listed when the day was written, get the mapping).
+  void writeSeasonEncodings();
   // After the last day: the previews of every day on one sheet (when there were several).
   void writeContactSheet();
   // Each released avalanche's release zone, scour, deposit and motion frames (outputs.avalanche_maps).
@@ -68,6 +78,26 @@ class OutputWriter {
     // tools read the frames as a sequence), less the extension.
     std::string base(const std::string& stem, const std::string& outDir) const;
   };
+  // The output path of `stem` (with the day's tag) less its extension: outDir/stem, or
+  // outDir/frames/stem on a frame day.
+  using BaseOf = std::function<std::string(const std::string& stem)>;
+  BaseOf baseOf(const Day& d) const;
+  // One raster output, whole or as tiles ([outputs.tiles]); each file listed (output_rasters.cpp).
+  void writeFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid, const Grid<uint8_t>* valid,
+                        const std::string& layerName, const std::string& content, const std::string& unit);
+  void writeEncodedRaster(const BaseOf& base, double day, const std::string& stem, const std::string& encoding, const Grid<float>& grid,
+                          const Grid<uint8_t>* valid, const ValueMapping& mapping, const std::string& content, const std::string& unit,
+                          bool write);
+  void writeRgbRaster(const BaseOf& base, double day, const std::string& stem, int width, int height, const std::vector<uint8_t>& pixels,
+                      const std::string& content, const std::string& unit, int channels = 3, const std::string& format = {});
+  void writeRawFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid, const std::string& content,
+                           const std::string& unit);
+  // The splat map and the snow surface's normal map (output_engine_maps.cpp).
+  void writeSplatMap(const Day& d, const LayerInfo& layer);
+  void writeNormalMap(const Day& d, const LayerInfo& layer);
+  // The tile fields of the file just listed.
+  void noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const;
+  void writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content);
   void writeLayers(const Day& d);
   void writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
                        std::vector<Grid<float>>& channels);
@@ -86,6 +116,17 @@ class OutputWriter {
   std::string exrCompression_;    // the EXR compression name of the scene's level
   std::string floatImageFormat_;  // the manifest's format line of every float image
   std::string occluderNotes_;
+  // Encodings with "season" ranges, written after the last day (writeSeasonEncodings).
+  struct SeasonEncoding {
+    bool frame;
+    std::string dayTag, layer, encoding, content, unit;
+    double day;
+    Grid<float> grid;
+    Grid<uint8_t> valid;
+  };
+  std::mutex seasonMutex_;
+  std::vector<SeasonEncoding> seasonEncodings_;
+  std::map<std::string, SeenRange> seasonRanges_;  // by layer
   std::vector<std::vector<uint8_t>> previews_;  // every preview written, subsampled, for the contact sheet
   int previewWidth_ = 0, previewHeight_ = 0;
 };

@@ -60,6 +60,32 @@ Grid<float> snowCoverage(const LayerInputs& in) {
   });
 }
 
+// Engine layers (docs/outputs.md, Engine layers): snow = snow_coverage; the bare rest split by
+// the bedrock's slope into rock (a smooth step from kRockSlopeDeg[0] to [1]) and ground, so the
+// three weights sum to 1 at every valid cell.
+constexpr double kRockSlopeDeg[2] = {30.0, 45.0};
+double smoothStep(double t) {
+  t = std::clamp(t, 0.0, 1.0);
+  return t * t * (3.0 - 2.0 * t);
+}
+double bedrockSlopeDeg(const SnowState& s, int x, int y) {
+  const int w = s.spec.width, h = s.spec.height;
+  auto at = [&](int i, int j) {
+    i = std::clamp(i, 0, w - 1), j = std::clamp(j, 0, h - 1);
+    return s.validCell(i, j) ? s.bedrockM(i, j) : s.bedrockM(x, y);  // NODATA neighbours: flat
+  };
+  const double gx = (at(x + 1, y) - at(x - 1, y)) / (2 * s.spec.cellSizeXM), gy = (at(x, y + 1) - at(x, y - 1)) / (2 * s.spec.cellSizeYM);
+  return std::atan(std::hypot(gx, gy)) * 180.0 / kPi;
+}
+Grid<float> engineWeight(const LayerInputs& in, int which) {  // 0 snow, 1 rock, 2 ground
+  const Grid<float> coverage = snowCoverage(in);
+  return perValidCell(*in.state, [&](int x, int y) {
+    const double c = coverage(x, y);
+    const double rock = smoothStep((bedrockSlopeDeg(*in.state, x, y) - kRockSlopeDeg[0]) / (kRockSlopeDeg[1] - kRockSlopeDeg[0]));
+    return static_cast<float>(which == 0 ? c : which == 1 ? (1 - c) * rock : (1 - c) * (1 - rock));
+  });
+}
+
 constexpr uint8_t S = kSeasonMode, G = kGridModes, O = kOcclusionMode;
 
 const LayerInfo kLayers[] = {
@@ -138,6 +164,25 @@ const LayerInfo kLayers[] = {
      "wind bedforms: cohesion of the loose snow, 0 loose .. 1 bonded; wind lifts it above threshold / (1 - cohesion)", S, kNeedsState,
      LayerKind::Float,
      SNOW_STATE_LAYER(s.bedformCohesion.size() == s.spec.cellCount() ? s.bedformCohesion(x, y) : 0.f)},
+    // Engine layers (docs/outputs.md, Engine layers)
+    {"snow_coverage_hard", "1", "hard snow cover: 1 where snow_coverage >= 0.5 (depth at least midway between outputs.coverage_depths_m's two), else 0",
+     G, kNeedsState, LayerKind::Float,
+     [](const LayerInputs& in) {
+       Grid<float> g = snowCoverage(in);
+       for (float& v : g.values()) v = v >= 0.5f ? 1.f : 0.f;
+       return g;
+     }},
+    {"weight_snow", "1", "engine weight of the snow layer: snow_coverage (weight_snow + weight_rock + weight_ground = 1)", G, kNeedsState,
+     LayerKind::Float, [](const LayerInputs& in) { return engineWeight(in, 0); }},
+    {"weight_rock", "1", "engine weight of the rock layer: the bare share (1 - snow_coverage) on bedrock steeper than 30-45 deg (a smooth step)", G,
+     kNeedsState, LayerKind::Float, [](const LayerInputs& in) { return engineWeight(in, 1); }},
+    {"weight_ground", "1", "engine weight of the ground layer: the bare share on gentler bedrock", G, kNeedsState, LayerKind::Float,
+     [](const LayerInputs& in) { return engineWeight(in, 2); }},
+    {"splat_map", "1", "Unity RGBA splat map, 8 bits: R weight_snow, G weight_rock, B weight_ground, A 0; channels sum to 255 at every pixel (NODATA: ground)",
+     G, kNeedsState, LayerKind::Preview, nullptr},
+    {"snow_normal", "unit vector",
+     "tangent-space normal map of the snow surface (u east, v north, 8-bit RGB = 0.5 + 0.5 n; outputs.normal_map_convention: opengl, or directx with G flipped)",
+     G, kNeedsState, LayerKind::Preview, nullptr},
 };
 
 #undef SNOW_STATE_LAYER

@@ -21,6 +21,19 @@
 
 namespace snow {
 
+// [outputs.ranges]: how a layer's 16- and 8-bit encodings map values to pixels (docs/outputs.md).
+enum class RangeMode : uint8_t { Own, Season, Fixed };
+struct LayerRange {
+  RangeMode mode = RangeMode::Own;
+  double lo = 0.0, hi = 1.0;  // Fixed: in the layer's unit
+};
+// [outputs.tiles]: every raster output cut into equal tiles (bakers/raster_tiles.h).
+struct OutputTiles {
+  TileConvention convention = TileConvention::None;
+  int sizePx = 0;     // pixels a side (Unreal's list, 2^n + 1 for Unity, any for grid)
+  int overlapPx = 1;  // rows and columns neighbours share (Unreal and Unity: 1)
+};
+
 struct OutputRequest {
   std::vector<std::string> layers{"compacted", "stable", "unstable", "powder", "depth"};
   ImageFormat format = ImageFormat::Exr;  // 32-bit float, one channel, metres
@@ -39,6 +52,10 @@ struct OutputRequest {
   bool avalancheMaps = false;      // each avalanche's release zone, scour and deposit
   double avalancheFrameIntervalS = 0.0;  // frames of each avalanche's motion (0: none)
   std::array<double, 2> coverageDepthsM{0.02, 0.15};  // snow_coverage: 0 up to the first depth, 1 from the second
+  std::map<std::string, LayerRange> ranges;  // [outputs.ranges] as given; other layers take their kind's default
+  OutputTiles tiles;                         // [outputs.tiles]
+  int resizeWidth = 0, resizeHeight = 0;     // outputs.resize: the grid layers at this size (0: the grid's)
+  std::string normalMapConvention = "opengl";  // snow_normal: opengl (G = +v, north) or directx (G flipped)
 };
 
 // mode = "occlusion": Foldes & Benes 2007 (static_snow/occlusion.h), no season.

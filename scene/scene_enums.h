@@ -17,6 +17,7 @@ enum class SceneMode { Season, Occlusion, Mesh };             // mode
 enum class SunMethod { Auto, Horizon, Embree };               // precompute.sun_method
 enum class BackendChoice { Cpu, Cuda, Auto };                 // run.backend, --backend
 enum class ImageFormat { Exr, Tiff };                         // outputs.format
+enum class TileConvention { None, Unreal, Unity, Grid };      // outputs.tiles.convention
 // terrain.format; Builtin is what a terrain.builtin source resolves to, not a terrain.format value.
 enum class TerrainFormat { Auto, Dem, Heightmap, Raw, Mesh, Builtin };
 enum class TerrainCoordinates { Auto, Geographic, Metres };  // terrain.coordinates
@@ -47,6 +48,11 @@ template <>
 struct EnumNames<ImageFormat> {
   static constexpr std::array<std::pair<ImageFormat, std::string_view>, 2> table{
       {{ImageFormat::Exr, "exr"}, {ImageFormat::Tiff, "tiff"}}};
+};
+template <>
+struct EnumNames<TileConvention> {
+  static constexpr std::array<std::pair<TileConvention, std::string_view>, 4> table{
+      {{TileConvention::None, "none"}, {TileConvention::Unreal, "unreal"}, {TileConvention::Unity, "unity"}, {TileConvention::Grid, "grid"}}};
 };
 template <>
 struct EnumNames<TerrainFormat> {

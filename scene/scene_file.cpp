@@ -15,6 +15,7 @@
 #include "scene/layers.h"
 #include "scene.h"
 #include "scene_schema.h"
+#include "tile_sizes.h"
 
 namespace snow {
 namespace {
@@ -379,9 +380,28 @@ void validateTerrain(Scene& scene, const toml::table& root, const std::string& s
     throw InputError(where(source, terrain.source()) + ": terrain.max_altitude_m: must be above terrain.min_altitude_m");
 }
 
+// [outputs.tiles]: a convention and a size it allows.
+void validateTiles(const Scene& scene, const toml::table& root, const std::string& source) {
+  const toml::table* t = root["outputs"]["tiles"].as_table();
+  if (!t) return;
+  const OutputTiles& tiles = scene.outputs.tiles;
+  if (!t->contains("convention")) throw InputError(where(source, t->source()) + ": outputs.tiles: needs convention = \"unreal\", \"unity\" or \"grid\"");
+  if (!t->contains("size_px")) throw InputError(where(source, t->source()) + ": outputs.tiles: needs size_px");
+  const std::vector<int> allowed = allowedTileSizes(tiles.convention);
+  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), tiles.sizePx) == allowed.end())
+    fail(source, *t->get("size_px"), "outputs.tiles.size_px",
+         std::to_string(tiles.sizePx) + " is not a " + enumName(tiles.convention) + " tile size (allowed: " + tileSizeList(tiles.convention) + ")");
+  if (t->contains("overlap_px")) {
+    if (tiles.convention != TileConvention::Grid)
+      fail(source, *t->get("overlap_px"), "outputs.tiles.overlap_px", std::string(enumName(tiles.convention)) + " tiles always share one row and column");
+    if (tiles.overlapPx >= tiles.sizePx) fail(source, *t->get("overlap_px"), "outputs.tiles.overlap_px", "must be less than size_px");
+  }
+}
+
 // A frame's files are tagged with its day rounded to a whole day (frames/STEM.DDDD): two frame
 // days with one tag would write the same files.
 void validateOutputs(const Scene& scene, const toml::table& root, const std::string& source) {
+  validateTiles(scene, root, source);
   const toml::array* frames = root["outputs"]["frames_days"].as_array();
   if (!frames) return;
   for (size_t i = 0; i < frames->size(); ++i) {
@@ -434,9 +454,9 @@ void validateMeshMode(const Scene& scene, const toml::table& root, const std::st
   const OutputRequest& out = scene.outputs;
   if (scene.terrain.builtin) throw InputError(source + ": mode = \"mesh\" needs terrain.file to name a mesh (.obj, .ply, .glb, .gltf, .fbx)");
   if (root["outputs"]["layers"].node() || !out.encodings.empty() || out.multichannelExr || out.displacementWidth > 0 || !out.frameDays.empty() ||
-      out.avalancheMaps)
+      out.avalancheMaps || out.resizeWidth > 0 || root["outputs"]["tiles"].node() || root["outputs"]["ranges"].node())
     throw InputError(source + ": outputs: mode = \"mesh\" writes the snow body only (outputs.meshes, outputs.vdb); grid layers, "
-                     "encodings, displacement maps and frames need a height field");
+                     "encodings, displacement maps, frames, resize, tiles and ranges need a height field");
   if (root["outputs"]["mesh_parts"].node()) throw InputError(source + ": outputs.mesh_parts: mode = \"mesh\" writes the snow body (snow_body.EXT)");
   if (out.meshes.empty() && !out.vdb) throw InputError(source + ": outputs: mode = \"mesh\" needs outputs.meshes or outputs.vdb = true");
   if (!scene.userAvalanches.empty() || !scene.userSkiers.empty() || !scene.edits.empty() || scene.bedforms.enabled)

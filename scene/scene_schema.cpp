@@ -141,6 +141,41 @@ Bind<Scene> displacementSize() {
         return s.outputs.displacementWidth > 0 ? show(std::vector<int>{s.outputs.displacementWidth, s.outputs.displacementHeight}) : "none";
       });
 }
+// [outputs.ranges] LAYER = "own" | "season" | [lo, hi]; a layer not given takes its kind's default.
+Bind<Scene> layerRange(const std::string& layer) {
+  return custom<Scene>(
+      [layer](Scene& s, const toml::node& n, const BindContext& c) {
+        LayerRange r;
+        if (const auto* text = n.as_string()) {
+          if (text->get() != "own" && text->get() != "season") fail(c.source, n, c.path, "needs \"own\", \"season\" or [lo, hi]");
+          r.mode = text->get() == "own" ? RangeMode::Own : RangeMode::Season;
+        } else if (n.is_array()) {
+          const auto* a = n.as_array();
+          if (a->size() != 2 || !(*a)[0].is_number() || !(*a)[1].is_number()) fail(c.source, n, c.path, "needs [lo, hi], two numbers");
+          r.mode = RangeMode::Fixed, r.lo = (*a)[0].value<double>().value(), r.hi = (*a)[1].value<double>().value();
+          if (!std::isfinite(r.lo) || !std::isfinite(r.hi) || !(r.hi > r.lo)) fail(c.source, n, c.path, "needs [lo, hi] with hi > lo");
+        } else {
+          fail(c.source, n, c.path, "needs \"own\", \"season\" or [lo, hi]");
+        }
+        s.outputs.ranges[layer] = r;
+      },
+      [layer](const Scene& s) {
+        const auto it = s.outputs.ranges.find(layer);
+        if (it == s.outputs.ranges.end()) return std::string("the layer kind's (see Value ranges)");
+        const LayerRange& r = it->second;
+        return r.mode == RangeMode::Own ? show(std::string("own")) : r.mode == RangeMode::Season ? show(std::string("season")) : show(std::vector<double>{r.lo, r.hi});
+      });
+}
+Bind<Scene> resize() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        std::vector<double> a;
+        read(n, a);
+        if (a.size() != 2 || !whole(a)) fail(c.source, n, c.path, "needs whole numbers [width, height], each at least 1");
+        s.outputs.resizeWidth = static_cast<int>(a[0]), s.outputs.resizeHeight = static_cast<int>(a[1]);
+      },
+      [](const Scene& s) { return s.outputs.resizeWidth > 0 ? show(std::vector<int>{s.outputs.resizeWidth, s.outputs.resizeHeight}) : "none"; });
+}
 Bind<Scene> bedformMask() {
   return custom<Scene>([](Scene& s, const toml::node& n, const BindContext& c) { s.bedforms.mask = rasterRef(n, c.source, s, c.path); },
                        [](const Scene& s) { return s.bedforms.mask ? s.bedforms.mask->label() : "none"; });
@@ -463,8 +498,8 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
   r.push_back({"outputs.layers", Kind::StringArray, -kInf, kInf, kLayerChoices, "",
        "grids to write: the layers listed under Output layers below (a layer the mode does not make is an error; bedform_cohesion needs [bedforms])", at<S>(&S::outputs, &OR::layers)});
   r.push_back({"outputs.format", Kind::String, -kInf, kInf, enumNames<ImageFormat>(), "", "the layers' image format: 32-bit float, one channel", at<S>(&S::outputs, &OR::format)});
-  r.push_back({"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16"}, "",
-       "also write each layer normalised to its own range: 16-bit PNG, 8-bit PNG mask, raw 16-bit heightmap (the float file is always written)", at<S>(&S::outputs, &OR::encodings)});
+  r.push_back({"outputs.encodings", Kind::StringArray, -kInf, kInf, {"png16", "png8", "r16", "r32"}, "",
+       "also write each layer quantised over its range (outputs.ranges): 16-bit PNG, 8-bit PNG mask, raw 16-bit heightmap; or r32: raw float32 as it is (the float file is always written)", at<S>(&S::outputs, &OR::encodings)});
   r.push_back({"outputs.multichannel_exr", Kind::Bool, -kInf, kInf, {}, "", "also write all layers in one EXR (layers.exr), a channel <layer>.Y each", at<S>(&S::outputs, &OR::multichannelExr)});
   r.push_back({"outputs.vdb", Kind::Bool, -kInf, kInf, {}, "", "also write the snow body as snow.vdb (OpenVDB)", at<S>(&S::outputs, &OR::vdb)});
   r.push_back({"outputs.ski_track_factor", Kind::Integer, 1, 16, {}, "", "texels of the ski_tracks texture per simulation cell, each way", at<S>(&S::outputs, &OR::skiTrackFactor)});
@@ -474,7 +509,7 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
        "surface: the snow-covered surface (snow_surface.<ext>); body: the snow body alone, closed (snow_body.<ext>)", meshParts()});
   r.push_back({"outputs.mesh_max_error_m", Kind::Number, 0, 10000, {}, "m", "the adaptive triangulation's vertical error bound (0: only exactly planar areas merge)", at<S>(&S::outputs, &OR::meshMaxErrorM)});
   r.push_back({"outputs.mesh_tile_size_m", Kind::Number, 0, 1e7, {}, "m",
-       "split the surface mesh into square tiles of this size (snow_surface_x<column>_y<row>.<ext>, columns from the west, rows from the north; 0: one file)", at<S>(&S::outputs, &OR::meshTileSizeM)});
+       "split the surface mesh into square tiles of this size, cut along the tile borders so neighbours share their border vertices (snow_surface_x<column>_y<row>.<ext>, columns from the west, rows from the north; 0: one file)", at<S>(&S::outputs, &OR::meshTileSizeM)});
   r.push_back({"outputs.vdb_voxel_size_m", Kind::Number, 0.01, 1000, {}, "m", "the VDB's voxel size", at<S>(&S::outputs, &OR::vdbVoxelSizeM), "the grid's smaller cell size"});
   r.push_back({"outputs.compression_level", Kind::Integer, 0, 9, {}, "",
        "deflate effort of the lossless images: PNG's zlib level and EXR's zip level (0: EXR uncompressed; TIFF is always zip at its default level). "
@@ -489,6 +524,25 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
   r.push_back({"outputs.coverage_depths_m", Kind::NumberArray, 0, 100, {}, "m",
        "the snow_coverage layer's [bare, covered] snow depths: 0 at or below the first, 1 at or above the second, a smooth step between", coverageDepths()});
   r.push_back({"outputs.frames_days", Kind::NumberArray, 0, 3650, {}, "day", "also write the layers at these days (0: the season's start); frames are named by the whole day, so two days that round to the same one are refused", at<S>(&S::outputs, &OR::frameDays)});
+  r.push_back({"outputs.ranges", Kind::Table, -kInf, kInf, {}, "",
+       "per layer, how its png16, png8 and r16 files map values to pixels: [lo, hi] in the layer's unit (fixed), \"season\" (one range over every frame and tile of the bake) or \"own\" (each day's own range over all its tiles); "
+       "NODATA cells are left out of every range and written as pixel 0. Default: [0, 1] for layers in unit 1 (masks and fractions), \"season\" for the others (docs/outputs.md)"});
+  for (const LayerInfo& l : layerTable())
+    if (l.kind == LayerKind::Float)
+      r.push_back({std::string("outputs.ranges.") + l.name, Kind::Any, -kInf, kInf, {}, l.unit, std::string("the ") + l.name + " layer's range", layerRange(l.name),
+           std::string(l.unit) == "1" ? "[0, 1]" : "\"season\""});
+  r.push_back({"outputs.tiles", Kind::Table, -kInf, kInf, {}, "",
+       "cut every raster output (layers, encodings, previews, displacement maps) into equal tiles for an engine's importer (docs/outputs.md)"});
+  r.push_back({"outputs.tiles.convention", Kind::String, -kInf, kInf, {"unreal", "unity", "grid"}, "",
+       "unreal: <name>_x<column>_y<row> from the north-west, sizes 127, 253, 505, 1009, 2017, 4033, 8129, one shared edge row and column; "
+       "unity: <name>_<column>_<row> from the south-west (Unity's terrain grid), 2^n + 1 from 33 to 4097, one shared edge; grid: <name>_x<column>_y<row>, any size and overlap",
+       at<S>(&S::outputs, &OR::tiles, &OutputTiles::convention), "required with [outputs.tiles]"});
+  r.push_back({"outputs.tiles.size_px", Kind::Integer, 2, 65536, {}, "pixels", "each tile's width and height", at<S>(&S::outputs, &OR::tiles, &OutputTiles::sizePx), "required with [outputs.tiles]"});
+  r.push_back({"outputs.tiles.overlap_px", Kind::Integer, 0, 65535, {}, "pixels", "grid: rows and columns neighbouring tiles share (unreal and unity share 1)", at<S>(&S::outputs, &OR::tiles, &OutputTiles::overlapPx)});
+  r.push_back({"outputs.resize", Kind::NumberArray, 1, 65536, {}, "pixels",
+       "write the grid's layers, their encodings and the multi-channel EXR at [width, height] over the same extent (bilinear over valid cells; the simulation grid is untouched; previews stay at the grid's size)", resize()});
+  r.push_back({"outputs.normal_map_convention", Kind::String, -kInf, kInf, {"opengl", "directx"}, "",
+       "the snow_normal layer's green channel: opengl (+v, north: Blender, Unity) or directx (flipped: Unreal)", at<S>(&S::outputs, &OR::normalMapConvention)});
   r.push_back({"run", Kind::Table, -kInf, kInf, {}, "", "how the bake runs"});
   r.push_back({"run.seed", Kind::Integer, 0, 9.007199254740992e15, {}, "", "random seed", at<S>(&S::seed)});
   r.push_back({"run.backend", Kind::String, -kInf, kInf, enumNames<BackendChoice>(), "", "compute backend (auto: CUDA when a device works)", at<S>(&S::backend)});

@@ -4,8 +4,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <algorithm>
 #include <map>
 
+#include "bakers/mesh_tiles.h"
 #include "bakers/mesh_writer.h"
 #include "bakers/rtin.h"
 #include "bake_support.h"
@@ -132,22 +134,67 @@ TEST(AdaptiveMesh, SnowBodyIsWatertightAndHoldsTheSnowVolume) {
   }
 }
 
-TEST(AdaptiveMesh, TilesShareTheTriangulation) {
+// Tiles cut along their borders: every vertex inside its tile, the projected area kept, and the
+// edges on a shared border the same in both tiles bit for bit (no cracks, no T-junctions).
+TEST(AdaptiveMesh, TilesAreCutAlongTheBorderAndMeetWithoutCracks) {
   const Surface s = makeSurface(150, 97, false);
   const RtinMesh m = buildRtin({&s.surface}, s.valid, 0.5);
   const MeshData mesh = surfaceMesh(m, s.surface, s.spec);
-  const auto tiles = splitIntoTiles(mesh, s.spec, 64);
-  EXPECT_EQ(tiles.size(), 6u);  // 3 columns x 2 rows of 64 cells
-  size_t triangles = 0;
-  for (const auto& t : tiles) {
-    triangles += t.mesh.triangles.size();
-    for (const auto& p : t.mesh.positions) {
-      // Within the tile, give or take the largest triangle reaching over its edge.
-      EXPECT_GE(p[0], t.column * 64 * 20.0 - 64 * 20.0);
-      EXPECT_LE(p[0], (t.column + 2) * 64 * 20.0);
+  const auto tiles = cutIntoTiles(mesh, s.spec, 64);
+  ASSERT_EQ(tiles.size(), 6u);  // 3 columns x 2 rows of 64 cells
+  const double t = 64 * 20.0, top = 97 * 20.0;
+  auto area = [](const MeshData& d) {
+    double a = 0;
+    for (const auto& tri : d.triangles) {
+      const auto &p = d.positions[tri[0]], &q = d.positions[tri[1]], &r = d.positions[tri[2]];
+      a += 0.5 * ((static_cast<double>(q[0]) - p[0]) * (r[1] - p[1]) - (static_cast<double>(r[0]) - p[0]) * (q[1] - p[1]));
+    }
+    return a;
+  };
+  double tiled = 0;
+  using Edge = std::pair<std::array<float, 3>, std::array<float, 3>>;
+  std::map<std::pair<int, int>, std::vector<Edge>> westEdges, northEdges;  // each tile's edges on its west and north border
+  std::map<std::pair<int, int>, std::vector<Edge>> eastEdges, southEdges;
+  for (const auto& tile : tiles) {
+    const double x0 = tile.column * t, x1 = x0 + t, y1 = top - tile.row * t, y0 = y1 - t;
+    for (const auto& p : tile.mesh.positions) {
+      ASSERT_GE(p[0], static_cast<float>(x0));
+      ASSERT_LE(p[0], static_cast<float>(x1));
+      ASSERT_GE(p[1], static_cast<float>(y0));
+      ASSERT_LE(p[1], static_cast<float>(y1));
+    }
+    const double a = area(tile.mesh);
+    EXPECT_GT(a, 0.0);
+    tiled += a;
+    for (const auto& [e, count] : countEdges(tile.mesh.triangles)) {
+      if (count != 1) continue;  // inner edges are shared by two triangles
+      auto p = tile.mesh.positions[e.first], q = tile.mesh.positions[e.second];
+      if (q < p) std::swap(p, q);
+      const Edge edge{p, q};
+      const std::pair<int, int> at{tile.column, tile.row};
+      if (p[0] == static_cast<float>(x0) && q[0] == p[0]) westEdges[at].push_back(edge);
+      if (p[0] == static_cast<float>(x1) && q[0] == p[0]) eastEdges[at].push_back(edge);
+      if (p[1] == static_cast<float>(y1) && q[1] == p[1]) northEdges[at].push_back(edge);
+      if (p[1] == static_cast<float>(y0) && q[1] == p[1]) southEdges[at].push_back(edge);
     }
   }
-  EXPECT_EQ(triangles, mesh.triangles.size());
+  EXPECT_NEAR(tiled, area(mesh), 1e-9 * area(mesh));
+  int borders = 0;
+  for (auto& [at, edges] : eastEdges) {
+    auto west = westEdges[{at.first + 1, at.second}];
+    if (west.empty()) continue;  // the grid's east edge
+    std::sort(edges.begin(), edges.end()), std::sort(west.begin(), west.end());
+    EXPECT_EQ(edges, west) << "tile " << at.first << ", " << at.second;
+    ++borders;
+  }
+  for (auto& [at, edges] : southEdges) {
+    auto north = northEdges[{at.first, at.second + 1}];
+    if (north.empty()) continue;
+    std::sort(edges.begin(), edges.end()), std::sort(north.begin(), north.end());
+    EXPECT_EQ(edges, north) << "tile " << at.first << ", " << at.second;
+    ++borders;
+  }
+  EXPECT_EQ(borders, 2 * 2 + 3);  // 2 vertical borders in 2 rows, 1 horizontal in 3 columns
 }
 
 TEST(AdaptiveMesh, SurfaceMeshHeightsAndUvsLineUpWithTheGrid) {

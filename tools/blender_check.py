@@ -1,12 +1,16 @@
 # Loads a bake's outputs in Blender (3.4, headless) as a user would, and writes what it found to
 # DIR/blender_check.json for the test to judge (tests/blender_test.cpp):
-#   blender -b --factory-startup --python tools/blender_check.py -- BAKE_DIR
+#   blender -b --factory-startup --python tools/blender_check.py -- BAKE_DIR [TILED_BAKE_DIR]
 # - snow_surface.glb imports as a mesh (vertex count, height range in Blender's z-up world);
 # - snow.vdb imports as a volume object (its grid names);
 # - displacement_depth.exr drives a Displace modifier on a grid mesh over the terrain's extent
 #   (UV coordinates, strength 1, midlevel 0, nearest texel): the evaluated heights against the
 #   EXR's texels;
-# - one small Cycles image on the CPU (blender_check.png).
+# - snow_normal.png as the surface's tangent-space normal map (Normal Map node on its UVs), and
+#   its decoded texels against the mesh's vertex normals;
+# - one small Cycles image on the CPU (blender_check.png);
+# - with TILED_BAKE_DIR: its snow_surface_x<c>_y<r>.glb tiles, and how far each border vertex of a
+#   tile is from the nearest border vertex of its neighbour.
 import json
 import math
 import os
@@ -102,6 +106,74 @@ scene.render.resolution_y = 64
 scene.render.filepath = os.path.join(out, "blender_check.png")
 bpy.ops.render.render(write_still=True)
 result["render"] = {"path": scene.render.filepath, "exists": os.path.exists(scene.render.filepath)}
+
+# 5. The normal map on the surface: Image (Non-Color) -> Normal Map (tangent space, the UVs) ->
+# Principled BSDF; and at each vertex the texel under its UV, decoded (n = 2 p - 1 in the frame
+# u east, v north, up), against the mesh's own normal there.
+material = bpy.data.materials.new("snow")
+material.use_nodes = True
+nodes, links = material.node_tree.nodes, material.node_tree.links
+bsdf = nodes["Principled BSDF"]
+normal_image = bpy.data.images.load(os.path.join(out, "snow_normal.png"))
+normal_image.colorspace_settings.name = "Non-Color"
+tex = nodes.new("ShaderNodeTexImage")
+tex.image = normal_image
+normal_map = nodes.new("ShaderNodeNormalMap")
+normal_map.space = "TANGENT"
+normal_map.uv_map = surface.data.uv_layers[0].name
+links.new(tex.outputs["Color"], normal_map.inputs["Color"])
+links.new(normal_map.outputs["Normal"], bsdf.inputs["Normal"])
+surface.data.materials.clear()
+surface.data.materials.append(material)
+npx = list(normal_image.pixels)  # RGBA, row 0 at the bottom (south)
+nw, nh = normal_image.size
+uv_of = {}
+for loop in surface.data.loops:
+    uv_of.setdefault(loop.vertex_index, surface.data.uv_layers[0].data[loop.index].uv)
+angles, flipped = [], []  # flipped: had the map DirectX's green, the angle it would give
+def angle_deg(n, m):
+    cos = sum(a * b for a, b in zip(n, m)) / (math.sqrt(sum(c * c for c in n)) * m.length)
+    return math.degrees(math.acos(max(-1.0, min(1.0, cos))))
+for v in surface.data.vertices:
+    u, t = uv_of[v.index]
+    i, j = min(nw - 1, max(0, int(u * nw))), min(nh - 1, max(0, int(t * nh)))
+    n = [2.0 * npx[4 * (j * nw + i) + k] - 1.0 for k in range(3)]
+    m = surface.matrix_world.to_3x3() @ v.normal
+    angles.append(angle_deg(n, m))
+    flipped.append(angle_deg([n[0], -n[1], n[2]], m))
+angles.sort()
+flipped.sort()
+result["normal_map"] = {"image_size": list(normal_image.size), "linked": bsdf.inputs["Normal"].is_linked,
+                        "vertices": len(angles), "median_angle_deg": angles[len(angles) // 2],
+                        "p95_angle_deg": angles[int(0.95 * (len(angles) - 1))],
+                        "median_angle_deg_green_flipped": flipped[len(flipped) // 2]}
+
+# 6. Mesh tiles: every border vertex of a tile against its neighbour's border vertices.
+if len(sys.argv) > sys.argv.index("--") + 2:
+    tiled = sys.argv[sys.argv.index("--") + 2]
+    tiles = {}
+    for name in sorted(os.listdir(tiled)):
+        if name.startswith("snow_surface_x") and name.endswith(".glb"):
+            column, row = (int(p[1:]) for p in name[len("snow_surface_"):-4].split("_"))
+            bpy.ops.import_scene.gltf(filepath=os.path.join(tiled, name), import_shading="SMOOTH")
+            obj = [o for o in bpy.context.selected_objects if o.type == "MESH"][0]
+            tiles[(column, row)] = [tuple(obj.matrix_world @ v.co) for v in obj.data.vertices]
+    manifest_tiled = json.load(open(os.path.join(tiled, "manifest.json")))
+    size_m = 640.0  # the test's mesh_tile_size_m
+    top = manifest_tiled["terrain"]["height"] * manifest_tiled["terrain"]["cell_size_y_m"]
+    border_vertices, worst = 0, 0.0
+    for (c, r), verts in tiles.items():
+        for (dc, dr, axis, value) in ((1, 0, 0, (c + 1) * size_m), (0, 1, 1, top - (r + 1) * size_m)):
+            other = tiles.get((c + dc, r + dr))
+            if other is None:
+                continue
+            mine = [v for v in verts if abs(v[axis] - value) < 1e-3]
+            theirs = [v for v in other if abs(v[axis] - value) < 1e-3]
+            for v in mine + theirs:
+                pool = theirs if v in mine else mine
+                worst = max(worst, min(math.dist(v, u) for u in pool))
+            border_vertices += len(mine)
+    result["tiles"] = {"count": len(tiles), "border_vertices": border_vertices, "max_gap_m": worst}
 
 with open(os.path.join(out, "blender_check.json"), "w") as f:
     json.dump(result, f, indent=2)

@@ -1,0 +1,158 @@
+// OutputWriter's raster files: each raster output whole or cut into tiles ([outputs.tiles]), its
+// 16- and 8-bit encodings mapped by [outputs.ranges] ("season" ranges written after the last
+// day), and every file's mapping and tile listed in the manifest.
+#include <filesystem>
+
+#include "geotiff_writer.h"
+#include "grid_writer.h"
+#include "output_writer.h"
+
+namespace snow {
+
+namespace fs = std::filesystem;
+
+OutputWriter::BaseOf OutputWriter::baseOf(const Day& d) const {
+  return [outDir = src_.outDir, frame = d.frame, tag = d.dayTag](const std::string& stem) {
+    return (fs::path(outDir) / (frame ? "frames" : "") / (stem + tag)).string();
+  };
+}
+
+void OutputWriter::noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const {
+  ManifestFile& f = currentSink().files.back();
+  if (imageWidth != src_.geo.gridWidth || imageHeight != src_.geo.gridHeight || l.tiled()) f.width = l.tileWidth, f.height = l.tileHeight;
+  if (!l.tiled()) return;
+  const GeoFrame g = src_.geo.pixels(imageWidth, imageHeight, column * l.step, row * l.step);
+  f.tileConvention = enumName(l.convention);
+  f.tileColumn = column, f.tileRow = row, f.tileX = column * l.step, f.tileY = row * l.step;
+  f.tileOriginX = g.originX, f.tileOriginY = g.originY, f.pixelSizeX = g.cellX, f.pixelSizeY = g.cellY;
+}
+
+void OutputWriter::writeFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+                                    const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content,
+                                    const std::string& unit) {
+  const auto& out = scene_.outputs;
+  const TileLayout l = tileLayout(out.tiles, grid.width(), grid.height());
+  const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
+  for (int r = 0; r < l.rows; ++r)
+    for (int c = 0; c < l.columns; ++c) {
+      const Grid<float> tile = cutTile(grid, l, c, r);
+      const Grid<uint8_t> tileValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
+      const std::string tileBase = base(stem + tileSuffix(l, c, r));
+      // TIFF through GDAL with the terrain's CRS and this tile's geotransform; EXR through OpenImageIO.
+      const std::string path = out.format == ImageFormat::Tiff ? tileBase + ".tif" : writeFloatImage(tileBase, "exr", tile, layerName, out.compressionLevel).path;
+      if (out.format == ImageFormat::Tiff)
+        writeGeoTiff(path, tile, src_.geo.pixels(grid.width(), grid.height(), c * l.step, r * l.step), layerName);
+      SeenRange seen;  // NODATA left out
+      seen.widen(tile, masked ? &tileValid : nullptr);
+      listFile(path, content, unit, floatImageFormat_, day, static_cast<float>(seen.mapping(RangeMode::Own).lo),
+               static_cast<float>(seen.mapping(RangeMode::Own).hi));
+      noteTile(l, c, r, grid.width(), grid.height());
+    }
+}
+
+void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std::string& stem, const std::string& encoding,
+                                      const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& m,
+                                      const std::string& content, const std::string& unit, bool write) {
+  const auto& out = scene_.outputs;
+  const TileLayout l = tileLayout(out.tiles, grid.width(), grid.height());
+  const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
+  for (int r = 0; r < l.rows; ++r)
+    for (int c = 0; c < l.columns; ++c) {
+      const std::string path = base(stem + tileSuffix(l, c, r)) + encodingExtension(encoding);
+      if (write) {
+        const Grid<float> tile = cutTile(grid, l, c, r);
+        const Grid<uint8_t> tileValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
+        writeQuantised(path, encoding, tile, masked ? &tileValid : nullptr, m.lo, m.hi, kNodataPixel, out.compressionLevel);
+      }
+      listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi));
+      ManifestFile& f = currentSink().files.back();
+      f.rangeMode = rangeModeName(m.mode), f.rangeLo = m.lo, f.rangeHi = m.hi, f.nodataPixel = kNodataPixel;
+      noteTile(l, c, r, grid.width(), grid.height());
+    }
+}
+
+void OutputWriter::writeRgbRaster(const BaseOf& base, double day, const std::string& stem, int width, int height,
+                                  const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels,
+                                  const std::string& format) {
+  const TileLayout l = tileLayout(scene_.outputs.tiles, width, height);
+  for (int r = 0; r < l.rows; ++r)
+    for (int c = 0; c < l.columns; ++c) {
+      const std::string path = base(stem + tileSuffix(l, c, r)) + ".png";
+      writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), width, height, channels, l, c, r) : pixels,
+                scene_.outputs.compressionLevel);
+      listFile(path, content, unit, format.empty() ? kRgbPngFormat : format, day, 0.f, 255.f);
+      noteTile(l, c, r, width, height);
+    }
+}
+
+void OutputWriter::writeRawFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+                                       const std::string& content, const std::string& unit) {
+  const TileLayout l = tileLayout(scene_.outputs.tiles, grid.width(), grid.height());
+  for (int r = 0; r < l.rows; ++r)
+    for (int c = 0; c < l.columns; ++c) {
+      const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
+      const Grid<float> tile = cutTile(grid, l, c, r);
+      writeRawFloat32(path, tile);
+      SeenRange seen;
+      seen.widen(tile, nullptr);
+      listFile(path, content, unit,
+               "raw float32 little-endian, " + std::to_string(l.tileWidth) + " x " + std::to_string(l.tileHeight) +
+                   ", row 0 north, no header, in the layer's unit (NODATA 0)",
+               day, static_cast<float>(seen.mapping(RangeMode::Own).lo), static_cast<float>(seen.mapping(RangeMode::Own).hi));
+      noteTile(l, c, r, grid.width(), grid.height());
+    }
+}
+
+void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid,
+                                  const std::string& content) {
+  const auto& out = scene_.outputs;
+  if (out.encodings.empty()) return;
+  const LayerRange range = rangeOf(out, layer);
+  ValueMapping m{range.mode, range.lo, range.hi};
+  if (range.mode != RangeMode::Fixed) {
+    SeenRange seen;
+    seen.widen(grid, valid);
+    m = seen.mapping(range.mode);
+    if (range.mode == RangeMode::Season) {
+      const std::lock_guard lock(seasonMutex_);
+      seasonRanges_[layer.name].widen(seen);
+    }
+  }
+  const bool now = range.mode != RangeMode::Season;
+  for (const std::string& encoding : out.encodings) {
+    if (encoding == "r32") {  // floats as they are: no range
+      writeRawFloatRaster(baseOf(d), d.day, layer.name, grid, content, layer.unit);
+      continue;
+    }
+    writeEncodedRaster(baseOf(d), d.day, layer.name, encoding, grid, valid, m, content, layer.unit, now);
+    if (now) continue;
+    const std::lock_guard lock(seasonMutex_);
+    const bool masked = valid->width() == grid.width() && valid->height() == grid.height();
+    seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid, masked ? *valid : Grid<uint8_t>()});
+  }
+}
+
+void OutputWriter::writeSeasonEncodings() {
+  if (seasonEncodings_.empty()) return;
+  OutputSink written;
+  {
+    SinkScope scope(written);
+    for (const SeasonEncoding& e : seasonEncodings_) {
+      const BaseOf base = [outDir = src_.outDir, &e](const std::string& stem) {
+        return (fs::path(outDir) / (e.frame ? "frames" : "") / (stem + e.dayTag)).string();
+      };
+      const ValueMapping m = seasonRanges_[e.layer].mapping(RangeMode::Season);
+      writeEncodedRaster(base, e.day, e.layer, e.encoding, e.grid, e.valid.empty() ? nullptr : &e.valid, m, e.content, e.unit, true);
+    }
+  }
+  // The entries listed on the day, in the manifest's order, take the season's mapping.
+  std::map<std::string, const ManifestFile*> byPath;
+  for (const ManifestFile& f : written.files) byPath[f.path] = &f;
+  OutputSink& sink = currentSink();
+  for (ManifestFile& f : sink.files)
+    if (const auto it = byPath.find(f.path); it != byPath.end()) f = *it->second;
+  for (const auto& [kind, seconds] : written.seconds) sink.addSeconds(kind, seconds);
+  seasonEncodings_.clear();
+}
+
+}  // namespace snow
