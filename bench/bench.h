@@ -10,7 +10,7 @@
 namespace snow {
 
 struct BenchOptions {
-  std::string stage = "all";  // sun | wind | season | avalanche | occlusion | mesh | bedforms | skiers | meshsnow | scaling | bandwidth | agreement | bake | all
+  std::string stage = "all";  // sun | wind | season | avalanche | avalanche-reference | occlusion | mesh | bedforms | skiers | meshsnow | scaling | bandwidth | agreement | bake | all
   int sunSize = 1024;          // grid of the sun-exposure timing table
   int sunAccuracySize = 256;   // grid of the sun-exposure accuracy table (the Embree reference is costly)
   std::vector<int> scalingSizes{256, 512, 1024, 2048, 4096};

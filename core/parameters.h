@@ -67,6 +67,8 @@ struct ModelParameters {
   double avalancheDryTemperatureC = -10.0;    // alpha = 1 (granular) at or below
   double avalancheWetTemperatureC = 0.0;      // alpha = 0 (viscous) at or above
   double avalancheWetGranularFraction = 0.2;  // alpha of wet snow: the granular friction it keeps
+  double avalancheDynamicFrictionDeg = 30.0;  // delta: Coulomb friction angle while snow flows (theta_c: to start and stop)
+  double avalancheTurbulenceMps2 = 0.0;       // xi: Voellmy's turbulent drag g s^2 / (xi h); 0: none
   double avalancheRatePerKm2PerDay = 1.0 / 7.0;  // spontaneous releases: about one a week per km^2
   double avalancheReachMPerM = 50.0;          // release reach: metres per metre of unstable snow at the rupture
   double avalancheMinUnstableM = 0.05;        // no release where U is thinner
