@@ -1,6 +1,8 @@
 // `snowbake bench --stage avalanche-reference`: the AvaFrame com1DFA cases of
 // <data>/avaframe/ run with the default parameters and scored (avalanche_reference.h); a table,
 // a CSV and one picture per case (ours red, the reference blue, both purple, on shaded terrain).
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 
@@ -33,10 +35,46 @@ void writeCasePicture(const BenchOptions& o, const AvalancheReferenceCase& c, co
   table << "Picture: " << path << "\n";
 }
 
+// The targets of issue #25 for one case.
+bool meetsTargets(const AvalancheReferenceScores& r) {
+  const double speed = r.peakSpeedMps / std::max(1e-9, r.referencePeakSpeedMps);
+  return std::abs(r.runoutError) <= 0.10 && r.iou >= 0.65 && std::abs(r.alphaDeg - r.referenceAlphaDeg) <= 2.0 && speed >= 0.65 &&
+         speed <= 1.35;
+}
+
+// The fit: every (dynamic friction angle, turbulence) pair of the grid on every case, one row each.
+std::string fitTable(const std::vector<AvalancheReferenceCase>& cases, std::ostringstream& csv, std::ostream& log) {
+  std::ostringstream t;
+  t << "| δ (°) | ξ (m/s²) |";
+  for (const auto& c : cases) t << " " << c.name << ": runout, IoU, Δα, speed |";
+  t << " cases within all targets |\n|---|---|";
+  for (size_t k = 0; k < cases.size(); ++k) t << "---|";
+  t << "---|\n";
+  for (double delta : {14.0, 16.0, 18.0, 20.0, 22.0})
+    for (double xi : {0.0, 4000.0, 2000.0, 1000.0, 500.0}) {
+      ModelParameters p;
+      p.avalancheDynamicFrictionDeg = delta;
+      p.avalancheTurbulenceMps2 = xi;
+      t << "| " << fmt("%.0f", delta) << " | " << (xi > 0 ? fmt("%.0f", xi) : std::string("none")) << " |";
+      int pass = 0;
+      for (const auto& c : cases) {
+        const AvalancheReferenceScores r = runAvalancheReferenceCase(c, p);
+        pass += meetsTargets(r);
+        t << " " << fmt("%+.0f %%", 100 * r.runoutError) << ", " << fmt("%.2f", r.iou) << ", " << fmt("%+.1f°", r.alphaDeg - r.referenceAlphaDeg)
+          << ", " << fmt("%.2f", r.peakSpeedMps / r.referencePeakSpeedMps) << " |";
+        csv << "fit," << c.name << "," << delta << "," << xi << "," << r.runoutError << "," << r.iou << "," << r.alphaDeg - r.referenceAlphaDeg
+            << "," << r.peakSpeedMps / r.referencePeakSpeedMps << "\n";
+      }
+      t << " " << pass << " |\n";
+      log << "  fit delta " << delta << " xi " << xi << ": " << pass << " cases\n";
+    }
+  return t.str();
+}
+
 }  // namespace
 
 std::string avalancheReferenceBench(const BenchOptions& o, std::ostream& log, int threads) {
-  std::ostringstream table, csv, pictures;
+  std::ostringstream table, csv, pictures, fitCsv;
   const fs::path root = fs::path(o.sharedDataDir) / "avaframe";
   if (!fs::exists(root)) return "Skipped: " + root.string() + " is absent (the AvaFrame reference cases).\n";
   const ModelParameters p;
@@ -66,6 +104,15 @@ std::string avalancheReferenceBench(const BenchOptions& o, std::ostream& log, in
     writeCasePicture(o, c, r, pictures);
   }
   table << "\nRunouts are path lengths from the release top. Pictures: ours red, com1DFA's blue, both purple.\n";
+  if (o.avalancheFit) {
+    std::vector<AvalancheReferenceCase> cases;
+    for (const std::string& name : avalancheReferenceCaseNames())
+      if (fs::exists(root / name)) cases.push_back(loadAvalancheReferenceCase((root / name).string()));
+    table << "\nThe fit (--fit): the dynamic friction angle δ and Voellmy's ξ over a grid, rest angle 30°, every case; per case "
+             "the runout error, IoU, α − reference α and peak speed / reference; the targets: ±10 %, ≥ 0.65, ±2°, 0.65–1.35.\n\n"
+          << fitTable(cases, fitCsv, log);
+    writeCsvFile(o, "avalanche_reference_fit.csv", "part,case,delta_deg,xi_mps2,runout_error,iou,alpha_diff_deg,speed_ratio\n" + fitCsv.str(), table);
+  }
   writeCsvFile(o, "avalanche_reference.csv", csv.str(), table);
   table << pictures.str();
   return table.str();

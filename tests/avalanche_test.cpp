@@ -2,6 +2,8 @@
 // thread independence.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -243,14 +245,20 @@ TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
   const Grid<float> scour = readFloatImage((dir / "out" / "avalanche_scour.exr").string());
   double depositM3 = 0, scourM3 = 0, depositAltitude = 0, hollow = 0, weight = 0;
   const int w = bed.width(), h = bed.height();
+  const float lowest = *std::min_element(bed.values().begin(), bed.values().end());  // what NODATA cells hold
+  for (float v : deposit.values()) depositM3 += v * 25.0;
+  for (float v : scour.values()) scourM3 += v * 25.0;
   for (int y = 10; y < h - 10; ++y)
     for (int x = 10; x < w - 10; ++x) {
-      depositM3 += deposit(x, y) * 25.0;
-      scourM3 += scour(x, y) * 25.0;
       if (deposit(x, y) < 0.5f) continue;
       double ring = 0;
-      for (int k = 0; k < 16; ++k) ring += bed(x + static_cast<int>(std::lround(10 * std::cos(k * 0.3927))),
-                                               y + static_cast<int>(std::lround(10 * std::sin(k * 0.3927))));
+      bool ringValid = true;  // the ring's mean means something only on the terrain
+      for (int k = 0; k < 16; ++k) {
+        const float b = bed(x + static_cast<int>(std::lround(10 * std::cos(k * 0.3927))), y + static_cast<int>(std::lround(10 * std::sin(k * 0.3927))));
+        ring += b;
+        ringValid = ringValid && b > lowest;
+      }
+      if (!ringValid) continue;
       hollow += (ring / 16 - bed(x, y)) * deposit(x, y);
       depositAltitude += bed(x, y) * deposit(x, y);
       weight += deposit(x, y);
