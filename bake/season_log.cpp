@@ -1,5 +1,6 @@
 // The season's report in the log: events, per-phenomenon steps and times, every avalanche, edit
 // and user skier, and the mass balance.
+#include <algorithm>
 #include <iomanip>
 
 #include "core/format.h"
@@ -15,7 +16,7 @@ void logAvalanches(const SeasonReport& report, const Scene& scene, std::ostream&
       log << ": not released, " << a.why << "\n";
       continue;
     }
-    log << ": " << a.releaseCells << " cells released (" << fixed(a.releasedM3, 0) << " m^3), runout " << fixed(a.runoutM, 0)
+    log << " on a " << fixed(a.ruptureSlopeDeg, 1) << " deg slope: " << a.releaseCells << " cells released (" << fixed(a.releasedM3, 0) << " m^3), runout " << fixed(a.runoutM, 0)
         << " m, fall " << fixed(a.fallHeightM, 0) << " m, " << a.steps << " steps of " << fixed(scene.params.avalancheStepS, 2) << " s, "
         << fixed(a.secondsPerStep() * 1e3, 3) << " ms a step; " << a.why << "\n";
   }
@@ -37,6 +38,24 @@ void logSkiers(const SeasonReport& report, std::ostream& log) {
           << fixed(k.lengthM, 0) << " m, drop " << fixed(k.dropM, 0) << " m; " << k.why << "\n";
 }
 
+// Spontaneous releases counted by the snowfall they follow (from its start to the next one's).
+void logReleasesPerStorm(const SeasonReport& report, const SeasonConfig& config, std::ostream& log) {
+  const auto& storms = config.weather.snowfallPeriods;
+  if (storms.empty() || report.avalancheTries == 0) return;
+  log << "  spontaneous releases per storm:";
+  for (size_t k = 0; k < storms.size(); ++k) {
+    const double end = k + 1 < storms.size() ? storms[k + 1].startDay : 1e300;
+    int n = 0;
+    double lo = 90.0, hi = 0.0;
+    for (const AvalancheRecord& a : report.avalanches)
+      if (!a.user && a.released && a.day >= storms[k].startDay && a.day < end)
+        ++n, lo = std::min(lo, a.ruptureSlopeDeg), hi = std::max(hi, a.ruptureSlopeDeg);
+    log << " day " << fixed(storms[k].startDay, 1) << ": " << n;
+    if (n > 0) log << " (slopes " << fixed(lo, 0) << "-" << fixed(hi, 0) << " deg)";
+    log << (k + 1 < storms.size() ? "," : "\n");
+  }
+}
+
 }  // namespace
 
 void logSeasonReport(const SeasonReport& report, const Scene& scene, const SeasonConfig& config, const std::string& backendName,
@@ -52,7 +71,8 @@ void logSeasonReport(const SeasonReport& report, const Scene& scene, const Seaso
   if (report.noSnowRemovedM3 > 0.0)
     log << "  no-snow mask: " << std::scientific << std::setprecision(4) << report.noSnowRemovedM3 << std::defaultfloat
         << " m^3 of initial snow removed\n";
-  if (report.avalancheTries > 0) log << "  spontaneous avalanche tries: " << report.avalancheTries << "\n";
+  if (report.avalancheTries > 0) log << "  spontaneous avalanche events: " << report.avalancheTries << "\n";
+  logReleasesPerStorm(report, config, log);
   if (config.bedforms)
     log << "  wind bedforms: " << report.bedforms.domainCells << " cells, " << report.bedforms.rounds << " rounds, "
         << report.bedforms.slabsEroded << " slabs lifted, " << report.bedforms.slabsAvalanched << " slab moves by avalanching, "

@@ -17,7 +17,7 @@ std::string isoDate(int year, int month, int day) {
 void addSeasonRecords(Manifest& m, const SeasonReport& report) {
   for (const AvalancheRecord& a : report.avalanches)
     m.avalanches.push_back({a.day, a.ruptureX, a.ruptureY, a.user, a.released, a.why, a.releaseCells, a.footprintCells, a.steps,
-                            a.releasedM3, a.depositM3, a.runoutM, a.fallHeightM, a.simulatedS});
+                            a.releasedM3, a.depositM3, a.runoutM, a.fallHeightM, a.simulatedS, a.ruptureSlopeDeg});
   for (const SkierRecord& k : report.skiers)
     m.skiers.push_back({k.day, k.startX, k.startY, k.user, k.cells, k.lengthM, k.dropM, k.triggered, k.why});
   for (ManifestEdit& e : m.edits)

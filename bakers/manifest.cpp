@@ -34,7 +34,8 @@ ordered_json avalanchesJson(const Manifest& m) {
     avalanches.push_back({{"day", a.day}, {"rupture_cell", {a.x, a.y}}, {"user", a.user}, {"released", a.released},
                           {"outcome", a.why}, {"release_cells", a.releaseCells}, {"footprint_cells", a.footprintCells},
                           {"released_m3", a.releasedM3}, {"deposit_m3", a.depositM3}, {"runout_m", a.runoutM},
-                          {"fall_height_m", a.fallHeightM}, {"steps", a.steps}, {"simulated_s", a.simulatedS}});
+                          {"fall_height_m", a.fallHeightM}, {"steps", a.steps}, {"simulated_s", a.simulatedS},
+                          {"rupture_slope_deg", a.ruptureSlopeDeg}});
   return avalanches;
 }
 

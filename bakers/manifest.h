@@ -53,6 +53,7 @@ struct ManifestAvalanche {
   std::string why;
   int releaseCells = 0, footprintCells = 0, steps = 0;
   double releasedM3 = 0, depositM3 = 0, runoutM = 0, fallHeightM = 0, simulatedS = 0;
+  double ruptureSlopeDeg = 0;
 };
 
 // mode = "occlusion": the settings the snow cover came from.

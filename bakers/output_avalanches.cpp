@@ -43,6 +43,8 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
     write(stem.str() + "_release", zero, a.maps->release, which + ": release zone (1 released, 0 not)", "1", a.day);
     write(stem.str() + "_scour", zero, a.maps->scour, which + ": snow taken away, net (m)", "m", a.day);
     write(stem.str() + "_deposit", zero, a.maps->deposit, which + ": snow left, net (m)", "m", a.day);
+    write(stem.str() + "_peak_thickness", zero, a.maps->peakThickness, which + ": peak flowing thickness (m)", "m", a.day);
+    write(stem.str() + "_peak_speed", zero, a.maps->peakSpeed, which + ": peak speed, the fastest pipe (m/s)", "m/s", a.day);
     for (size_t k = 0; k < a.maps->frames.size(); ++k) {
       std::ostringstream rel;
       rel << stem.str() << "/depth." << std::setw(4) << std::setfill('0') << k;

@@ -45,13 +45,13 @@ std::string meshBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string runBench(const BenchOptions& o, std::ostream& log) {
   const int threads = o.threads > 0 ? o.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  static const std::vector<std::string> stages = {"sun", "wind", "season", "avalanche", "occlusion", "mesh", "bedforms", "skiers", "meshsnow", "scaling", "bandwidth", "agreement", "bake", "all"};
+  static const std::vector<std::string> stages = {"sun", "wind", "season", "avalanche", "avalanche-reference", "stability", "occlusion", "mesh", "bedforms", "skiers", "meshsnow", "scaling", "bandwidth", "agreement", "bake", "all"};
   if (o.stage == "scaling-child") {  // internal: one size of the scaling stage, in its own process
     if (o.scalingSizes.size() != 1) throw InputError("--stage scaling-child: needs one size in --sizes");
     return scalingChild(o, o.scalingSizes[0]) + "\n";
   }
   if (std::find(stages.begin(), stages.end(), o.stage) == stages.end())
-    throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all");
+    throw InputError("--stage " + o.stage + ": must be sun, wind, season, avalanche, avalanche-reference, stability, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all");
   const auto t0 = WallClock::now();
   std::string out;
   auto run = [&](const char* name, const std::function<std::string()>& f) {
@@ -65,6 +65,8 @@ std::string runBench(const BenchOptions& o, std::ostream& log) {
   run("wind", [&] { return windBench(o, log, threads) + "\n" + windAccuracyBench(o, log, threads); });
   run("season", [&] { return seasonAccuracyBench(o, log, threads); });
   run("avalanche", [&] { return avalancheBench(o, log, threads) + "\n" + avalancheAccuracyBench(o, log, threads); });
+  run("avalanche-reference", [&] { return avalancheReferenceBench(o, log, threads); });
+  run("stability", [&] { return stabilityBench(o, log, threads); });
   run("occlusion", [&] { return occlusionBench(o, log, threads); });
   run("mesh", [&] { return meshBench(o, log, threads); });
   run("bedforms", [&] { return bedformBench(o, log, threads); });

@@ -10,7 +10,7 @@
 namespace snow {
 
 struct BenchOptions {
-  std::string stage = "all";  // sun | wind | season | avalanche | occlusion | mesh | bedforms | skiers | meshsnow | scaling | bandwidth | agreement | bake | all
+  std::string stage = "all";  // sun | wind | season | avalanche | avalanche-reference | stability | occlusion | mesh | bedforms | skiers | meshsnow | scaling | bandwidth | agreement | bake | all
   int sunSize = 1024;          // grid of the sun-exposure timing table
   int sunAccuracySize = 256;   // grid of the sun-exposure accuracy table (the Embree reference is costly)
   std::vector<int> scalingSizes{256, 512, 1024, 2048, 4096};
@@ -24,6 +24,7 @@ struct BenchOptions {
   std::string backend = "cpu";  // cpu | cuda | auto
   int threads = 0;              // 0 = all cores
   std::string csvDir = "snowbake-bench";  // one CSV per stage; empty: none
+  bool avalancheFit = false;     // avalanche-reference: also the grid search of the flow's friction
   std::string sharedDataDir = "../shared/data";  // real DEMs for the wind table (skipped when absent)
 };
 

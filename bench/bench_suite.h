@@ -40,6 +40,10 @@ void writePlot(const BenchOptions& o, const std::string& name, const std::string
 std::string windAccuracyBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string seasonAccuracyBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string avalancheAccuracyBench(const BenchOptions& o, std::ostream& log, int threads);
+// The AvaFrame com1DFA reference cases of <data>/avaframe/ (bench_avalanche_reference.cpp).
+std::string avalancheReferenceBench(const BenchOptions& o, std::ostream& log, int threads);
+// The stability rates' study (bench_stability.cpp).
+std::string stabilityBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string bandwidthBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string agreementBench(const BenchOptions& o, std::ostream& log, int threads);

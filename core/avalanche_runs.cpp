@@ -35,31 +35,42 @@ bool AvalancheRun::release(int x, int y, double day, double seaLevelTemperatureC
   return releaseFromSnapshot(x, y, day, seaLevelTemperatureC, user);
 }
 
-bool AvalancheRun::trySpontaneous(double cellDraw, double acceptDraw, double day, double seaLevelTemperatureC) {
+double AvalancheRun::steepestDrop(int x, int y) const {
   const GridSpec& g = before_.spec;
-  const size_t cell = std::min(static_cast<size_t>(cellDraw * static_cast<double>(g.cellCount())), g.cellCount() - 1);
-  const int x = static_cast<int>(cell % g.width), y = static_cast<int>(cell / g.width);
-  if (!before_.validCell(x, y)) return false;
-  const int x0 = std::max(0, x - 1), y0 = std::max(0, y - 1), x1 = std::min(g.width, x + 2), y1 = std::min(g.height, y + 2);
-  std::vector<float> depth, unstable;
-  backend_.readCells(x0, y0, x1 - x0, y1 - y0, depth, unstable);
-  const int cols = x1 - x0;
-  auto at = [&](int cx, int cy) { return static_cast<size_t>(cy - y0) * cols + (cx - x0); };
-  const double u = unstable[at(x, y)];
-  if (u < p_.avalancheMinUnstableM) return false;
-  const double a = static_cast<double>(before_.bedrockM(x, y)) + depth[at(x, y)];
+  const double a = surfaceAt(before_, static_cast<size_t>(y) * g.width + x);
   double slope = 0.0;
-  for (int ny = y0; ny < y1; ++ny)
-    for (int nx = x0; nx < x1; ++nx) {
+  for (int ny = std::max(0, y - 1); ny < std::min(g.height, y + 2); ++ny)
+    for (int nx = std::max(0, x - 1); nx < std::min(g.width, x + 2); ++nx) {
       if ((nx == x && ny == y) || !before_.validCell(nx, ny)) continue;
       const double dist = std::hypot((nx - x) * g.cellSizeXM, (ny - y) * g.cellSizeYM);
-      slope = std::max(slope, (a - before_.bedrockM(nx, ny) - depth[at(nx, ny)]) / dist);
+      slope = std::max(slope, (a - surfaceAt(before_, static_cast<size_t>(ny) * g.width + nx)) / dist);
     }
+  return slope;
+}
+
+bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC) {
+  backend_.download(before_);
+  const GridSpec& g = before_.spec;
   const double tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
-  const double factor = before_.avalancheReleaseFactor.size() == g.cellCount() ? before_.avalancheReleaseFactor(x, y) : 1.0;
-  const double probability = std::min(1.0, factor * u * std::max(0.0, slope - tanRest) / std::max(1e-6, 1.0 - tanRest));
-  if (!(acceptDraw < probability)) return false;
-  return release(x, y, day, seaLevelTemperatureC, false);
+  const bool factors = before_.avalancheReleaseFactor.size() == g.cellCount();
+  std::vector<double> cumulative(g.cellCount(), 0.0);
+  double total = 0.0;
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * g.width + x;
+      const double u = before_.unstableM.values()[i];
+      if (before_.validCell.values()[i] && u >= p_.avalancheMinUnstableM) {
+        const double excess = steepestDrop(x, y) - tanRest;
+        const double factor = factors ? before_.avalancheReleaseFactor.values()[i] : 1.0;
+        if (excess > 0.0) total += std::min(1.0, factor * u * excess / std::max(1e-6, 1.0 - tanRest));
+      }
+      cumulative[i] = total;
+    }
+  if (!(total > 0.0)) return false;
+  const double target = cellDraw * total;
+  const size_t cell = std::min(static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()),
+                               g.cellCount() - 1);
+  return releaseFromSnapshot(static_cast<int>(cell % g.width), static_cast<int>(cell / g.width), day, seaLevelTemperatureC, false);
 }
 
 void AvalancheRun::beginRecord(int rx, int ry, double day, bool user) {
@@ -106,6 +117,7 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
     record_.why = "rupture point outside the terrain";
     return false;
   }
+  record_.ruptureSlopeDeg = std::atan(steepestDrop(rx, ry)) * 180.0 / kPi;
   const double minU = p_.avalancheMinUnstableM;
   if (s.unstableM(rx, ry) < minU) {
     record_.why = "no unstable snow at the rupture point (U = " + std::to_string(s.unstableM(rx, ry)) + " m)";
@@ -278,6 +290,8 @@ AvalancheRecord AvalancheRun::settle() {
       }
     record_.maps->scour = crop(scour, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
     record_.maps->deposit = crop(deposit, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
+    record_.maps->peakThickness = crop(after.avalanchePeakThicknessM, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
+    record_.maps->peakSpeed = crop(after.avalanchePeakSpeedMps, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
     if (frameIntervalS_ > 0.0)
       record_.maps->frames.push_back({record_.simulatedS, crop(after.depthGrid(), unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
   }

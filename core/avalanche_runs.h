@@ -43,7 +43,7 @@ struct GridCrop {
 // frames of its motion (snow depth C + S + U + P every frameIntervalS of simulated time), each
 // cropped to where the avalanche was; `depthAtRelease` is the full grid they paste onto.
 struct AvalancheMaps {
-  GridCrop release, scour, deposit;
+  GridCrop release, scour, deposit, peakThickness, peakSpeed;
   Grid<float> depthAtRelease;
   std::vector<std::pair<double, GridCrop>> frames;  // (simulated seconds, depth)
 };
@@ -60,6 +60,7 @@ struct AvalancheRecord {
   double depositM3 = 0;      // net gain summed over the cells that gained
   double runoutM = 0;        // horizontal distance from the rupture point to the farthest deposit (> 1 cm)
   double fallHeightM = 0;    // snow-surface altitude at the rupture point minus that of the lowest deposit
+  double ruptureSlopeDeg = 0;  // the snow surface's steepest drop to an 8-neighbour at the rupture point
   int steps = 0, substeps = 0;
   double simulatedS = 0;     // simulated duration
   double seconds = 0;        // wall-clock time, release and deposit included
@@ -81,12 +82,13 @@ class AvalancheRun {
   // least avalanche_min_unstable_m of unstable snow, as one avalanche; its rupture point (for
   // runout and fall height) is the zone's highest released cell. False when none holds any.
   bool releaseZone(const std::vector<uint8_t>& zone, double day, double seaLevelTemperatureC, bool user);
-  // A spontaneous release try (§6.1's "low per-cell probability"): the cell drawn uniformly from
-  // `cellDraw`, released when `acceptDraw` < min(1, U / 1 m x (s - tan theta_c) / (1 - tan theta_c)),
-  // s the steepest drop of the snow surface to an 8-neighbour: one metre of unstable snow at 45
-  // degrees always releases, nothing releases below the rest angle. Reads only the 3 x 3 cells.
-  // The scene's avalanche_release multiplier (state.avalancheReleaseFactor) scales the probability.
-  bool trySpontaneous(double cellDraw, double acceptDraw, double day, double seaLevelTemperatureC);
+  // A spontaneous release (§6.1): the rupture cell drawn by `cellDraw` among the cells that can
+  // release, each weighted by how unstable it is, min(1, U / 1 m x (s - tan theta_c) / (1 - tan theta_c))
+  // (s the steepest drop of the snow surface to an 8-neighbour; U >= avalanche_min_unstable_m;
+  // times the scene's avalanche_release multiplier): nothing releases below the rest angle, and
+  // nothing at all where no cell can (false). Downloads the state; weights summed in row order in
+  // double, so the draw is the same on every backend and thread count.
+  bool trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC);
   bool active() const { return active_; }
   bool atRest() const { return atRest_; }
   // One step of avalanche_step_s. Returns true when the snow has come to rest (or the duration
@@ -106,6 +108,8 @@ class AvalancheRun {
 
  private:
   bool releaseFromSnapshot(int x, int y, double day, double seaLevelTemperatureC, bool user);
+  // tan of the steepest drop of the snapshot's snow surface from (x, y) to a valid 8-neighbour.
+  double steepestDrop(int x, int y) const;
   void beginRecord(int rx, int ry, double day, bool user);
   // Sets the cells of `moving` in motion from the snapshot (records, box, substep arguments).
   void start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, std::chrono::steady_clock::time_point t0);

@@ -35,8 +35,8 @@ struct ModelParameters {
   double warmTemperatureC = 5.0;             // T_warm
   double coolTemperatureC = -5.0;            // T_cool
   double freezeTemperatureC = -20.0;         // T_freeze
-  double instabilityByWarmthMPerDay = 1e4;   // k_w, as printed in Table 2
-  double stabilityByColdMPerDay = 1e4;       // k_c, as printed in Table 2
+  double instabilityByWarmthMPerDay = 1.0;   // k_w (Table 2 prints 1e4: an all-or-nothing switch; docs/models/season.md)
+  double stabilityByColdMPerDay = 0.3;       // k_c (Table 2: 1e4): a storm's unstable snow halves in ~2 days at T_cool
   // --- §5.3 powder diffusion and §5.4 wind transport
   double diffusionRestSlope = 0.5;           // s_d0
   double diffusionRatePerDay = 0.5;          // k_m, defined at the paper's 10 m cells (see powder_diffusion.h)
@@ -67,6 +67,9 @@ struct ModelParameters {
   double avalancheDryTemperatureC = -10.0;    // alpha = 1 (granular) at or below
   double avalancheWetTemperatureC = 0.0;      // alpha = 0 (viscous) at or above
   double avalancheWetGranularFraction = 0.2;  // alpha of wet snow: the granular friction it keeps
+  double avalancheDynamicFrictionDeg = 14.0;  // delta: Coulomb friction angle while snow flows (theta_c: to start and stop)
+  double avalancheTurbulenceMps2 = 500.0;     // xi: Voellmy's turbulent drag g s^2 / (xi h); 0: none
+                                              // (both fitted to AvaFrame com1DFA: docs/models/avalanches.md)
   double avalancheRatePerKm2PerDay = 1.0 / 7.0;  // spontaneous releases: about one a week per km^2
   double avalancheReachMPerM = 50.0;          // release reach: metres per metre of unstable snow at the rupture
   double avalancheMinUnstableM = 0.05;        // no release where U is thinner

@@ -23,7 +23,7 @@ void SeasonRun::startAvalanche(int slot, const EventContext& e) {
       const RandomKey key{cfg_.seed};
       const Philox4x32 r = key.draw(e.eventIndex, 0, RngStream::Avalanche);
       ++report_.avalancheTries;
-      avalanche_->trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), uniformOpenDouble(r.v[2], r.v[3]), e.day, t0);
+      avalanche_->trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), e.day, t0);
     }
   });
 }
@@ -42,8 +42,9 @@ void SeasonRun::stopAvalanche(int slot) {
   }
 }
 
-// Avalanches (§6.1): spontaneous release tries at about one a week per km^2 (each at a random
-// cell, released with a probability from its unstable depth and slope above the rest angle),
+// Avalanches (§6.1): spontaneous releases at about one a week per km^2, each at a cell drawn
+// among those that can release, weighted by their unstable depth and slope above the rest angle
+// (AvalancheRun::trySpontaneous; none where no cell can),
 // and the scene's user releases. A zoomed phenomenon: while one runs, its steps of 0.1 s are
 // the only events (§3.1's temporal zoom). The runner (which keeps host copies of the state)
 // exists only when the season can have avalanches.

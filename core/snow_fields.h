@@ -70,6 +70,12 @@ constexpr bool optionalField(FieldRole r) {
   X(meltedM, melted, float, Record, Mutable, 0.f)                                                  \
   X(avalancheScourM, avalancheScour, float, Record, Mutable, 0.f)                                  \
   X(avalancheDepositM, avalancheDeposit, float, Record, Mutable, 0.f)                              \
+  /* avalanches' peak flowing thickness (m, the moving snow's depth) and speed (m/s, the fastest  \
+     pipe at the cell): over the current avalanche (reset at release) and over the season */      \
+  X(avalanchePeakThicknessM, avalanchePeakThickness, float, Record, Mutable, 0.f)                  \
+  X(avalanchePeakSpeedMps, avalanchePeakSpeed, float, Record, Mutable, 0.f)                        \
+  X(avalancheSeasonPeakThicknessM, avalancheSeasonPeakThickness, float, Record, Mutable, 0.f)      \
+  X(avalancheSeasonPeakSpeedMps, avalancheSeasonPeakSpeed, float, Record, Mutable, 0.f)            \
   /* Art direction (the scene's [multipliers], mapped from painted rasters): per-cell factors on  \
      a phenomenon, absent = 1 everywhere */                                                        \
   X(snowfallFactor, snowfallFactor, float, ArtDirection, Const, 1.f)                               \
@@ -115,6 +121,8 @@ enum class ScratchExtent {
   X(flows, float, AvalanchePipes)                                                                  \
   X(avalancheBefore, float, AvalancheCell)                                                         \
   X(avalancheU, double, AvalancheCell)                                                             \
+  /* 1 where snow crossed the cell's pipes in the last substep: dynamic friction, else static */  \
+  X(avalancheFlowing, uint8_t, AvalancheCell)                                                      \
   X(rowStats, float, AvalancheRows)
 
 constexpr bool madeWithState(ScratchExtent e) { return e == ScratchExtent::Cell || e == ScratchExtent::PowderShares; }

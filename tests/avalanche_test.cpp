@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -143,6 +145,80 @@ TEST(Avalanche, WetSnowRunsOutFartherAndThinnerThanDry) {
   EXPECT_LT(maxDeposit[1], maxDeposit[0]);
 }
 
+// Static and dynamic friction (docs/models/avalanches.md): snow released on a steep slope keeps
+// flowing down a run-out of slope 0.4 (21.8 degrees: steeper than delta = 14, gentler than the
+// rest angle, where snow at rest never starts); with delta = theta_c (one angle for all) it stops.
+TEST(Avalanche, FlowingSnowCrossesSlopesBetweenTheDynamicAndTheRestAngle) {
+  auto slope = [](double, double y) { return y < 60.0 ? 2000.0 - 1.2 * y : 2000.0 - 72.0 - 0.4 * (y - 60.0); };
+  double reach[2] = {0, 0};
+  for (int oneAngle = 0; oneAngle < 2; ++oneAngle) {
+    SnowState s = test::terrainFrom(40, 200, 2.0, -20.f, slope);
+    for (int y = 5; y < 25; ++y)
+      for (int x = 12; x < 28; ++x) s.unstableM(x, y) = 1.f;
+    ModelParameters p;
+    if (oneAngle) p.avalancheDynamicFrictionDeg = p.avalancheRestAngleDeg;
+    const Outcome o = runAvalanche(s, 20, 15, p);
+    for (int y = 0; y < 200; ++y)
+      for (int x = 0; x < 40; ++x)
+        if (o.state.stableM(x, y) > 0.01f) reach[oneAngle] = std::max(reach[oneAngle], 2.0 * y);
+  }
+  std::printf("[ measure ] farthest deposit: %.0f m with delta 14, %.0f m with delta = theta_c (slope break at 60 m)\n", reach[0], reach[1]);
+  EXPECT_GT(reach[0], 200.0);  // 140 m or more down the 0.4 run-out
+  EXPECT_LT(reach[1], 100.0);
+}
+
+// The peak records: each avalanche's deepest moving snow and fastest pipe, reset at its release,
+// and the season's maximum over every avalanche.
+TEST(Avalanche, PeakFieldsHoldEachAvalanchesAndTheSeasonsMaximum) {
+  SnowState s = test::terrainFrom(60, 120, 2.0, -20.f, [](double, double y) { return 2000.0 - 1.2 * y; });
+  for (int y = 10; y < 20; ++y)
+    for (int x = 5; x < 15; ++x) s.unstableM(x, y) = 1.f, s.unstableM(x + 40, y) = 2.f;
+  auto backend = createCpuBackend();
+  backend->upload(s);
+  AvalancheRun run(*backend, ModelParameters{}, s);
+  ASSERT_TRUE(run.release(10, 15, 0.0, 0.0, true));
+  run.runToRest();
+  SnowState first = s;
+  backend->download(first);
+  ASSERT_TRUE(run.release(50, 15, 0.0, 0.0, true));
+  run.runToRest();
+  SnowState second = s;
+  backend->download(second);
+  EXPECT_FLOAT_EQ(first.avalanchePeakThicknessM(10, 15), 1.f);  // the release depth, its deepest
+  EXPECT_GT(first.avalanchePeakSpeedMps(10, 15), 0.f);
+  EXPECT_EQ(first.avalanchePeakThicknessM(50, 15), 0.f);
+  EXPECT_EQ(second.avalanchePeakThicknessM(10, 15), 0.f);       // reset at the second release
+  EXPECT_FLOAT_EQ(second.avalancheSeasonPeakThicknessM(10, 15), 1.f);
+  EXPECT_GE(second.avalancheSeasonPeakThicknessM(50, 15), 2.f);
+  const double freeFall = std::sqrt(2.0 * 9.81 * 1.2 * 2.0 * 120.0);
+  for (size_t i = 0; i < s.spec.cellCount(); ++i) {
+    EXPECT_EQ(second.avalancheSeasonPeakSpeedMps.values()[i],
+              std::max(first.avalanchePeakSpeedMps.values()[i], second.avalanchePeakSpeedMps.values()[i]));
+    EXPECT_LE(second.avalancheSeasonPeakSpeedMps.values()[i], freeFall);
+  }
+}
+
+// Spontaneous releases start only where a cell can release: none on a plane gentler than the
+// rest angle however deep its unstable snow, and on a steep one at a cell steeper than it.
+TEST(Avalanche, SpontaneousReleasesOnlyWhereACellCanRelease) {
+  for (double slope : {0.5, 1.0}) {
+    SnowState s = test::terrainFrom(30, 30, 5.0, -20.f, [slope](double, double y) { return 2000.0 - slope * y; });
+    s.unstableM.fill(2.f);  // everywhere: a patch's edge would be a step steeper than the plane
+    auto backend = createCpuBackend();
+    backend->upload(s);
+    AvalancheRun run(*backend, ModelParameters{}, s);
+    const bool released = run.trySpontaneous(0.5, 0.0, 0.0);
+    if (slope < kTan30) {
+      EXPECT_FALSE(released);
+    } else {
+      ASSERT_TRUE(released);
+      const AvalancheRecord& r = run.record();
+      EXPECT_GE(s.unstableM(r.ruptureX, r.ruptureY), 2.f);
+      EXPECT_GT(r.ruptureSlopeDeg, 30.0);
+    }
+  }
+}
+
 // Random rough terrains (cliffs, spikes, NODATA holes) with random releases, a release at the
 // top of a vertical cliff and 1 m of snow on 5 m cells: no NaN, no negative snow, mass kept,
 // flows bounded by free fall from the highest snow.
@@ -250,14 +326,20 @@ TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
   const Grid<float> scour = readFloatImage((dir / "out" / "avalanche_scour.exr").string());
   double depositM3 = 0, scourM3 = 0, depositAltitude = 0, hollow = 0, weight = 0;
   const int w = bed.width(), h = bed.height();
+  const float lowest = *std::min_element(bed.values().begin(), bed.values().end());  // what NODATA cells hold
+  for (float v : deposit.values()) depositM3 += v * 25.0;
+  for (float v : scour.values()) scourM3 += v * 25.0;
   for (int y = 10; y < h - 10; ++y)
     for (int x = 10; x < w - 10; ++x) {
-      depositM3 += deposit(x, y) * 25.0;
-      scourM3 += scour(x, y) * 25.0;
       if (deposit(x, y) < 0.5f) continue;
       double ring = 0;
-      for (int k = 0; k < 16; ++k) ring += bed(x + static_cast<int>(std::lround(10 * std::cos(k * 0.3927))),
-                                               y + static_cast<int>(std::lround(10 * std::sin(k * 0.3927))));
+      bool ringValid = true;  // the ring's mean means something only on the terrain
+      for (int k = 0; k < 16; ++k) {
+        const float b = bed(x + static_cast<int>(std::lround(10 * std::cos(k * 0.3927))), y + static_cast<int>(std::lround(10 * std::sin(k * 0.3927))));
+        ring += b;
+        ringValid = ringValid && b > lowest;
+      }
+      if (!ringValid) continue;
       hollow += (ring / 16 - bed(x, y)) * deposit(x, y);
       depositAltitude += bed(x, y) * deposit(x, y);
       weight += deposit(x, y);

@@ -4,7 +4,7 @@
 //   snowbake demo [--out DIR]
 //   snowbake info FILE [--json] [--set KEY=VALUE]...
 //   snowbake help scene [--markdown]
-//   snowbake bench [--stage sun|wind|season|avalanche|occlusion|mesh|bedforms|skiers|meshsnow|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
+//   snowbake bench [--stage sun|wind|season|avalanche|avalanche-reference|stability|occlusion|mesh|bedforms|skiers|meshsnow|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
 //                  [--backend cpu|cuda|auto] [--sun-size N] [--csv-dir DIR] [--data DIR]
 //   snowbake --version | --help
 // Exit status: 0 success, 2 usage or input error (one line naming the file and the problem),
@@ -108,10 +108,11 @@ void addBenchCommand(CLI::App& app, BenchCommand& c) {
       ->capture_default_str();
   c.cmd->add_option("--threads", o.threads, "CPU threads, 0 = all cores");
   c.cmd->add_option("--sun-size", o.sunSize, "Grid size of the sun-exposure timing table")->capture_default_str();
-  c.cmd->add_option("--stage", o.stage, "sun, wind, season, avalanche, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all")
-      ->check(CLI::IsMember({"sun", "season", "wind", "avalanche", "occlusion", "mesh", "bedforms", "skiers", "meshsnow", "scaling", "bandwidth", "agreement", "bake", "all", "scaling-child"}))
+  c.cmd->add_option("--stage", o.stage, "sun, wind, season, avalanche, avalanche-reference, stability, occlusion, mesh, bedforms, skiers, meshsnow, scaling, bandwidth, agreement, bake or all")
+      ->check(CLI::IsMember({"sun", "season", "wind", "avalanche", "avalanche-reference", "stability", "occlusion", "mesh", "bedforms", "skiers", "meshsnow", "scaling", "bandwidth", "agreement", "bake", "all", "scaling-child"}))
       ->capture_default_str();
   c.cmd->add_option("--csv-dir", o.csvDir, "Folder for the CSV files (empty: none)")->capture_default_str();
+  c.cmd->add_flag("--fit", o.avalancheFit, "avalanche-reference: also run the grid search of the flow's friction (about 2 minutes)");
   c.cmd->add_option("--data", o.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();
 }
 

@@ -9,7 +9,9 @@ namespace snow {
 struct AvalancheArgs {
   float dtS = 0.01f;                 // substep, seconds
   float gravity = 9.81f;
-  float tanRestAngle = 0.57735f;     // tan(theta_c), 30 degrees
+  float tanRestAngle = 0.57735f;     // tan(theta_c), 30 degrees: static friction (start, stop)
+  float tanDynamicAngle = 0.57735f;  // tan(delta): Coulomb friction while the source cell flows
+  float inverseDragMps2 = 0.f;       // 1 / xi (Voellmy's turbulent drag g s^2 / (xi h)); 0: none
   float viscosity = 5e-4f;           // k_v
   float dryTemperatureC = -10.f;     // alpha = 1 (granular) at or below
   float wetTemperatureC = 0.f;       // alpha = alphaWet (mostly viscous) at or above
@@ -73,7 +75,8 @@ struct AvalancheFlowKernel {
         continue;
       }
       const float alpha = avalancheAlpha(a, a.seaLevelTemperatureC + v.temperatureBase[src]);
-      const float friction = a.dtS * c * alpha * a.gravity * a.tanRestAngle;
+      const float mu = v.avalancheFlowing[src] ? a.tanDynamicAngle : a.tanRestAngle;
+      const float friction = a.dtS * c * alpha * a.gravity * mu;
       const float magnitude = fabsf(phi);
       if (magnitude <= friction) {
         f[d] = 0.f;
@@ -81,6 +84,8 @@ struct AvalancheFlowKernel {
       }
       phi = phi > 0.f ? magnitude - friction : friction - magnitude;
       phi = phi / (1.f + a.dtS * (1.f - alpha) * a.viscosity * v.unstable[src]);
+      if (a.inverseDragMps2 > 0.f)  // implicit, like the viscosity: it only slows the flow
+        phi = phi / (1.f + a.dtS * a.gravity * a.inverseDragMps2 * (fabsf(phi) / c) / maxf(v.unstable[src], 1e-3f));
       f[d] = phi;
     }
   }
@@ -139,6 +144,7 @@ struct AvalancheHeightKernel {
       const float g = v.flows[4 * static_cast<size_t>(v.index(nx, ny)) + d];
       if (g > 0.f) in += g; else out -= g;
     }
+    v.avalancheFlowing[i] = in > 0.0 || out > 0.0;
     if (in == 0.0 && out == 0.0) return;
     const double c = static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
     double u = v.avalancheU[i];
@@ -151,6 +157,14 @@ struct AvalancheHeightKernel {
     u = u > 0.0 ? u : 0.0;
     v.avalancheU[i] = u;
     v.unstable[i] = static_cast<float>(u);
+    float speed = 0.f;  // the fastest of the cell's eight pipes, as the row statistics read them
+    for (int d = 0; d < 4; ++d) {
+      speed = maxf(speed, fabsf(f[d]));
+      const int nx = x - pipeDx(d), ny = y - pipeDy(d);
+      if (v.inside(nx, ny)) speed = maxf(speed, fabsf(v.flows[4 * static_cast<size_t>(v.index(nx, ny)) + d]));
+    }
+    v.avalanchePeakSpeed[i] = maxf(v.avalanchePeakSpeed[i], speed / static_cast<float>(c));
+    v.avalanchePeakThickness[i] = maxf(v.avalanchePeakThickness[i], v.unstable[i]);
   }
 };
 
@@ -214,6 +228,9 @@ struct AvalancheReleaseKernel {
       v.powder[i] = 0.f;
     }
     v.avalancheU[i] = v.unstable[i];
+    v.avalanchePeakSpeed[i] = 0.f;
+    v.avalanchePeakThickness[i] = v.moving[i] && v.valid[i] ? v.unstable[i] : 0.f;
+    v.avalancheFlowing[i] = 0;
   }
 };
 
@@ -229,6 +246,8 @@ struct AvalancheSettleKernel {
     const float net = (v.unstable[i] + v.powder[i]) - v.avalancheBefore[i];
     if (net > 0.f) v.avalancheDeposit[i] = v.avalancheDeposit[i] + net;
     if (net < 0.f) v.avalancheScour[i] = v.avalancheScour[i] - net;
+    v.avalancheSeasonPeakThickness[i] = maxf(v.avalancheSeasonPeakThickness[i], v.avalanchePeakThickness[i]);
+    v.avalancheSeasonPeakSpeed[i] = maxf(v.avalancheSeasonPeakSpeed[i], v.avalanchePeakSpeed[i]);
     if (v.moving[i]) {
       v.stable[i] = v.stable[i] + v.unstable[i];
       v.unstable[i] = 0.f;

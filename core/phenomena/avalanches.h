@@ -56,6 +56,8 @@ inline AvalancheArgs makeAvalancheArgs(const ModelParameters& p, double seaLevel
   a.wetTemperatureC = static_cast<float>(p.avalancheWetTemperatureC);
   a.seaLevelTemperatureC = static_cast<float>(seaLevelTemperatureC);
   a.alphaWet = static_cast<float>(p.avalancheWetGranularFraction);
+  a.tanDynamicAngle = static_cast<float>(std::tan(p.avalancheDynamicFrictionDeg * kPi / 180.0));
+  a.inverseDragMps2 = p.avalancheTurbulenceMps2 > 0.0 ? static_cast<float>(1.0 / p.avalancheTurbulenceMps2) : 0.f;
   return a;
 }
 
