@@ -26,7 +26,7 @@ constexpr bool kSanitized = false;
 
 struct Outcome {
   int status;
-  std::string err;
+  std::string err, out;
 };
 
 fs::path workDir() {
@@ -44,9 +44,9 @@ std::string slurp(const fs::path& p) {
 }
 
 Outcome shell(const fs::path& dir, const std::string& cmd) {
-  const std::string err = (dir / "stderr.txt").string();
-  const int raw = std::system((cmd + " >/dev/null 2>'" + err + "' </dev/null").c_str());
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(err)};
+  const std::string err = (dir / "stderr.txt").string(), out = (dir / "stdout.txt").string();
+  const int raw = std::system((cmd + " >'" + out + "' 2>'" + err + "' </dev/null").c_str());
+  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(err), slurp(out)};
 }
 
 Outcome bake(const fs::path& dir, const std::string& args, const std::string& prefix = "") {
@@ -61,10 +61,9 @@ TEST(MemoryModel, SmallScenesPredictTheMeasuredPeakWithin25Percent) {
   if (kSanitized) GTEST_SKIP() << "the sanitizer build's resident set is not the bake's";
   if (!fs::exists("/usr/bin/time")) GTEST_SKIP() << "/usr/bin/time is absent (Debian's package time; tools/setup-debian.sh installs it)";
   const fs::path dir = workDir();
-  const Outcome r = shell(dir, "bash '"s + SNOWBAKE_SOURCE_DIR + "/tools/measure-memory.sh' --small --csv '" + SNOWBAKE_BINARY + "' > '" +
-                               (dir / "table.csv").string() + "'");
+  const Outcome r = shell(dir, "bash '"s + SNOWBAKE_SOURCE_DIR + "/tools/measure-memory.sh' --small --csv '" + SNOWBAKE_BINARY + "'");
   ASSERT_EQ(r.status, 0) << r.err;
-  std::istringstream table(slurp(dir / "table.csv"));
+  std::istringstream table(r.out);
   std::string line;
   std::getline(table, line);  // the header
   int rows = 0;
@@ -72,8 +71,9 @@ TEST(MemoryModel, SmallScenesPredictTheMeasuredPeakWithin25Percent) {
     std::vector<std::string> cells;
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-    ASSERT_EQ(cells.size(), 5u) << line;
-    const double predicted = std::stod(cells[1]), measured = std::stod(cells[2]);
+    ASSERT_GE(cells.size(), 5u) << line;  // the scene's name may hold commas: the four numbers and the phase end the line
+    const size_t n = cells.size();
+    const double predicted = std::stod(cells[n - 4]), measured = std::stod(cells[n - 3]);
     EXPECT_LE(std::abs(predicted - measured), 0.25 * measured) << line;
     ++rows;
   }
