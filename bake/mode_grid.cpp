@@ -6,11 +6,14 @@
 #include <algorithm>
 #include <filesystem>
 #include <iomanip>
+#include <optional>
 
+#include "bake_stage.h"
 #include "bakers/bake_manifest.h"
 #include "core/atomic_file.h"
 #include "core/errors.h"
 #include "core/format.h"
+#include "memory_model.h"
 #include "modes.h"
 #include "stages.h"
 
@@ -48,6 +51,33 @@ GeoFrame geoFrameOf(const TerrainInfo& ti) {
   return g;
 }
 
+// The memory model's prediction for the grid, logged; refused above the budget before any work.
+void checkGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, std::ostream& log) {
+  refuseBeyondTheModel(scene, spec);
+  const MemoryPrediction p = predictGridBake(scene, spec, occluderTriangles);
+  const double budget = memoryBudgetBytes(scene);
+  refuseAboveBudget(scene, p, budget);
+  log << "memory: " << p.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
+}
+
+// A builtin terrain's grid is known before it is made: refused before it is generated.
+void checkBuiltinMemory(const Scene& scene) {
+  const TerrainSource& t = scene.terrain;
+  if (!t.builtin || t.cropM || t.resampleCellSizeM || t.resampleSize) return;
+  const DefaultTerrainOptions& b = t.builtinOptions;
+  GridSpec spec;
+  spec.width = spec.height = b.size;
+  spec.cellSizeXM = spec.cellSizeYM = b.cellSizeM;
+  refuseBeyondTheModel(scene, spec);
+  refuseAboveBudget(scene, predictGridBake(scene, spec, 0), memoryBudgetBytes(scene));
+}
+
+size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
+  size_t n = 0;
+  for (const auto& m : meshes) n += m.triangles.size();
+  return n;
+}
+
 }  // namespace
 
 void createOutputFolder(const std::string& dir) {
@@ -57,18 +87,23 @@ void createOutputFolder(const std::string& dir) {
 }
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
+  checkBuiltinMemory(scene);
+  std::optional<BakeStage> stage(std::in_place, "terrain");
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
+  checkGridMemory(scene, terrain.info().spec, triangleCount(terrain.occluders), log);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
 
   // Painted rasters first: a bad mask fails before any precompute runs; so do bedform parameters
   // that do not suit the grid.
+  stage.emplace("inputs and art direction");
   SnowState state = initialState(terrain);
   const ArtDirectionPlan art = prepareArtDirection(scene, terrain.info(), state, log);
   if (scene.bedforms.enabled && !occlusionMode)
     if (const std::string problem = validateBedformParameters(scene.bedforms.params, state.spec); !problem.empty())
       throw InputError(scene.sourceName + ": " + problem);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
+  stage.emplace("precompute");
   const Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
 
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : chooseBackend(scene.backend, log);
@@ -85,14 +120,17 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
                       log);
   SeasonReport report;
   if (occlusionMode) {
+    stage.emplace("occlusion");
     runOcclusion(scene, terrain, state, occlusion, log);
     report = occlusion.report;
   } else {
+    stage.emplace("season");
     const SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
     report = runSeasonStage(scene, options, threads, *backend, state, config, seasonOutputs, writer, log);
   }
 
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
+  stage.emplace("outputs");
   const auto t0 = WallClock::now();
   writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);

@@ -1,6 +1,7 @@
 // mode = "mesh": Fearing's snow on the mesh itself (docs/models/snow-on-meshes.md): placement,
 // stability, the snow body as meshes and a VDB, and a manifest.
 #include <filesystem>
+#include <optional>
 
 #include "bakers/manifest.h"
 #include "bakers/mesh_snow_body.h"
@@ -8,6 +9,8 @@
 #include "core/atomic_file.h"
 #include "core/format.h"
 #include "core/hash.h"
+#include "bake_stage.h"
+#include "memory_model.h"
 #include "modes.h"
 #include "static_snow/fallen_snow.h"
 
@@ -47,16 +50,25 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   BakeResult result;
   result.backendName = "cpu (Embree ray queries, TBB)";
   auto t0 = WallClock::now();
+  std::optional<BakeStage> stage(std::in_place, "mesh");
   const TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (const auto& p : mesh.positions)
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
   log << "mode: mesh (Fearing 2000: snow on the mesh itself; no grid, no season)\n";
+  {
+    const double extent[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    const MemoryPrediction p = predictMeshBake(scene, mesh.triangles.size(), extent);
+    const double budget = memoryBudgetBytes(scene);
+    refuseAboveBudget(scene, p, budget);
+    log << "memory: " << p.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
+  }
   log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
       << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   t0 = WallClock::now();
   FallenSnowSettings placement = scene.meshSnow.placement;
   placement.seed = scene.seed;
+  stage.emplace("placement");
   FallenSnow snow = placeFallenSnow(mesh, placement);
   log << "placement: " << snow.sites.size() << " sites (" << snow.refinedCells << " cells refined), " << snow.flakes << " flakes ("
       << snow.blocked << " blocked, " << snow.leftTheWorld << " left the world), sky " << fixed(snow.skyMassM3, 4) << " m^3, placed "
@@ -64,6 +76,7 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   t0 = WallClock::now();
   FallenSnowStability stability = scene.meshSnow.stability;
   stability.seed = scene.seed;
+  stage.emplace("stability");
   const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, stability);
   log << "stability: " << st.rounds << " rounds, " << st.passes << " passes"
       << (st.unconvergedRounds ? " (" + std::to_string(st.unconvergedRounds) + " rounds hit the pass limit)" : std::string()) << ", "
@@ -73,6 +86,7 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   createOutputFolder(options.outDir);
   const MeshSnowBodyOptions& bo = scene.meshSnow.body;
   const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / "snow.vdb").string() : std::string();
+  stage.emplace("snow body");
   const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo, vdbPath);
   log << "snow body: " << body.snowVoxels << " voxels of " << fixed(body.voxelSizeM, 4) << " m, " << body.mesh.triangles.size()
       << " triangles (" << fixed(body.seconds, 2) << " s)\n";

@@ -255,7 +255,8 @@ std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads
     auto backend = backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
     backend->upload(s);
     const double before = backend->totals().totalM3();
-    AvalancheRun run(*backend, ModelParameters{}, s);
+    const ModelParameters params;
+    AvalancheRun run(*backend, params, s);
     if (!run.release(size / 2, size / 2, 0.0, 0.0, true)) throw std::runtime_error("the benchmark avalanche did not release");
     const AvalancheRecord r = run.runToRest();
     const double error = std::abs(backend->totals().totalM3() - before) / before;

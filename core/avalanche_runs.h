@@ -75,6 +75,9 @@ class AvalancheRun {
  public:
   // `terrain` supplies the grid, bedrock and valid cells (the backend holds the snow).
   AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain);
+  // It keeps a reference to the parameters: a temporary would dangle (AddressSanitizer found
+  // three callers doing so: stack-use-after-scope).
+  AvalancheRun(SnowBackend& backend, ModelParameters&& params, const SnowState& terrain) = delete;
   // Releases at cell (x, y) of the current backend state. Returns false (and says why in the
   // record) when there is no unstable snow to release there.
   bool release(int x, int y, double day, double seaLevelTemperatureC, bool user);

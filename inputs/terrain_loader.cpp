@@ -20,9 +20,11 @@ namespace snow {
 
 namespace {
 constexpr int kMinCellsPerSide = 3;
-// What a bake holds per cell: about 14 float fields and 2 byte fields, plus the frames and
-// writers' copies. A grid needing more than 80% of physical memory is refused up front.
-constexpr double kBytesPerCell = 96.0;
+// What reading a grid holds per cell: the heights and validity (5 bytes) and the reader's
+// buffer (a heightmap's pixels as floats, up to four channels). A grid whose reading alone would
+// pass 80 % of physical memory is refused before it is read; the whole bake is checked after
+// loading by the memory model (bake/memory_model.h), against run.max_memory_gb.
+constexpr double kBytesPerCell = 32.0;
 
 }  // namespace
 
@@ -45,7 +47,7 @@ void checkGridSize(const std::string& what, int64_t w, int64_t h) {
   if (needed > available || w > (1 << 24) || h > (1 << 24)) {
     std::ostringstream o;
     o << what << ": grid " << w << " x " << h << " needs about " << std::fixed << std::setprecision(1) << needed / (1ull << 30)
-      << " GiB to bake; this machine has " << available / 0.8 / (1ull << 30)
+      << " GiB to read; this machine has " << available / 0.8 / (1ull << 30)
       << " GiB: resample it (terrain.resample_cell_size_m) or crop it";
     throw InputError(o.str());
   }

@@ -152,6 +152,8 @@ struct Scene {
   uint64_t seed = 1;
   BackendChoice backend = BackendChoice::Auto;
   int threads = 0;               // 0 = all cores
+  std::optional<double> maxMemoryGb;  // run.max_memory_gb; none: 80 % of MemAvailable (bake/memory_model.h)
+  std::map<std::string, std::string> keyLocations;  // "scene.toml:12" of every key given, by dotted path, for messages
   std::string canonicalToml;     // the merged, validated document (hashed into the manifest)
 
   int startDayOfYear() const;

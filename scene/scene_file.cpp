@@ -497,6 +497,16 @@ void validateMode(const Scene& scene, const toml::table& root, const std::string
 // The keys bound to the Scene go in first (each checks only its own value); the masks before
 // them, since rasters (initial_snow, multipliers, bedforms.mask) may name one; then the arrays of
 // tables and the checks across keys.
+// Where each key was given (the tables' keys, not those inside arrays of tables), for checks
+// made after loading (the memory model's).
+void recordKeyLocations(const toml::table& table, const std::string& prefix, const std::string& source, Scene& scene) {
+  for (auto&& [key, node] : table) {
+    const std::string path = prefix.empty() ? std::string(key.str()) : prefix + "." + std::string(key.str());
+    scene.keyLocations[path] = where(source, node.source());
+    if (const toml::table* t = node.as_table()) recordKeyLocations(*t, path, source, scene);
+  }
+}
+
 Scene buildScene(const toml::table& root, const std::string& source, const std::string& baseDir) {
   Scene scene;
   scene.sourceName = source;
@@ -515,6 +525,7 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   validateOcclusion(scene, root, source);
   validateMeshSnow(scene, root, source);
   validateMode(scene, root, source);
+  recordKeyLocations(root, "", source, scene);
 
   std::ostringstream canonical;
   canonical << root;

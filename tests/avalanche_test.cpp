@@ -175,7 +175,8 @@ TEST(Avalanche, PeakFieldsHoldEachAvalanchesAndTheSeasonsMaximum) {
     for (int x = 5; x < 15; ++x) s.unstableM(x, y) = 1.f, s.unstableM(x + 40, y) = 2.f;
   auto backend = createCpuBackend();
   backend->upload(s);
-  AvalancheRun run(*backend, ModelParameters{}, s);
+  const ModelParameters params;
+  AvalancheRun run(*backend, params, s);
   ASSERT_TRUE(run.release(10, 15, 0.0, 0.0, true));
   run.runToRest();
   SnowState first = s;
@@ -206,7 +207,8 @@ TEST(Avalanche, SpontaneousReleasesOnlyWhereACellCanRelease) {
     s.unstableM.fill(2.f);  // everywhere: a patch's edge would be a step steeper than the plane
     auto backend = createCpuBackend();
     backend->upload(s);
-    AvalancheRun run(*backend, ModelParameters{}, s);
+    const ModelParameters params;
+    AvalancheRun run(*backend, params, s);
     const bool released = run.trySpontaneous(0.5, 0.0, 0.0);
     if (slope < kTan30) {
       EXPECT_FALSE(released);

@@ -12,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <new>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -19,6 +20,7 @@
 
 #include "core/errors.h"
 #include "bake/bake.h"
+#include "bake/bake_stage.h"
 #include "bench/bench.h"
 #include "scene/scene_reference.h"
 #include "tools/info.h"
@@ -207,6 +209,12 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << "snowbake: error: " << e.what() << "\n";
     return 2;
+  } catch (const std::bad_alloc&) {
+    // The memory model refuses what it predicts will not fit; this is what it did not foresee.
+    const std::string stage = currentBakeStage();
+    std::cerr << "snowbake: failed: out of memory" << (stage.empty() ? std::string() : " during the " + stage + " stage")
+              << " (the memory model's prediction was short: see docs/memory.md; lower run.max_memory_gb or bake a smaller grid)\n";
+    return 1;
   } catch (const std::exception& e) {
     std::cerr << "snowbake: failed: " << e.what() << "\n";
     return 1;

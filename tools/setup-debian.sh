@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what snowbake needs on Debian 12, if it is missing. Idempotent: does nothing (and
 # needs no network) when every package is already there. Runs apt-get as root, or through sudo.
+# `time` (GNU time) measures the peak memory tests/memory_model_test.cpp and
+# tools/measure-memory.sh compare with the memory model.
 # --with-blender also installs Blender 3.4, which the test suite uses as a real client of the
 # outputs (tests/blender_test.cpp); the bake itself never needs it.
 set -euo pipefail
@@ -10,6 +12,7 @@ packages=(
   libembree-dev libopenvdb-dev libnanovdb-dev libboost-iostreams-dev libassimp-dev
   libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
+  time
 )
 # Blender's glTF importer imports numpy, which Debian's blender only recommends.
 if [ "${1:-}" = "--with-blender" ]; then packages+=(blender python3-numpy); fi

@@ -78,7 +78,8 @@ inline SnowState avalancheFixture() {
 inline std::vector<double> avalancheToRest(SnowBackend& b, const SnowState& s) {
   int rx = 100, ry = 80;
   while (!s.validCell(rx, ry)) ++rx;
-  AvalancheRun run(b, ModelParameters{}, s);
+  const ModelParameters params;
+  AvalancheRun run(b, params, s);
   run.release(rx, ry, 0.0, -5.0, true);
   const AvalancheRecord r = run.runToRest();
   EXPECT_TRUE(r.released);

@@ -152,7 +152,8 @@ namespace {
 // A rough terrain with unstable snow and a release near its middle, run to rest.
 AvalancheRecord avalancheOn(SnowBackend& backend, SnowState& s, int rx, int ry) {
   backend.upload(s);
-  AvalancheRun run(backend, ModelParameters{}, s);
+  const ModelParameters params;
+  AvalancheRun run(backend, params, s);
   run.release(rx, ry, 0.0, -5.0, true);
   const AvalancheRecord r = run.runToRest();
   backend.download(s);

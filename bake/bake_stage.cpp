@@ -1,0 +1,20 @@
+#include "bake_stage.h"
+
+#include <atomic>
+#include <exception>
+
+namespace snow {
+
+namespace {
+// Atomic: a frame writer's thread or a TBB worker may read it while the bake's thread moves on.
+std::atomic<const char*> stage{""};
+}  // namespace
+
+const char* currentBakeStage() { return stage.load(); }
+
+BakeStage::BakeStage(const char* name) : previous_(stage.exchange(name)), exceptions_(std::uncaught_exceptions()) {}
+BakeStage::~BakeStage() {
+  if (std::uncaught_exceptions() == exceptions_) stage.store(previous_);
+}
+
+}  // namespace snow

@@ -1,0 +1,57 @@
+// The bake's peak memory, predicted from the resolved scene before any work (docs/memory.md): a
+// table of owners (the state, the backend's copies, exposure samples, frames in flight, the
+// ski-track texture, the VDB, ...), grouped by the phase of the bake that holds them at once.
+// The peak is the largest phase plus the libraries. runBake refuses a scene whose peak is above
+// the budget (run.max_memory_gb, default 80 % of MemAvailable), naming the owner that needs the
+// most and the key that sizes it; tools/measure-memory.sh checks the prediction against the
+// measured peak resident set.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/grid.h"
+#include "scene/scene.h"
+
+namespace snow {
+
+struct MemoryOwner {
+  std::string name;   // "snow state", "ski-track texture", ...
+  double bytes = 0;
+  std::string key;    // the scene key that sizes it most ("" where it is the grid itself)
+};
+
+struct MemoryPhase {
+  std::string name;   // "precompute", "season", "outputs", ...
+  std::vector<MemoryOwner> owners;
+  double bytes() const;
+  const MemoryOwner& largest() const;
+};
+
+struct MemoryPrediction {
+  double libraryBytes = 0;  // the program and its libraries, resident before the bake allocates
+  std::vector<MemoryPhase> phases;
+  const MemoryPhase& peakPhase() const;
+  double peakBytes() const { return libraryBytes + peakPhase().bytes(); }
+  // One line: the peak, its phase and its three largest owners.
+  std::string summary() const;
+};
+
+// What a grid bake (mode = "season" or "occlusion") holds on a grid of `spec`, with
+// `occluderTriangles` triangles of occluder meshes.
+MemoryPrediction predictGridBake(const Scene& scene, const GridSpec& spec, size_t occluderTriangles);
+// mode = "mesh": the lattice and the snow body over a mesh of `triangles` triangles whose
+// bounding box is `extentM` (x, y, z).
+MemoryPrediction predictMeshBake(const Scene& scene, size_t triangles, const double extentM[3]);
+
+// The budget: run.max_memory_gb, else 80 % of /proc/meminfo's MemAvailable.
+double memoryBudgetBytes(const Scene& scene);
+// Throws InputError when the prediction is above the budget: what needs the memory (the phase
+// and its largest owner, with the key where the scene sets it) and what to change.
+void refuseAboveBudget(const Scene& scene, const MemoryPrediction& prediction, double budgetBytes);
+
+// Sizes the model cannot hold whatever the memory (coordinates past OpenVDB's 32-bit range, a
+// displacement map or ski-track texture of more than 2^31 pixels): InputError naming the key.
+void refuseBeyondTheModel(const Scene& scene, const GridSpec& spec);
+
+}  // namespace snow
