@@ -12,6 +12,7 @@
 #include "core/errors.h"
 #include "core/format.h"
 #include "modes.h"
+#include "progress.h"
 #include "stages.h"
 
 namespace snow {
@@ -38,6 +39,14 @@ std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti
 
 }  // namespace
 
+void reportFilesWritten(const std::vector<std::string>& paths) {
+  for (const std::string& path : paths) {
+    std::error_code ec;
+    const auto bytes = fs::file_size(path, ec);
+    progress().event("outputs", "file", {{"path", jsonText(path)}, {"bytes", ec ? "null" : std::to_string(bytes)}});
+  }
+}
+
 void createOutputFolder(const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -45,7 +54,9 @@ void createOutputFolder(const std::string& dir) {
 }
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
+  progress().stage("terrain", 0.0);
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
+  progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
 
@@ -73,7 +84,9 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
                       log);
   SeasonReport report;
   if (occlusionMode) {
+    progress().stage("occlusion", 0.0);
     runOcclusion(scene, terrain, state, occlusion, log);
+    progress().stage("occlusion", 1.0);
     report = occlusion.report;
   } else {
     const SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
@@ -82,10 +95,13 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
 
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
   const auto t0 = WallClock::now();
+  progress().stage("outputs", 0.0);
   writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
   writer.writeContactSheet();
   writer.writeAvalancheMaps(report.avalanches, state.spec);
+  progress().stage("outputs", 1.0);
+  progress().stage("manifest", 0.0);
   BakeResult result;
   const Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
                                                   occlusion.manifest, &report, art.rasters, art.editRecords, files.files});
@@ -93,6 +109,8 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, manifestToJson(manifest));
   result.files.push_back(manifestPath);
+  reportFilesWritten(result.files);
+  progress().stage("manifest", 1.0);
   log << writer.occluderNotes();
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   for (const auto& [kind, seconds] : files.seconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";

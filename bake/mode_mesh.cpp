@@ -9,6 +9,7 @@
 #include "core/format.h"
 #include "core/hash.h"
 #include "modes.h"
+#include "progress.h"
 #include "static_snow/fallen_snow.h"
 
 namespace snow {
@@ -47,6 +48,7 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   BakeResult result;
   result.backendName = "cpu (Embree ray queries, TBB)";
   auto t0 = WallClock::now();
+  progress().stage("terrain", 0.0);
   const TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (const auto& p : mesh.positions)
@@ -54,6 +56,8 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   log << "mode: mesh (Fearing 2000: snow on the mesh itself; no grid, no season)\n";
   log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
       << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  progress().stage("terrain", 1.0);
+  progress().stage("placement", 0.0);
   t0 = WallClock::now();
   FallenSnowSettings placement = scene.meshSnow.placement;
   placement.seed = scene.seed;
@@ -61,6 +65,8 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   log << "placement: " << snow.sites.size() << " sites (" << snow.refinedCells << " cells refined), " << snow.flakes << " flakes ("
       << snow.blocked << " blocked, " << snow.leftTheWorld << " left the world), sky " << fixed(snow.skyMassM3, 4) << " m^3, placed "
       << fixed(snow.placedM3, 4) << " m^3 (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  progress().stage("placement", 1.0);
+  progress().stage("stability", 0.0);
   t0 = WallClock::now();
   FallenSnowStability stability = scene.meshSnow.stability;
   stability.seed = scene.seed;
@@ -69,6 +75,8 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
       << (st.unconvergedRounds ? " (" + std::to_string(st.unconvergedRounds) + " rounds hit the pass limit)" : std::string()) << ", "
       << fixed(st.overEdgesM3, 4) << " m^3 over edges, " << fixed(st.leftTheWorldM3, 4) << " m^3 left the world, " << fixed(st.finalM3, 4)
       << " m^3 kept (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  progress().stage("stability", 1.0);
+  progress().stage("outputs", 0.0);
   t0 = WallClock::now();
   createOutputFolder(options.outDir);
   const MeshSnowBodyOptions& bo = scene.meshSnow.body;
@@ -91,9 +99,13 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
     manifest.files.push_back({name, "the snow body, closed, in the input mesh's frame", "m", meshFormatDescription(format)});
     result.files.push_back(path);
   }
+  progress().stage("outputs", 1.0);
+  progress().stage("manifest", 0.0);
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, meshSnowManifestToJson(manifest));
   result.files.push_back(manifestPath);
+  reportFilesWritten(result.files);
+  progress().stage("manifest", 1.0);
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   log << "total: " << fixed(elapsedSeconds(tStart), 2) << " s\n";
   return result;
