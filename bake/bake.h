@@ -32,6 +32,7 @@ struct BakeOptions {
   bool framesBesideSeason = true;
   // Where stages report progress and events (progress.h); null: the human bar on the log.
   ProgressSink* progressSink = nullptr;
+  std::vector<std::string> commandLine;  // recorded in the manifest (argv of `snowbake bake`)
 };
 
 struct BakeResult {

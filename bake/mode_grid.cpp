@@ -47,6 +47,15 @@ void reportFilesWritten(const std::vector<std::string>& paths) {
   }
 }
 
+std::string writeResolvedScene(const Scene& scene, const std::string& outDir) {
+  const std::string path = (fs::path(outDir) / "scene.resolved.toml").string();
+  writeTextAtomically(path, resolvedSceneToml(scene));
+  currentSink().files.push_back({"scene.resolved.toml", "the resolved scene: every key, defaults and --set overrides included, paths absolute",
+                                 "", "TOML"});
+  currentSink().paths.push_back(path);
+  return path;
+}
+
 void createOutputFolder(const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -100,11 +109,13 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
   writer.writeContactSheet();
   writer.writeAvalancheMaps(report.avalanches, state.spec);
+  writeResolvedScene(scene, options.outDir);
   progress().stage("outputs", 1.0);
   progress().stage("manifest", 0.0);
   BakeResult result;
   const Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
-                                                  occlusion.manifest, &report, art.rasters, art.editRecords, files.files});
+                                                  occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
+                                                  options.commandLine});
   result.files = files.paths;
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, manifestToJson(manifest));

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "bakers/manifest.h"
+#include "bakers/output_sink.h"
 #include "bakers/mesh_snow_body.h"
 #include "bakers/mesh_writer.h"
 #include "core/atomic_file.h"
@@ -99,6 +100,13 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
     manifest.files.push_back({name, "the snow body, closed, in the input mesh's frame", "m", meshFormatDescription(format)});
     result.files.push_back(path);
   }
+  {
+    OutputSink resolved;
+    const SinkScope scope(resolved);
+    result.files.push_back(writeResolvedScene(scene, options.outDir));
+    manifest.files.push_back({"scene.resolved.toml", resolved.files[0].content, "", "TOML"});
+  }
+  manifest.commandLine = options.commandLine;
   progress().stage("outputs", 1.0);
   progress().stage("manifest", 0.0);
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();

@@ -94,12 +94,12 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode)
     log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
-  if (occlusionMode || !scene.sunExposure)
-    progress().event("precompute", "exposure", {{"status", jsonText("skipped")}, {"why", jsonText(occlusionMode ? "occlusion mode" : "precompute.sun = false")}});
   else if (scene.sunExposure)
     precomputeExposure(scene, terrain, state, cache, pre, log);
   else
     log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
+  if (occlusionMode || !scene.sunExposure)
+    progress().event("precompute", "exposure", {{"status", jsonText("skipped")}, {"why", jsonText(occlusionMode ? "occlusion mode" : "precompute.sun = false")}});
   pre.temperatureForDay(0, state, scene.params);
   const auto t0 = WallClock::now();
   const WeatherTimeline calm;

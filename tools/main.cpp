@@ -123,8 +123,9 @@ void addBenchCommand(CLI::App& app, BenchCommand& c) {
 }
 
 // The command line's values over the scene's; unset options leave the scene's choice.
-BakeOptions bakeOptions(const BakeCommand& c) {
+BakeOptions bakeOptions(const BakeCommand& c, const std::vector<std::string>& argv) {
   BakeOptions bake = c.bake;
+  bake.commandLine = argv;
   bake.scene = c.scene;
   if (!c.terrainFile.empty()) bake.terrainFile = c.terrainFile;
   if (c.cmd->count("--seed")) bake.seed = c.seed;
@@ -146,8 +147,8 @@ ProgressOutcome bakeOutcome(const BakeResult& r) {
 
 // The bake, its human log on stderr or in --log-file; with --progress json the last line on
 // stderr says how it ended (and errors are reported there, not as text).
-int runBakeCommand(const BakeCommand& c) {
-  BakeOptions bake = bakeOptions(c);
+int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
+  BakeOptions bake = bakeOptions(c, argv);
   std::ofstream logFile;
   std::ostream nowhere(nullptr);
   std::ostream* log = &std::cerr;
@@ -242,7 +243,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*bake.cmd) {
-      return runBakeCommand(bake);
+      return runBakeCommand(bake, std::vector<std::string>(argv, argv + argc));
     } else if (*demo.cmd) {
       runDemoCommand(demo);
     } else if (*bench.cmd) {
