@@ -5,6 +5,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup-debian.sh --with-blender
-bash tools/build.sh
+bash tools/build.sh -DSNOWBAKE_PYTHON=ON  # the Python module too (python/), so ctest runs its pytest
 cd build
 ctest --output-on-failure -j"$(nproc)" --timeout 900

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what snowbake needs on Debian 12, if it is missing. Idempotent: does nothing (and
 # needs no network) when every package is already there. Runs apt-get as root, or through sudo.
+# pybind11-dev, python3-dev, python3-pytest, python3-numpy and python3-openimageio are for the
+# optional Python module (-DSNOWBAKE_PYTHON=ON, python/) and its pytest.
 # --with-blender also installs Blender 3.4, which the test suite uses as a real client of the
 # outputs (tests/blender_test.cpp); the bake itself never needs it.
 set -euo pipefail
@@ -10,6 +12,7 @@ packages=(
   libembree-dev libopenvdb-dev libnanovdb-dev libboost-iostreams-dev libassimp-dev
   libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
+  pybind11-dev python3-dev python3-pytest python3-numpy python3-openimageio
 )
 # Blender's glTF importer imports numpy, which Debian's blender only recommends.
 if [ "${1:-}" = "--with-blender" ]; then packages+=(blender python3-numpy); fi
