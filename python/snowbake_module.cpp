@@ -32,7 +32,8 @@ class PythonProgress : public ProgressSink {
     callback_ = py::object();
   }
   void stage(const std::string& name, double fraction) override {
-    call(py::dict(py::arg("type") = "progress", py::arg("stage") = name, py::arg("fraction") = fraction));
+    py::gil_scoped_acquire gil;  // before any Python object is made
+    callLocked(py::dict(py::arg("type") = "progress", py::arg("stage") = name, py::arg("fraction") = fraction));
   }
   void event(const std::string& stage, const std::string& name, const ProgressFields& fields) override {
     py::gil_scoped_acquire gil;
@@ -47,10 +48,6 @@ class PythonProgress : public ProgressSink {
   }
 
  private:
-  void call(py::dict d) {
-    py::gil_scoped_acquire gil;
-    callLocked(d);
-  }
   void callLocked(const py::dict& d) {
     if (error_) return;  // the first error raised by the callable ends its calls
     try {
