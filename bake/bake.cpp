@@ -4,7 +4,10 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <iostream>
+
 #include "modes.h"
+#include "progress.h"
 
 #ifndef SNOWBAKE_VERSION
 #define SNOWBAKE_VERSION "0.0.0"
@@ -16,7 +19,11 @@ const char* programVersion() { return SNOWBAKE_VERSION; }
 
 BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   const auto tStart = WallClock::now();
+  HumanProgress human(log, stderrIsTerminal() && &log == &std::cerr, options.progress);
+  const ProgressScope progressScope(options.progressSink ? *options.progressSink : human);
+  progress().stage("scene", 0.0);
   const Scene scene = resolveScene(options);
+  progress().stage("scene", 1.0);
   const int threads = scene.threads > 0 ? scene.threads : tbb::info::default_concurrency();
   tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   log << "snowbake " << programVersion() << ": scene " << scene.sourceName << " (" << scene.name << "), seed " << scene.seed << ", "

@@ -14,6 +14,8 @@
 
 namespace snow {
 
+class ProgressSink;
+
 struct BakeOptions {
   std::string scene = "preset:default";  // a path, or preset:NAME
   std::optional<std::string> terrainFile;  // --terrain: replaces the scene's terrain
@@ -28,6 +30,9 @@ struct BakeOptions {
   // Frame days' outputs written on their own thread while the season goes on (false: in place,
   // the season waiting; the same files, for tests and timing comparisons).
   bool framesBesideSeason = true;
+  // Where stages report progress and events (progress.h); null: the human bar on the log.
+  ProgressSink* progressSink = nullptr;
+  std::vector<std::string> commandLine;  // recorded in the manifest (argv of `snowbake bake`)
 };
 
 struct BakeResult {

@@ -15,6 +15,7 @@
 #include "core/format.h"
 #include "memory_model.h"
 #include "modes.h"
+#include "progress.h"
 #include "stages.h"
 
 namespace snow {
@@ -80,6 +81,23 @@ size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
 
 }  // namespace
 
+void reportFilesWritten(const std::vector<std::string>& paths) {
+  for (const std::string& path : paths) {
+    std::error_code ec;
+    const auto bytes = fs::file_size(path, ec);
+    progress().event("outputs", "file", {{"path", jsonText(path)}, {"bytes", ec ? "null" : std::to_string(bytes)}});
+  }
+}
+
+std::string writeResolvedScene(const Scene& scene, const std::string& outDir) {
+  const std::string path = (fs::path(outDir) / "scene.resolved.toml").string();
+  writeTextAtomically(path, resolvedSceneToml(scene));
+  currentSink().files.push_back({"scene.resolved.toml", "the resolved scene: every key, defaults and --set overrides included, paths absolute",
+                                 "", "TOML"});
+  currentSink().paths.push_back(path);
+  return path;
+}
+
 void createOutputFolder(const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -89,8 +107,10 @@ void createOutputFolder(const std::string& dir) {
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
   checkBuiltinMemory(scene);
   std::optional<BakeStage> stage(std::in_place, "terrain");
+  progress().stage("terrain", 0.0);
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
   checkGridMemory(scene, terrain.info().spec, triangleCount(terrain.occluders), log);
+  progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
 
@@ -121,7 +141,9 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   SeasonReport report;
   if (occlusionMode) {
     stage.emplace("occlusion");
+    progress().stage("occlusion", 0.0);
     runOcclusion(scene, terrain, state, occlusion, log);
+    progress().stage("occlusion", 1.0);
     report = occlusion.report;
   } else {
     stage.emplace("season");
@@ -132,18 +154,25 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
   stage.emplace("outputs");
   const auto t0 = WallClock::now();
+  progress().stage("outputs", 0.0);
   writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
   writer.writeSeasonEncodings();
   writer.writeContactSheet();
   writer.writeAvalancheMaps(report.avalanches, state.spec);
+  writeResolvedScene(scene, options.outDir);
+  progress().stage("outputs", 1.0);
+  progress().stage("manifest", 0.0);
   BakeResult result;
   const Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
-                                                  occlusion.manifest, &report, art.rasters, art.editRecords, files.files});
+                                                  occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
+                                                  options.commandLine});
   result.files = files.paths;
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, manifestToJson(manifest));
   result.files.push_back(manifestPath);
+  reportFilesWritten(result.files);
+  progress().stage("manifest", 1.0);
   log << writer.occluderNotes();
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   for (const auto& [kind, seconds] : files.seconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";

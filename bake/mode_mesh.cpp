@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "bakers/manifest.h"
+#include "bakers/output_sink.h"
 #include "bakers/mesh_snow_body.h"
 #include "bakers/mesh_writer.h"
 #include "core/atomic_file.h"
@@ -12,6 +13,7 @@
 #include "bake_stage.h"
 #include "memory_model.h"
 #include "modes.h"
+#include "progress.h"
 #include "static_snow/fallen_snow.h"
 
 namespace snow {
@@ -51,6 +53,7 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   result.backendName = "cpu (Embree ray queries, TBB)";
   auto t0 = WallClock::now();
   std::optional<BakeStage> stage(std::in_place, "mesh");
+  progress().stage("terrain", 0.0);
   const TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (const auto& p : mesh.positions)
@@ -65,6 +68,8 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   }
   log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
       << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  progress().stage("terrain", 1.0);
+  progress().stage("placement", 0.0);
   t0 = WallClock::now();
   FallenSnowSettings placement = scene.meshSnow.placement;
   placement.seed = scene.seed;
@@ -73,6 +78,8 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   log << "placement: " << snow.sites.size() << " sites (" << snow.refinedCells << " cells refined), " << snow.flakes << " flakes ("
       << snow.blocked << " blocked, " << snow.leftTheWorld << " left the world), sky " << fixed(snow.skyMassM3, 4) << " m^3, placed "
       << fixed(snow.placedM3, 4) << " m^3 (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  progress().stage("placement", 1.0);
+  progress().stage("stability", 0.0);
   t0 = WallClock::now();
   FallenSnowStability stability = scene.meshSnow.stability;
   stability.seed = scene.seed;
@@ -82,6 +89,8 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
       << (st.unconvergedRounds ? " (" + std::to_string(st.unconvergedRounds) + " rounds hit the pass limit)" : std::string()) << ", "
       << fixed(st.overEdgesM3, 4) << " m^3 over edges, " << fixed(st.leftTheWorldM3, 4) << " m^3 left the world, " << fixed(st.finalM3, 4)
       << " m^3 kept (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  progress().stage("stability", 1.0);
+  progress().stage("outputs", 0.0);
   t0 = WallClock::now();
   createOutputFolder(options.outDir);
   const MeshSnowBodyOptions& bo = scene.meshSnow.body;
@@ -105,9 +114,20 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
     manifest.files.push_back({name, "the snow body, closed, in the input mesh's frame", "m", meshFormatDescription(format)});
     result.files.push_back(path);
   }
+  {
+    OutputSink resolved;
+    const SinkScope scope(resolved);
+    result.files.push_back(writeResolvedScene(scene, options.outDir));
+    manifest.files.push_back({"scene.resolved.toml", resolved.files[0].content, "", "TOML"});
+  }
+  manifest.commandLine = options.commandLine;
+  progress().stage("outputs", 1.0);
+  progress().stage("manifest", 0.0);
   const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
   writeTextAtomically(manifestPath, meshSnowManifestToJson(manifest));
   result.files.push_back(manifestPath);
+  reportFilesWritten(result.files);
+  progress().stage("manifest", 1.0);
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   log << "total: " << fixed(elapsedSeconds(tStart), 2) << " s\n";
   return result;

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace snow {
@@ -35,5 +36,39 @@ void ProgressBar::finish() {
   finished_ = true;
   if (terminal_) out_ << "\n" << std::flush;
 }
+
+void HumanProgress::stage(const std::string& name, double fraction) {
+  const std::lock_guard lock(mutex_);
+  auto it = bars_.find(name);
+  // Stages that only begin (0) and end (1) draw nothing; a fraction in between starts a bar.
+  if (it == bars_.end()) {
+    if (fraction <= 0.0 || fraction >= 1.0) return;
+    it = bars_.emplace(name, std::make_unique<ProgressBar>(out_, name, terminal_, enabled_)).first;
+  }
+  if (fraction >= 1.0)
+    it->second->finish();
+  else
+    it->second->update(fraction);
+}
+
+namespace {
+
+class NoProgress : public ProgressSink {
+ public:
+  void stage(const std::string&, double) override {}
+  void event(const std::string&, const std::string&, const ProgressFields&) override {}
+  void finish(const ProgressOutcome&) override {}
+};
+
+NoProgress noProgress;
+// Not thread-local: the frame writer's thread reports into the bake's sink.
+std::atomic<ProgressSink*> current{&noProgress};
+
+}  // namespace
+
+ProgressSink& progress() { return *current.load(); }
+
+ProgressScope::ProgressScope(ProgressSink& sink) : previous_(current.exchange(&sink)) {}
+ProgressScope::~ProgressScope() { current.store(previous_); }
 
 }  // namespace snow

@@ -4,6 +4,7 @@
 #include "core/format.h"
 #include "core/hash.h"
 #include "precompute/ray_scene.h"
+#include "progress.h"
 #include "stages.h"
 
 namespace snow {
@@ -34,6 +35,7 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
   for (auto& d : e.days) grids.push_back(&d.sunHours), grids.push_back(&d.indirectHours);
   if (cache.load("exposure", key, state.spec.width, state.spec.height, grids)) {
     log << "  sun exposure: from the cache\n";
+    progress().event("precompute", "exposure", {{"status", jsonText("cached")}});
     return e;
   }
   std::unique_ptr<RayScene> scene;
@@ -49,6 +51,7 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
   std::vector<const Grid<float>*> out{&e.skyHours};
   for (const auto& d : e.days) out.push_back(&d.sunHours), out.push_back(&d.indirectHours);
   cache.store("exposure", key, out);
+  progress().event("precompute", "exposure", {{"status", jsonText("computed")}});
   return e;
 }
 
@@ -86,6 +89,7 @@ void Precomputed::windForDay(int day, SnowState& s) const {
 
 Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
                           std::ostream& log) {
+  progress().stage("precompute", 0.0);
   Precomputed pre;
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode)
@@ -94,12 +98,19 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
     precomputeExposure(scene, terrain, state, cache, pre, log);
   else
     log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
+  if (occlusionMode || !scene.sunExposure)
+    progress().event("precompute", "exposure", {{"status", jsonText("skipped")}, {"why", jsonText(occlusionMode ? "occlusion mode" : "precompute.sun = false")}});
   pre.temperatureForDay(0, state, scene.params);
   const auto t0 = WallClock::now();
   const WeatherTimeline calm;
   pre.wind.emplace(state.bedrockM, state.validCell, state.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
                    WindSolverOptions{}, &log);
   const WindTimeline& wind = *pre.wind;
+  if (!occlusionMode && wind.hasWind())
+    progress().event("precompute", "wind", {{"status", jsonText(wind.computedStates() ? "computed" : "cached")},
+                                            {"computed", std::to_string(wind.computedStates())}, {"cached", std::to_string(wind.cachedStates())}});
+  else
+    progress().event("precompute", "wind", {{"status", jsonText("skipped")}, {"why", jsonText(occlusionMode ? "occlusion mode" : "no wind in the season")}});
   if (occlusionMode) {
   } else if (wind.hasWind()) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " (" << wind.computedStates()
@@ -109,6 +120,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
     log << "precompute: no wind in the season: wind field skipped\n";
   }
   pre.windForDay(0, state);
+  progress().stage("precompute", 1.0);
   return pre;
 }
 

@@ -10,12 +10,20 @@ namespace snow {
 
 SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int threads, SnowBackend& backend, SnowState& state,
                             const SeasonConfig& config, SeasonOutputs& outputs, OutputWriter& writer, std::ostream& log) {
-  ProgressBar bar(log, "season", stderrIsTerminal() && &log == &std::cerr, options.progress);
+  progress().stage("season", 0.0);
   FrameWriter frames(writer, outputs.skiTracks ? &*outputs.skiTracks : nullptr, threads, options.framesBesideSeason);
   SeasonReport report = runSeason(
-      backend, state, config, [&](double f) { bar.update(f); }, [&](double day, const SnowState& s) { frames.write(day, s); });
+      backend, state, config, [&](double f) { progress().stage("season", f); },
+      [&](double day, const SnowState& s) {
+        frames.write(day, s);
+        progress().event("season", "frame", {{"day", jsonNumber(day)}});
+      });
   frames.join();
-  bar.finish();
+  progress().stage("season", 1.0);
+  // From the season's records once it ends (the season core reports no events of its own).
+  for (const AvalancheRecord& a : report.avalanches)
+    progress().event("season", "avalanche", {{"day", jsonNumber(a.day)}, {"released", a.released ? "true" : "false"},
+                                             {"released_m3", jsonNumber(a.releasedM3)}, {"simulated_s", jsonNumber(a.simulatedS)}});
   logSeasonReport(report, scene, config, backend.name(), log);
   return report;
 }

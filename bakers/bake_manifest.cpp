@@ -1,5 +1,6 @@
 #include "bake_manifest.h"
 
+#include <algorithm>
 #include <iomanip>
 #include <sstream>
 
@@ -60,6 +61,12 @@ Manifest assembleBakeManifest(const BakeManifestInputs& in) {
   m.edits = in.edits;
   addSeasonRecords(m, *in.report);
   m.files = in.files;
+  m.commandLine = in.commandLine;
+  if (!scene.terrain.builtin) m.inputHashes.push_back({scene.terrain.file, m.terrainHash});
+  for (const auto& o : scene.occluders) m.inputHashes.push_back({o.file, hashFileFnv1a64(o.file)});
+  for (const ManifestRaster& r : in.artRasters)
+    if (std::find_if(m.inputHashes.begin(), m.inputHashes.end(), [&](const auto& h) { return h.first == r.source; }) == m.inputHashes.end())
+      m.inputHashes.push_back({r.source, r.hash});
   return m;
 }
 

@@ -21,6 +21,7 @@ struct BakeManifestInputs {
   std::vector<ManifestRaster> artRasters;   // art direction's rasters
   std::vector<ManifestEdit> edits;          // its edits (volumes filled from the report here)
   std::vector<ManifestFile> files;          // every file written, in order
+  std::vector<std::string> commandLine;     // argv, empty from a library
 };
 
 Manifest assembleBakeManifest(const BakeManifestInputs& in);

@@ -131,7 +131,10 @@ std::string manifestToJson(const Manifest& m) {
   ordered_json j;
   j["snowbake_manifest_version"] = 1;
   j["program"] = {{"name", "snowbake"}, {"version", m.programVersion}};
-  j["scene"] = {{"source", m.sceneSource}, {"name", m.sceneName}, {"hash_fnv1a64", m.sceneHash}};
+  j["scene"] = {{"source", m.sceneSource}, {"name", m.sceneName}, {"hash_fnv1a64", m.sceneHash}, {"resolved", "scene.resolved.toml"}};
+  j["command_line"] = m.commandLine;
+  j["inputs"] = ordered_json::array();
+  for (const auto& [path, hash] : m.inputHashes) j["inputs"].push_back({{"path", path}, {"hash_fnv1a64", hash}});
   j["terrain"] = terrainJson(m);
   j["run"] = runJson(m);
   if (!m.artRasters.empty() || !m.edits.empty()) j["art_direction"] = artDirectionJson(m);
@@ -148,7 +151,8 @@ std::string meshSnowManifestToJson(const MeshSnowManifest& m) {
   ordered_json j;
   j["snowbake_manifest_version"] = 1;
   j["program"] = {{"name", "snowbake"}, {"version", m.programVersion}};
-  j["scene"] = {{"source", m.sceneSource}, {"name", m.sceneName}, {"hash_fnv1a64", m.sceneHash}};
+  j["scene"] = {{"source", m.sceneSource}, {"name", m.sceneName}, {"hash_fnv1a64", m.sceneHash}, {"resolved", "scene.resolved.toml"}};
+  j["command_line"] = m.commandLine;
   j["mesh"] = {{"source", m.meshSource},
                {"hash_fnv1a64", m.meshHash},
                {"triangles", m.triangles},

@@ -107,6 +107,9 @@ struct Manifest {
   std::vector<ManifestEdit> edits;
   double editsNetM3 = 0, noSnowRemovedM3 = 0;
   std::vector<ManifestFile> files;
+  // How it was run: the command line (empty when a library called it) and every input file's hash.
+  std::vector<std::string> commandLine;
+  std::vector<std::pair<std::string, std::string>> inputHashes;  // path, FNV-1a 64
 };
 
 std::string manifestToJson(const Manifest& manifest);
@@ -128,6 +131,7 @@ struct MeshSnowManifest {
   double voxelSizeM = 0;
   size_t bodyTriangles = 0;
   std::vector<MeshSnowFile> files;
+  std::vector<std::string> commandLine;  // as Manifest's
 };
 std::string meshSnowManifestToJson(const MeshSnowManifest& manifest);
 

@@ -170,6 +170,9 @@ Scene loadSceneFile(const std::string& path, const std::vector<std::string>& ove
 Scene loadSceneText(const std::string& text, const std::string& sourceName, const std::string& baseDir,
                     const std::vector<std::string>& overrides = {}, const std::optional<std::string>& terrainFile = std::nullopt);
 // "preset:NAME" or a path.
+// The scene as scene.resolved.toml writes it (scene_resolved.cpp): canonicalToml with every
+// omitted key at its default and every path absolute; loading it gives the same bake.
+std::string resolvedSceneToml(const Scene& scene);
 Scene loadScene(const std::string& pathOrPreset, const std::vector<std::string>& overrides = {},
                 const std::optional<std::string>& terrainFile = std::nullopt);
 

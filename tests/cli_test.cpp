@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "bakers/grid_writer.h"
@@ -44,6 +45,7 @@ ProcessResult snowbake(const fs::path& dir, const std::string& args) {
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(err), slurp(out)};
 }
 
+// Every file's bytes; a manifest's without its command_line, which names each run's --out.
 std::map<std::string, std::string> filesIn(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(dir)) {
@@ -51,7 +53,13 @@ std::map<std::string, std::string> filesIn(const fs::path& dir) {
     std::ifstream in(e.path(), std::ios::binary);
     std::stringstream s;
     s << in.rdbuf();
-    files[fs::relative(e.path(), dir).string()] = s.str();
+    std::string bytes = s.str();
+    if (e.path().filename() == "manifest.json" && nlohmann::ordered_json::accept(bytes)) {
+      nlohmann::ordered_json m = nlohmann::ordered_json::parse(bytes);
+      m.erase("command_line");
+      bytes = m.dump(2);
+    }
+    files[fs::relative(e.path(), dir).string()] = bytes;
   }
   return files;
 }

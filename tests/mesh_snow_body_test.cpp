@@ -171,7 +171,7 @@ TEST(MeshSnowBake, ModeMeshWritesTheSnowBodyAndAManifest) {
   EXPECT_NEAR(placed, 0.3 * 4.0, 1e-9);
   EXPECT_NEAR(kept + lost, placed, 1e-9 * placed);
   EXPECT_GT(m["run"]["stability"]["buried_sites"].get<int>(), 0);  // the ground under the block
-  EXPECT_EQ(m["files"].size(), 3u);
+  EXPECT_EQ(m["files"].size(), 4u);  // the body twice, the VDB and scene.resolved.toml
 }
 
 TEST(MeshSnowBake, ModeMeshRefusesWhatItCannotMake) {

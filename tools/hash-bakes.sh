@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Bakes six scenes that cover every mode and most outputs and prints one SHA-256 a file, so a
 # refactoring can show it keeps the bytes: run it before and after, then diff the two lists.
+# Manifests and resolved scenes name the work and source folders: those are hashed as WORK and ROOT.
 #   bash tools/hash-bakes.sh [SNOWBAKE_BINARY] [WORK_DIR] > hashes.txt
 # The scenes: the demo (preset:default); presets/art_direction.toml; presets/bedforms.toml;
 # occlusion mode on the builtin range; mesh mode on a block on the ground; a real DEM from ../shared/data with every
@@ -120,7 +121,7 @@ fi
 cd "$work"
 find . -mindepth 2 -type f | LC_ALL=C sort | while read -r f; do
   case "$f" in
-    */manifest.json) printf '%s  %s\n' "$(sed -e "s|$work|WORK|g" -e "s|$root|ROOT|g" "$f" | sha256sum | cut -d' ' -f1)" "$f" ;;
+    */manifest.json | */scene.resolved.toml) printf '%s  %s\n' "$(sed -e "s|$work|WORK|g" -e "s|$root|ROOT|g" "$f" | sha256sum | cut -d' ' -f1)" "$f" ;;
     *) sha256sum "$f" ;;
   esac
 done

@@ -1,6 +1,6 @@
 // snowbake: the command-line program. The only translation unit that includes CLI11.
 //   snowbake bake SCENE [--terrain FILE] [--out DIR] [--seed N] [--threads N] [--backend cpu|cuda|auto] [--set KEY=VALUE]...
-//                [--cache-dir DIR] [--no-cache] [--quiet]
+//                [--cache-dir DIR] [--no-cache] [--quiet] [--progress human|json] [--log-file FILE]
 //   snowbake demo [--out DIR]
 //   snowbake info FILE [--json] [--set KEY=VALUE]...
 //   snowbake help scene [--markdown]
@@ -11,6 +11,7 @@
 // 1 any other failure.
 #include <CLI/CLI.hpp>
 
+#include <fstream>
 #include <iostream>
 #include <new>
 #include <optional>
@@ -21,6 +22,7 @@
 #include "core/errors.h"
 #include "bake/bake.h"
 #include "bake/bake_stage.h"
+#include "bake/progress.h"
 #include "bench/bench.h"
 #include "scene/scene_reference.h"
 #include "tools/info.h"
@@ -41,6 +43,7 @@ struct BakeCommand {
   bool quiet = false;
   std::string cacheDir;
   bool noCache = false;
+  std::string progress = "human", logFile;
 };
 
 struct DemoCommand {
@@ -80,6 +83,10 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
   c.cmd->add_flag("--quiet", c.quiet, "No progress bar");
   c.cmd->add_option("--cache-dir", c.cacheDir, "Precompute cache folder (default $XDG_CACHE_HOME/snowbake or ~/.cache/snowbake)");
   c.cmd->add_flag("--no-cache", c.noCache, "Neither read nor write the precompute cache");
+  c.cmd->add_option("--progress", c.progress, "human (a bar on stderr) or json (one JSON object a line on stderr, docs/command-line.md)")
+      ->check(CLI::IsMember({"human", "json"}))
+      ->capture_default_str();
+  c.cmd->add_option("--log-file", c.logFile, "Write the human log to FILE (with --progress json, stderr carries only JSON)");
 }
 
 void addDemoCommand(CLI::App& app, DemoCommand& c) {
@@ -119,8 +126,9 @@ void addBenchCommand(CLI::App& app, BenchCommand& c) {
 }
 
 // The command line's values over the scene's; unset options leave the scene's choice.
-void runBakeCommand(BakeCommand& c) {
-  BakeOptions& bake = c.bake;
+BakeOptions bakeOptions(const BakeCommand& c, const std::vector<std::string>& argv) {
+  BakeOptions bake = c.bake;
+  bake.commandLine = argv;
   bake.scene = c.scene;
   if (!c.terrainFile.empty()) bake.terrainFile = c.terrainFile;
   if (c.cmd->count("--seed")) bake.seed = c.seed;
@@ -129,7 +137,49 @@ void runBakeCommand(BakeCommand& c) {
   bake.progress = !c.quiet;
   if (!c.cacheDir.empty()) bake.cacheDir = c.cacheDir;
   bake.useCache = !c.noCache;
-  runBake(bake, std::cerr);
+  return bake;
+}
+
+ProgressOutcome bakeOutcome(const BakeResult& r) {
+  ProgressOutcome o{"ok", 0};
+  o.files = static_cast<long long>(r.files.size()) - 1;  // the manifest lists every file but itself
+  o.manifest = r.files.back();
+  if (r.season.final.totalM3() > 0 || r.season.initial.totalM3() > 0) o.massBalance = r.season.massBalanceRelativeError();
+  return o;
+}
+
+// The bake, its human log on stderr or in --log-file; with --progress json the last line on
+// stderr says how it ended (and errors are reported there, not as text).
+int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
+  BakeOptions bake = bakeOptions(c, argv);
+  std::ofstream logFile;
+  std::ostream nowhere(nullptr);
+  std::ostream* log = &std::cerr;
+  if (!c.logFile.empty()) {
+    logFile.open(c.logFile);
+    if (!logFile) throw InputError(c.logFile + ": cannot write the log file (--log-file)");
+    log = &logFile;
+  } else if (c.progress == "json") {
+    log = &nowhere;
+  }
+  if (c.progress != "json") {
+    runBake(bake, *log);
+    return 0;
+  }
+  JsonProgress json(std::cerr);
+  bake.progressSink = &json;
+  try {
+    json.finish(bakeOutcome(runBake(bake, *log)));
+    return 0;
+  } catch (const InputError& e) {
+    *log << "snowbake: error: " << e.what() << "\n";
+    json.finish({"input_error", 2, -1, "", -1, e.what()});
+    return 2;
+  } catch (const std::exception& e) {
+    *log << "snowbake: failed: " << e.what() << "\n";
+    json.finish({"failed", 1, -1, "", -1, e.what()});
+    return 1;
+  }
 }
 
 void runDemoCommand(const DemoCommand& c) {
@@ -196,7 +246,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*bake.cmd) {
-      runBakeCommand(bake);
+      return runBakeCommand(bake, std::vector<std::string>(argv, argv + argc));
     } else if (*demo.cmd) {
       runDemoCommand(demo);
     } else if (*bench.cmd) {

@@ -6,6 +6,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup-debian.sh --with-blender
-bash tools/build.sh
+bash tools/build.sh -DSNOWBAKE_PYTHON=ON  # the Python module too (python/), so ctest runs its pytest
 (cd build && ctest --output-on-failure -j"$(nproc)" --timeout 900)
 if [ "${SNOWBAKE_SANITIZED_SUITE:-1}" != 0 ]; then bash tools/run-sanitized-tests.sh; fi

@@ -3,6 +3,8 @@
 # needs no network) when every package is already there. Runs apt-get as root, or through sudo.
 # `time` (GNU time) measures the peak memory tests/memory_model_test.cpp and
 # tools/measure-memory.sh compare with the memory model.
+# pybind11-dev, python3-dev, python3-pytest, python3-numpy and python3-openimageio are for the
+# optional Python module (-DSNOWBAKE_PYTHON=ON, python/) and its pytest.
 # --with-blender also installs Blender 3.4, which the test suite uses as a real client of the
 # outputs (tests/blender_test.cpp); the bake itself never needs it.
 set -euo pipefail
@@ -13,6 +15,7 @@ packages=(
   libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
   time
+  pybind11-dev python3-dev python3-pytest python3-numpy python3-openimageio
 )
 # Blender's glTF importer imports numpy, which Debian's blender only recommends.
 if [ "${1:-}" = "--with-blender" ]; then packages+=(blender python3-numpy); fi
