@@ -12,6 +12,7 @@
 
 #include "core/errors.h"
 #include "core/snow_fields.h"
+#include "bakers/value_range.h"
 #include "precompute/exposure.h"
 #include "scene/layers.h"
 
@@ -107,6 +108,17 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
     w.push_back({"displacement map", static_cast<double>(o.displacementWidth) * o.displacementHeight * 4.0 + cells * 4.0,
                  "outputs.displacement_size"});
   return w;
+}
+
+// Encodings on a "season" range wait for the season's end: each frame's layer is held until then.
+double seasonRangeHeldBytes(const Scene& s, double cells) {
+  const OutputRequest& o = s.outputs;
+  if (o.encodings.empty()) return 0.0;
+  double perFrame = 0.0;
+  for (const auto& name : o.layers)
+    if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
+      perFrame += cells * 4.0 * (name == "ski_tracks" ? o.skiTrackFactor * o.skiTrackFactor : 1.0);
+  return perFrame * static_cast<double>(o.frameDays.size());
 }
 
 double vdbBytes(const Scene& s, const GridSpec& spec) {
@@ -222,12 +234,14 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
     season.owners.push_back({"frame in flight: state copies", 2.0 * state, "outputs.frames_days"});
     if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor"});
     for (const auto& w : writer) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key});
+    season.owners.push_back({"frames held for their season range", seasonRangeHeldBytes(s, cells), "outputs.ranges"});
   }
   p.phases.push_back(season);
 
   MemoryPhase out{"outputs", {terrain, stateOwner, exposure, wind, {"backend fields", backend, "terrain.size"}}};
   if (skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * skiTexture.bytes, "outputs.ski_track_factor"});
   out.owners.insert(out.owners.end(), writer.begin(), writer.end());
+  out.owners.push_back({"frames held for their season range", seasonRangeHeldBytes(s, cells), "outputs.ranges"});
   if (s.outputs.vdb) out.owners.push_back({"VDB", vdbBytes(s, spec), "outputs.vdb_voxel_size_m"});
   p.phases.push_back(out);
   return p;

@@ -66,6 +66,13 @@ void addDefaults(toml::table& root, const Scene& scene, std::vector<std::string>
     const bool fromCommandLine = rule.path == "run.seed" || rule.path == "run.backend";
     if (root.at_path(rule.path).node() && !fromCommandLine) continue;
     const std::string section = rule.path.find('.') == std::string::npos ? "" : rule.path.substr(0, rule.path.find('.'));
+    // A sub-table ([outputs.tiles]) is a choice the scene makes, like a section above.
+    const std::string parent = rule.path.substr(0, rule.path.rfind('.'));
+    const bool absentSubTable = parent.find('.') != std::string::npos && !root.at_path(parent).node();
+    if (absentSubTable) {
+      if (unwritten.empty() || unwritten.back() != "[" + parent + "]") unwritten.push_back("[" + parent + "]");
+      continue;
+    }
     if (!alwaysFilled(section) && !root.contains(section)) {
       if (unwritten.empty() || unwritten.back() != "[" + section + "]") unwritten.push_back("[" + section + "]");
       continue;

@@ -5,6 +5,8 @@
 // --with-blender); without it the test skips, except in CI (CI set), where it fails.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <OpenImageIO/imageio.h>
 
 #include <cstdio>
@@ -69,7 +71,10 @@ TEST(Blender, LoadsTheMeshVolumeDisplacementNormalMapAndMeshTilesAndRenders) {
   EXPECT_GT(r["displacement"]["checked_vertices"].get<int>(), 500);
   std::printf("[ measure ] Blender's Displace modifier: max |error| %.3g m over %d vertices\n", r["displacement"]["max_abs_error_m"].get<double>(),
               r["displacement"]["checked_vertices"].get<int>());
-  EXPECT_LT(r["displacement"]["max_abs_error_m"].get<double>(), 1e-6);
+  // Blender holds vertices in float32: the error bound is two float ulps of the deepest texel.
+  const float deepest = static_cast<float>(depthMax);
+  const double twoUlps = 2.0 * (std::nextafter(deepest, INFINITY) - deepest);
+  EXPECT_LE(r["displacement"]["max_abs_error_m"].get<double>(), twoUlps);
   EXPECT_NEAR(r["displacement"]["max_pixel_m"].get<double>(), depthMax, 1e-4);
 
   // Cycles: a 96 x 64 image with something in it.

@@ -157,6 +157,7 @@ TEST(MemoryModel, AnAllocationThatFailsAnywayIsExit1NamingTheStage) {
 TEST(MemoryModel, PeakIsTheLargestPhasePlusTheLibraries) {
   snow::Scene scene = snow::loadScene("preset:default");
   scene.params.skiersPerHour = 0;  // the records do not grow with the grid
+  scene.outputs.displacementWidth = scene.outputs.displacementHeight = 0;  // nor a fixed-size map
   snow::GridSpec spec;
   spec.width = spec.height = 1024;
   spec.cellSizeXM = spec.cellSizeYM = 10.0;
