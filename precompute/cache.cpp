@@ -24,6 +24,7 @@ namespace {
 
 // Version 2 added the payload length and its FNV-1a 64 checksum; version 1 files read as foreign.
 constexpr char kMagic[16] = "SNOWBAKE-CACHE2";
+constexpr const char* kForeign = "not a cache entry of this snowbake version";
 
 struct EntryHeader {
   char magic[16];
@@ -37,7 +38,7 @@ uint64_t gridBytes(int width, int height) { return static_cast<uint64_t>(width) 
 
 // Why a header cannot describe a file of `fileBytes` bytes; "" when it can.
 std::string headerProblem(const EntryHeader& h, uint64_t fileBytes) {
-  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) return "not a cache entry of this snowbake version";
+  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) return kForeign;
   if (h.width <= 0 || h.height <= 0 || h.count <= 0 || h.payloadBytes != gridBytes(h.width, h.height) * static_cast<uint64_t>(h.count))
     return "header inconsistent with its grids";
   const uint64_t expected = sizeof(EntryHeader) + h.payloadBytes;
@@ -149,7 +150,8 @@ bool PrecomputeCache::load(const std::string& stage, const std::string& key, int
   }
   if (problem.empty() && sum.value() != h.checksum) problem = "checksum mismatch";
   if (!problem.empty()) {
-    if (log_) *log_ << "  cache: " << path << " is damaged (" << problem << "): recomputing\n";
+    if (log_ && problem == kForeign) *log_ << "  cache: " << path << " is " << problem << ": recomputing\n";
+    else if (log_) *log_ << "  cache: " << path << " is damaged (" << problem << "): recomputing\n";
     return false;
   }
   ::utimensat(AT_FDCWD, path.c_str(), nullptr, 0);  // marks it as used now; best effort
