@@ -149,10 +149,12 @@ TEST(SceneList, BakeOfAnIndexWritesThatLevelIntoItsFolderAndABadIndexExits2Writi
   EXPECT_NE(slurp(dir / "err.txt").find("levels.txt: --index 2 is out of range"), std::string::npos) << slurp(dir / "err.txt");
   EXPECT_FALSE(fs::exists(dir / "out"));
   // A farm manager reading --progress json gets the refusal as the done line.
-  EXPECT_EQ(shell(snowbake(args + " --index 2 --progress json 2>'" + (dir / "err.json").string() + "'")), 2);
+  EXPECT_EQ(shell(snowbake(args + " --index 2 --progress json --log-file '" + (dir / "bake.log").string() + "' 2>'" +
+                           (dir / "err.json").string() + "'")), 2);
   const std::string json = slurp(dir / "err.json");
   EXPECT_NE(json.find("{\"type\":\"done\",\"outcome\":\"input_error\",\"exit_status\":2"), std::string::npos) << json;
   EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_FALSE(fs::exists(dir / "bake.log"));
   ASSERT_EQ(shell(snowbake(args + " --index 1 2>/dev/null")), 0);
   EXPECT_TRUE(fs::exists(dir / "out/other/manifest.json"));
   EXPECT_FALSE(fs::exists(dir / "out/small"));

@@ -200,8 +200,18 @@ ProgressOutcome bakeOutcome(const BakeResult& r) {
 }
 
 // The bake, its human log on stderr or in --log-file; with --progress json the last line on
-// stderr says how it ended (and errors are reported there, not as text).
+// stderr says how it ended (and errors are reported there, not as text). The scene (or level) is
+// chosen before the log is opened, so a bad list or index writes nothing.
 int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
+  std::ostringstream levelNote;
+  BakeOptions bake;
+  try {
+    bake = bakeOptions(c, argv, levelNote);
+  } catch (const InputError& e) {
+    if (c.progress != "json") throw;
+    JsonProgress(std::cerr).finish({"input_error", 2, -1, "", -1, e.what()});
+    return 2;
+  }
   std::ofstream logFile;
   std::ostream nowhere(nullptr);
   std::ostream* log = &std::cerr;
@@ -212,14 +222,14 @@ int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
   } else if (c.progress == "json") {
     log = &nowhere;
   }
+  *log << levelNote.str();
   if (c.progress != "json") {
-    runBake(bakeOptions(c, argv, *log), *log);
+    runBake(bake, *log);
     return 0;
   }
   JsonProgress json(std::cerr);
+  bake.progressSink = &json;
   try {
-    BakeOptions bake = bakeOptions(c, argv, *log);
-    bake.progressSink = &json;
     json.finish(bakeOutcome(runBake(bake, *log)));
     return 0;
   } catch (const InputError& e) {
