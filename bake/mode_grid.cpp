@@ -122,7 +122,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   if (scene.bedforms.enabled && !occlusionMode)
     if (const std::string problem = validateBedformParameters(scene.bedforms.params, state.spec); !problem.empty())
       throw InputError(scene.sourceName + ": " + problem);
-  const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
+  const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
   const Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
 

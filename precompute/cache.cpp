@@ -1,21 +1,125 @@
 #include "cache.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
+#include <random>
+#include <stdexcept>
 
-#include "core/atomic_file.h"
+#include "core/hash.h"
 
 namespace snow {
 
+namespace fs = std::filesystem;
+
 namespace {
-constexpr char kMagic[16] = "SNOWBAKE-CACHE1";
+
+// Version 2 added the payload length and its FNV-1a 64 checksum; version 1 files read as foreign.
+constexpr char kMagic[16] = "SNOWBAKE-CACHE2";
+constexpr const char* kForeign = "not a cache entry of this snowbake version";
+
+struct EntryHeader {
+  char magic[16];
+  int32_t width, height, count, reserved;
+  uint64_t payloadBytes;
+  uint64_t checksum;  // FNV-1a 64 of the payload
+};
+static_assert(sizeof(EntryHeader) == 48, "the header is written as it lies in memory");
+
+uint64_t gridBytes(int width, int height) { return static_cast<uint64_t>(width) * static_cast<uint64_t>(height) * sizeof(float); }
+
+// Why a header cannot describe a file of `fileBytes` bytes; "" when it can.
+std::string headerProblem(const EntryHeader& h, uint64_t fileBytes) {
+  if (std::memcmp(h.magic, kMagic, sizeof kMagic) != 0) return kForeign;
+  if (h.width <= 0 || h.height <= 0 || h.count <= 0 || h.payloadBytes != gridBytes(h.width, h.height) * static_cast<uint64_t>(h.count))
+    return "header inconsistent with its grids";
+  const uint64_t expected = sizeof(EntryHeader) + h.payloadBytes;
+  if (fileBytes < expected) return "truncated: " + std::to_string(fileBytes) + " of " + std::to_string(expected) + " bytes";
+  if (fileBytes > expected) return std::to_string(fileBytes) + " bytes where the header says " + std::to_string(expected);
+  return "";
 }
 
-PrecomputeCache::PrecomputeCache(std::string directory, bool enabled)
-    : directory_(std::move(directory)), enabled_(enabled && !directory_.empty()) {}
+// Reads the header of an open entry; "" or why not.
+std::string readHeader(std::ifstream& in, EntryHeader& h, uint64_t fileBytes) {
+  if (fileBytes < sizeof h || !in.read(reinterpret_cast<char*>(&h), sizeof h))
+    return "truncated: " + std::to_string(fileBytes) + " bytes, shorter than the header";
+  return headerProblem(h, fileBytes);
+}
+
+void writeAll(int fd, const void* data, size_t n, const std::string& path) {
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+    p += w;
+    n -= static_cast<size_t>(w);
+  }
+}
+
+// Unique among every process on every host sharing the folder: host, process and 64 random bits.
+std::string temporaryEntryPath(const fs::path& finalPath) {
+  char host[256] = "host";
+  ::gethostname(host, sizeof host - 1);
+  host[sizeof host - 1] = '\0';
+  std::random_device rd;
+  const uint64_t nonce = (static_cast<uint64_t>(rd()) << 32) ^ rd();
+  char suffix[32];
+  std::snprintf(suffix, sizeof suffix, "%016llx", static_cast<unsigned long long>(nonce));
+  std::string name = "." + finalPath.filename().string() + ".tmp-" + host + "-" + std::to_string(::getpid()) + "-" + suffix;
+  return (finalPath.parent_path() / name).string();
+}
+
+void fsyncFolder(const fs::path& folder) {
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;  // some shared file systems refuse to open folders: the rename still stands
+  ::fsync(fd);
+  ::close(fd);
+}
+
+// The entry is complete on disk under its temporary name before the rename makes it visible, and
+// the rename reaches the disk before store() returns: a crash or a concurrent writer of the same
+// key leaves the old entry or a new whole one, never a torn one.
+void writeEntryDurably(const fs::path& finalPath, const EntryHeader& header, const std::vector<const Grid<float>*>& grids) {
+  const std::string temp = temporaryEntryPath(finalPath);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error("cannot create " + temp + ": " + std::strerror(errno));
+  try {
+    writeAll(fd, &header, sizeof header, temp);
+    for (const Grid<float>* g : grids) writeAll(fd, g->data(), g->size() * sizeof(float), temp);
+    if (::fsync(fd) != 0) throw std::runtime_error("cannot fsync " + temp + ": " + std::strerror(errno));
+    if (::close(fd) != 0) throw std::runtime_error("cannot close " + temp + ": " + std::strerror(errno));
+  } catch (...) {
+    ::close(fd);
+    ::unlink(temp.c_str());
+    throw;
+  }
+  if (::rename(temp.c_str(), finalPath.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    ::unlink(temp.c_str());
+    throw std::runtime_error("cannot rename " + temp + ": " + why);
+  }
+  fsyncFolder(finalPath.parent_path());
+}
+
+uint64_t fileSize(const std::string& path) {
+  std::error_code ec;
+  const uintmax_t n = fs::file_size(path, ec);
+  return ec ? 0 : static_cast<uint64_t>(n);
+}
+
+}  // namespace
+
+PrecomputeCache::PrecomputeCache(std::string directory, bool enabled, std::ostream* log)
+    : directory_(std::move(directory)), enabled_(enabled && !directory_.empty()), log_(log) {}
 
 std::string PrecomputeCache::defaultDirectory() {
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/snowbake";
@@ -24,39 +128,79 @@ std::string PrecomputeCache::defaultDirectory() {
 }
 
 std::string PrecomputeCache::pathFor(const std::string& stage, const std::string& key) const {
-  return (std::filesystem::path(directory_) / (stage + "-" + key + ".bin")).string();
+  return (fs::path(directory_) / (stage + "-" + key + ".bin")).string();
 }
 
 bool PrecomputeCache::load(const std::string& stage, const std::string& key, int width, int height,
                            const std::vector<Grid<float>*>& grids) const {
   if (!enabled_) return false;
-  std::ifstream in(pathFor(stage, key), std::ios::binary);
-  if (!in) return false;
-  char magic[16];
-  int32_t header[3];
-  if (!in.read(magic, 16) || std::memcmp(magic, kMagic, 16) != 0) return false;
-  if (!in.read(reinterpret_cast<char*>(header), sizeof header)) return false;
-  if (header[0] != width || header[1] != height || header[2] != static_cast<int32_t>(grids.size())) return false;
-  for (Grid<float>* g : grids) {
-    g->resize(width, height);
-    if (!in.read(reinterpret_cast<char*>(g->data()), static_cast<std::streamsize>(g->size() * sizeof(float)))) return false;
+  const std::string path = pathFor(stage, key);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;  // absent: the ordinary miss, nothing to say
+  EntryHeader h{};
+  std::string problem = readHeader(in, h, fileSize(path));
+  if (problem.empty() && (h.width != width || h.height != height || h.count != static_cast<int32_t>(grids.size())))
+    problem = "holds other grids than its key says";
+  Fnv1a64 sum;
+  for (size_t i = 0; problem.empty() && i < grids.size(); ++i) {
+    grids[i]->resize(width, height);
+    if (!in.read(reinterpret_cast<char*>(grids[i]->data()), static_cast<std::streamsize>(gridBytes(width, height))))
+      problem = "truncated while reading";
+    sum.add(grids[i]->data(), gridBytes(width, height));
   }
-  return in.peek() == std::char_traits<char>::eof();
+  if (problem.empty() && sum.value() != h.checksum) problem = "checksum mismatch";
+  if (!problem.empty()) {
+    if (log_ && problem == kForeign) *log_ << "  cache: " << path << " is " << problem << ": recomputing\n";
+    else if (log_) *log_ << "  cache: " << path << " is damaged (" << problem << "): recomputing\n";
+    return false;
+  }
+  ::utimensat(AT_FDCWD, path.c_str(), nullptr, 0);  // marks it as used now; best effort
+  return true;
 }
 
 void PrecomputeCache::store(const std::string& stage, const std::string& key, const std::vector<const Grid<float>*>& grids) const {
   if (!enabled_ || grids.empty()) return;
-  std::error_code ec;
-  std::filesystem::create_directories(directory_, ec);
-  if (ec) return;  // a cache that cannot be written is no error: the bake goes on
-  std::string bytes(kMagic, 16);
-  const int32_t header[3] = {grids[0]->width(), grids[0]->height(), static_cast<int32_t>(grids.size())};
-  bytes.append(reinterpret_cast<const char*>(header), sizeof header);
-  for (const Grid<float>* g : grids) bytes.append(reinterpret_cast<const char*>(g->data()), g->size() * sizeof(float));
+  const std::string path = pathFor(stage, key);
+  EntryHeader h{};
+  std::memcpy(h.magic, kMagic, sizeof kMagic);
+  h.width = grids[0]->width();
+  h.height = grids[0]->height();
+  h.count = static_cast<int32_t>(grids.size());
+  Fnv1a64 sum;
+  for (const Grid<float>* g : grids) sum.add(g->data(), g->size() * sizeof(float));
+  h.payloadBytes = gridBytes(h.width, h.height) * grids.size();
+  h.checksum = sum.value();
   try {
-    writeTextAtomically(pathFor(stage, key), bytes);
-  } catch (const std::exception&) {
+    fs::create_directories(directory_);
+    writeEntryDurably(path, h, grids);
+  } catch (const std::exception& e) {
+    // A cache that cannot be written is no error: the bake goes on, and says so.
+    if (log_) *log_ << "  cache: not stored (" << e.what() << ")\n";
   }
+}
+
+CacheEntryCheck PrecomputeCache::checkEntry(const std::string& path) {
+  CacheEntryCheck check;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return check;
+  check.present = true;
+  EntryHeader h{};
+  check.problem = readHeader(in, h, fileSize(path));
+  if (!check.problem.empty()) return check;
+  Fnv1a64 sum;
+  std::vector<char> buffer(1 << 20);
+  for (uint64_t left = h.payloadBytes; left > 0;) {
+    const size_t n = static_cast<size_t>(std::min<uint64_t>(left, buffer.size()));
+    if (!in.read(buffer.data(), static_cast<std::streamsize>(n))) {
+      check.problem = "truncated while reading";
+      return check;
+    }
+    sum.add(buffer.data(), n);
+    left -= n;
+  }
+  if (sum.value() != h.checksum) check.problem = "checksum mismatch";
+  check.valid = check.problem.empty();
+  return check;
 }
 
 }  // namespace snow

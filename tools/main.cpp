@@ -1,7 +1,9 @@
 // snowbake: the command-line program. The only translation unit that includes CLI11.
-//   snowbake bake SCENE [--terrain FILE] [--out DIR] [--seed N] [--threads N] [--backend cpu|cuda|auto] [--set KEY=VALUE]...
+//   snowbake bake SCENE | --scene-list FILE --index N  [--terrain FILE] [--out DIR] [--seed N] [--threads N] [--backend cpu|cuda|auto] [--set KEY=VALUE]...
 //                [--cache-dir DIR] [--no-cache] [--quiet] [--progress human|json] [--log-file FILE]
 //   snowbake demo [--out DIR]
+//   snowbake cache prune [--cache-dir DIR] [--older-than-days D] [--max-size-gb G] [--dry-run]
+//   snowbake cache check [--cache-dir DIR]
 //   snowbake info FILE [--json] [--set KEY=VALUE]...
 //   snowbake help scene [--markdown]
 //   snowbake bench [--stage sun|wind|season|avalanche|avalanche-reference|stability|occlusion|mesh|bedforms|skiers|meshsnow|scaling|bandwidth|agreement|bake|all] [--sizes 256,512,...] [--days D] [--threads N]
@@ -11,6 +13,8 @@
 // 1 any other failure.
 #include <CLI/CLI.hpp>
 
+#include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <new>
@@ -23,7 +27,10 @@
 #include "bake/bake.h"
 #include "bake/bake_stage.h"
 #include "bake/progress.h"
+#include "bake/scene_list.h"
 #include "bench/bench.h"
+#include "precompute/cache.h"
+#include "precompute/cache_folder.h"
 #include "scene/scene_reference.h"
 #include "tools/info.h"
 
@@ -37,6 +44,8 @@ struct BakeCommand {
   CLI::App* cmd = nullptr;
   BakeOptions bake;
   std::string scene;
+  std::string sceneList;
+  long long index = -1;
   std::string terrainFile, backend;
   uint64_t seed = 0;
   int threads = 0;
@@ -44,6 +53,15 @@ struct BakeCommand {
   std::string cacheDir;
   bool noCache = false;
   std::string progress = "human", logFile;
+};
+
+struct CacheCommand {
+  CLI::App* cmd = nullptr;
+  CLI::App* prune = nullptr;
+  CLI::App* check = nullptr;
+  CachePruneOptions options;
+  std::string checkDir;
+  double olderThanDays = 0, maxSizeGb = 0;
 };
 
 struct DemoCommand {
@@ -72,7 +90,9 @@ struct BenchCommand {
 
 void addBakeCommand(CLI::App& app, BakeCommand& c) {
   c.cmd = app.add_subcommand("bake", "Simulate a season on a scene's terrain and write its outputs.");
-  c.cmd->add_option("SCENE", c.scene, "Scene file (TOML), or preset:NAME (preset:default)")->required();
+  c.cmd->add_option("SCENE", c.scene, "Scene file (TOML), or preset:NAME (preset:default)");
+  c.cmd->add_option("--scene-list", c.sceneList, "Bake one level of a list, `NAME SCENE [KEY=VALUE ...]` a line, into OUT/NAME (docs/farm.md)");
+  c.cmd->add_option("--index", c.index, "Which level of --scene-list, from 0 (e.g. $SLURM_ARRAY_TASK_ID)");
   c.cmd->add_option("--terrain", c.terrainFile, "Terrain file that replaces the scene's terrain");
   c.cmd->add_option("--out", c.bake.outDir, "Output folder (created if missing)")->capture_default_str();
   c.cmd->add_option("--seed", c.seed, "Random seed (overrides run.seed)");
@@ -92,6 +112,18 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
 void addDemoCommand(CLI::App& app, DemoCommand& c) {
   c.cmd = app.add_subcommand("demo", "Run the main job on the embedded default terrain (no input needed).");
   c.cmd->add_option("--out", c.out, "Output folder")->capture_default_str();
+}
+
+void addCacheCommand(CLI::App& app, CacheCommand& c) {
+  c.cmd = app.add_subcommand("cache", "Look after the precompute cache folder.");
+  c.cmd->require_subcommand(1);
+  c.prune = c.cmd->add_subcommand("prune", "Remove entries unused for a number of days, then the least recently used beyond a size.");
+  c.prune->add_option("--cache-dir", c.options.directory, "Cache folder (default $XDG_CACHE_HOME/snowbake or ~/.cache/snowbake)");
+  c.prune->add_option("--older-than-days", c.olderThanDays, "Remove entries not used for more than D days");
+  c.prune->add_option("--max-size-gb", c.maxSizeGb, "Then remove the least recently used until the rest take at most G GB (10^9 bytes)");
+  c.prune->add_flag("--dry-run", c.options.dryRun, "List what would be removed, remove nothing");
+  c.check = c.cmd->add_subcommand("check", "Read every entry and check its checksum; exit status 1 when one is damaged.");
+  c.check->add_option("--cache-dir", c.checkDir, "Cache folder (default $XDG_CACHE_HOME/snowbake or ~/.cache/snowbake)");
 }
 
 void addInfoCommand(CLI::App& app, InfoCommand& c) {
@@ -125,11 +157,30 @@ void addBenchCommand(CLI::App& app, BenchCommand& c) {
   c.cmd->add_option("--data", o.sharedDataDir, "Folder of the real DEMs (its dem/ subfolder)")->capture_default_str();
 }
 
+// SCENE, or the level --index of --scene-list: its scene, its sets before the command line's
+// (which win), and its own folder under --out.
+void chooseScene(const BakeCommand& c, BakeOptions& bake, std::ostream& log) {
+  const bool list = c.cmd->count("--scene-list") > 0, index = c.cmd->count("--index") > 0;
+  if (list && !c.scene.empty()) throw InputError("bake: give SCENE or --scene-list, not both");
+  if (list != index) throw InputError("bake: --scene-list and --index go together");
+  if (!list) {
+    if (c.scene.empty()) throw InputError("bake: no scene (give SCENE, or --scene-list FILE --index N)");
+    bake.scene = c.scene;
+    return;
+  }
+  const SceneListEntry level = sceneListEntry(c.sceneList, c.index);
+  bake.scene = level.scene;
+  bake.sets = level.sets;
+  bake.sets.insert(bake.sets.end(), c.bake.sets.begin(), c.bake.sets.end());
+  bake.outDir = (std::filesystem::path(c.bake.outDir) / level.name).string();
+  log << "level " << c.index << " of " << c.sceneList << " (line " << level.line << "): " << level.name << " -> " << bake.outDir << "\n";
+}
+
 // The command line's values over the scene's; unset options leave the scene's choice.
-BakeOptions bakeOptions(const BakeCommand& c, const std::vector<std::string>& argv) {
+BakeOptions bakeOptions(const BakeCommand& c, const std::vector<std::string>& argv, std::ostream& log) {
   BakeOptions bake = c.bake;
   bake.commandLine = argv;
-  bake.scene = c.scene;
+  chooseScene(c, bake, log);
   if (!c.terrainFile.empty()) bake.terrainFile = c.terrainFile;
   if (c.cmd->count("--seed")) bake.seed = c.seed;
   if (c.cmd->count("--threads")) bake.threads = c.threads;
@@ -149,9 +200,18 @@ ProgressOutcome bakeOutcome(const BakeResult& r) {
 }
 
 // The bake, its human log on stderr or in --log-file; with --progress json the last line on
-// stderr says how it ended (and errors are reported there, not as text).
+// stderr says how it ended (and errors are reported there, not as text). The scene (or level) is
+// chosen before the log is opened, so a bad list or index writes nothing.
 int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
-  BakeOptions bake = bakeOptions(c, argv);
+  std::ostringstream levelNote;
+  BakeOptions bake;
+  try {
+    bake = bakeOptions(c, argv, levelNote);
+  } catch (const InputError& e) {
+    if (c.progress != "json") throw;
+    JsonProgress(std::cerr).finish({"input_error", 2, -1, "", -1, e.what()});
+    return 2;
+  }
   std::ofstream logFile;
   std::ostream nowhere(nullptr);
   std::ostream* log = &std::cerr;
@@ -162,6 +222,7 @@ int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
   } else if (c.progress == "json") {
     log = &nowhere;
   }
+  *log << levelNote.str();
   if (c.progress != "json") {
     runBake(bake, *log);
     return 0;
@@ -187,6 +248,29 @@ void runDemoCommand(const DemoCommand& c) {
   demo.outDir = c.out;
   runBake(demo, std::cerr);
   std::cerr << "demo: outputs and manifest.json are in " << c.out << "\n";
+}
+
+void runCachePrune(CacheCommand& c) {
+  CachePruneOptions o = c.options;
+  if (o.directory.empty()) o.directory = PrecomputeCache::defaultDirectory();
+  if (c.prune->count("--older-than-days")) o.olderThanDays = c.olderThanDays;
+  if (c.prune->count("--max-size-gb")) o.maxSizeGb = c.maxSizeGb;
+  const CachePruneReport r = pruneCache(o, std::chrono::system_clock::now());
+  for (const std::string& path : r.removed) std::cout << (o.dryRun ? "would remove " : "removed ") << path << "\n";
+  std::cout << "cache " << o.directory << ": " << (o.dryRun ? "would remove " : "removed ") << r.removed.size() << " files ("
+            << r.removedBytes << " bytes), kept " << r.keptEntries << " entries (" << r.keptBytes << " bytes)\n";
+}
+
+int runCacheCheck(const CacheCommand& c) {
+  const std::string dir = c.checkDir.empty() ? PrecomputeCache::defaultDirectory() : c.checkDir;
+  size_t damaged = 0;
+  const std::vector<CacheEntryStatus> entries = checkCacheFolder(dir);
+  for (const CacheEntryStatus& e : entries) {
+    std::cout << (e.problem.empty() ? "ok " : "damaged ") << e.path << (e.problem.empty() ? "" : " (" + e.problem + ")") << "\n";
+    damaged += !e.problem.empty();
+  }
+  std::cout << "cache " << dir << ": " << entries.size() << " entries, " << damaged << " damaged\n";
+  return damaged ? 1 : 0;
 }
 
 // "256,512" -> {256, 512}; throws InputError naming the item that is not a number.
@@ -234,11 +318,13 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("snowbake ") + programVersion());
   BakeCommand bake;
   DemoCommand demo;
+  CacheCommand cache;
   InfoCommand info;
   HelpCommand help;
   BenchCommand bench;
   addBakeCommand(app, bake);
   addDemoCommand(app, demo);
+  addCacheCommand(app, cache);
   addInfoCommand(app, info);
   addHelpCommand(app, help);
   addBenchCommand(app, bench);
@@ -249,6 +335,10 @@ int main(int argc, char** argv) {
       return runBakeCommand(bake, std::vector<std::string>(argv, argv + argc));
     } else if (*demo.cmd) {
       runDemoCommand(demo);
+    } else if (*cache.prune) {
+      runCachePrune(cache);
+    } else if (*cache.check) {
+      return runCacheCheck(cache);
     } else if (*bench.cmd) {
       runBenchCommand(bench);
     } else if (*info.cmd) {

@@ -5,6 +5,8 @@
 # tools/measure-memory.sh compare with the memory model.
 # pybind11-dev, python3-dev, python3-pytest, python3-numpy and python3-openimageio are for the
 # optional Python module (-DSNOWBAKE_PYTHON=ON, python/) and its pytest.
+# slurm-wlm and munge are for the Slurm job-array test (tests/farm/slurm_array_test.sh), which
+# starts its own single-node Slurm; the bake itself never needs them.
 # --with-blender also installs Blender 3.4, which the test suite uses as a real client of the
 # outputs (tests/blender_test.cpp); the bake itself never needs it.
 set -euo pipefail
@@ -16,6 +18,7 @@ packages=(
   libtomlplusplus-dev libgdal-dev
   time
   pybind11-dev python3-dev python3-pytest python3-numpy python3-openimageio
+  slurm-wlm munge
 )
 # Blender's glTF importer imports numpy, which Debian's blender only recommends.
 if [ "${1:-}" = "--with-blender" ]; then packages+=(blender python3-numpy); fi
