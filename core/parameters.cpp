@@ -64,7 +64,7 @@ const std::vector<ParameterInfo>& parameterTable() {
       {"avalanche_wet_granular_fraction", &P::avalancheWetGranularFraction, "-", 0.0, 1.0, "alpha of wet snow: share of granular friction it keeps"},
       {"avalanche_dynamic_friction_deg", &P::avalancheDynamicFrictionDeg, "deg", 0.5, 80.0, "delta: Coulomb friction angle of flowing snow (the rest angle holds snow that is not flowing)"},
       {"avalanche_turbulence_mps2", &P::avalancheTurbulenceMps2, "m/s^2", 0.0, 1e6, "xi: Voellmy turbulent drag g s^2 / (xi h) on flowing snow (0: none)"},
-      {"avalanche_rate_per_km2_per_day", &P::avalancheRatePerKm2PerDay, "1/(km^2 day)", 0.0, 100.0, "spontaneous avalanche release tries (0: none)"},
+      {"avalanche_rate_per_km2_per_day", &P::avalancheRatePerKm2PerDay, "1/(km^2 day)", 0.0, 100.0, "spontaneous avalanches (an event that finds no cell able to release waits for one; 0: none)"},
       {"avalanche_reach_m_per_m", &P::avalancheReachMPerM, "m/m", 0.0, 10000.0, "release reach per metre of unstable snow"},
       {"avalanche_min_unstable_m", &P::avalancheMinUnstableM, "m", 0.001, 10.0, "no release where U is thinner"},
       {"avalanche_stop_speed_mps", &P::avalancheStopSpeedMps, "m/s", 1e-4, 10.0, "at rest below this pipe speed"},
