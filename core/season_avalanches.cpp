@@ -12,6 +12,8 @@ void SeasonRun::releaseUser(const UserAvalanche& u, double day, double seaLevelT
 
 // An avalanche's start: the first pending user (or skier) release, else a spontaneous try.
 void SeasonRun::startAvalanche(int slot, const EventContext& e) {
+  const bool retry = retryingRelease_;
+  retryingRelease_ = false;
   timed(slot, [&] {
     const double t0 = cfg_.weather.at(e.day).seaLevelTemperatureC;
     if (!pendingAvalanches_.empty()) {
@@ -19,12 +21,36 @@ void SeasonRun::startAvalanche(int slot, const EventContext& e) {
       pendingAvalanches_.pop_front();
       releaseUser(u, e.day, t0);
       if (!avalanche_->active()) report_.avalanches.push_back(avalanche_->record());
+      if (retry) scheduleWaitingRelease(e.day);
     } else {
-      const RandomKey key{cfg_.seed};
-      const Philox4x32 r = key.draw(e.eventIndex, 0, RngStream::Avalanche);
-      ++report_.avalancheTries;
-      avalanche_->trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), e.day, t0);
+      trySpontaneousRelease(e, retry);
     }
+  });
+}
+
+// A spontaneous release at a cell drawn among those that can release. One that finds none waits:
+// the paper's rate is of avalanches, and natural ones come when the snowpack lets them (in
+// cycles during and after storms), so it is tried again at each state-change step (when
+// stability changes) until it releases or the season ends; one waiting release a step.
+void SeasonRun::trySpontaneousRelease(const EventContext& e, bool retry) {
+  const RandomKey key{cfg_.seed};
+  const Philox4x32 r = key.draw(e.eventIndex, 0, RngStream::Avalanche);
+  if (!retry) ++report_.avalancheTries;
+  const bool released = avalanche_->trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), e.day, cfg_.weather.at(e.day).seaLevelTemperatureC);
+  if (retry && released) --waitingReleases_;
+  if (!retry && !released) ++waitingReleases_;
+  if (waitingReleases_ > 0) scheduleWaitingRelease(e.day);
+}
+
+void SeasonRun::scheduleWaitingRelease(double day) {
+  if (waitingRetryScheduled_) return;
+  waitingRetryScheduled_ = true;
+  scheduler_.addAction(day + 1.0 / p_.stateChangeStepsPerDay, [this](double d) {
+    waitingRetryScheduled_ = false;
+    if (waitingReleases_ <= 0) return;
+    if (scheduler_.isActive(avalancheId_)) return scheduleWaitingRelease(d);
+    retryingRelease_ = true;
+    scheduler_.start(avalancheId_);
   });
 }
 

@@ -53,6 +53,8 @@ class SeasonRun {
   void releaseUser(const UserAvalanche& u, double day, double seaLevelTemperatureC);
   void startAvalanche(int slot, const EventContext& e);
   void stopAvalanche(int slot);
+  void trySpontaneousRelease(const EventContext& e, bool retry);
+  void scheduleWaitingRelease(double day);
   void addAvalanches();
   // season_skiers.cpp
   void runSkiers(std::vector<SkierStart> starts, double day);
@@ -89,6 +91,9 @@ class SeasonRun {
   std::optional<AvalancheRun> avalanche_;
   std::deque<UserAvalanche> pendingAvalanches_;
   int avalancheId_ = -1;
+  // Spontaneous releases that found no cell able to release, waiting for one (season_avalanches.cpp).
+  int waitingReleases_ = 0;
+  bool waitingRetryScheduled_ = false, retryingRelease_ = false;
   bool skiing_ = false;
   std::optional<SkiRun> ski_;
   uint64_t skierId_ = 0;

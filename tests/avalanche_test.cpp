@@ -122,6 +122,35 @@ TEST(Avalanche, InclinedPlaneFlowsOnlyAboveTheRestAngle) {
   }
 }
 
+// Thin-flow stop: 15 cm of released snow on a plane of slope 1.2 with h_stop = 20 cm does not
+// flow at all (depths unchanged, the unstable snow below it still there); with the default
+// h_stop (5 cm) the same release runs down and entrains the snow below.
+TEST(Avalanche, MovingSnowNoThickerThanTheStopThicknessDoesNotFlow) {
+  for (double stop : {0.2, 0.05}) {
+    SnowState s = test::terrainFrom(40, 120, 2.0, -20.f, [](double, double y) { return 2000.0 - 1.2 * y; });
+    for (int y = 10; y < 120; ++y)
+      for (int x = 10; x < 30; ++x) s.unstableM(x, y) = y < 40 ? 0.15f : 0.5f;
+    const SnowState start = s;
+    ModelParameters p;
+    p.avalancheStopThicknessM = stop;  // (the default reach releases 7.5 m around the rupture point)
+    const Outcome o = runAvalanche(s, 20, 25, p);
+    ASSERT_TRUE(o.record.released) << o.record.why;
+    double moved = 0;
+    for (int y = 0; y < 120; ++y)
+      for (int x = 0; x < 40; ++x) moved += std::abs(o.state.depthM(x, y) - start.depthM(x, y));
+    std::printf("[ measure ] h_stop %.2f m: %d steps, moved %.3f m summed, unstable at (20, 80) %.3f m; %s\n", stop, o.record.steps, moved,
+                o.state.unstableM(20, 80), o.record.why.c_str());
+    expectFiniteNonNegative(o.state);
+    if (stop > 0.15) {
+      EXPECT_EQ(moved, 0.0);
+      EXPECT_EQ(o.state.unstableM(20, 80), 0.5f);
+    } else {
+      EXPECT_GT(moved, 10.0);
+      EXPECT_LT(o.state.unstableM(20, 80), 0.5f);
+    }
+  }
+}
+
 // The same release, cold (dry, granular) and warm (wet, viscous with the paper's small k_v): the
 // wet one runs out farther and its deposit is thinner. This is what the model says: granular
 // friction stops dry snow on the runout as soon as its slope is below theta_c, while wet snow

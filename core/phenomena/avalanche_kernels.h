@@ -17,9 +17,16 @@ struct AvalancheArgs {
   float wetTemperatureC = 0.f;       // alpha = alphaWet (mostly viscous) at or above
   float alphaWet = 0.2f;             // the granular share left in wet snow
   float seaLevelTemperatureC = 0.f;  // T0 of the day
+  float stopThicknessM = 0.f;        // h_stop: moving snow this thin or thinner does not flow
   // The box the pass runs over: [x0, x1) x [y0, y1).
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
 };
+
+// A cell that can send snow: moving snow thicker than h_stop (a granular layer thinner than its
+// h_stop comes to rest, Pouliquen 1999; it still receives snow, and flows again once thicker).
+SNOW_HD SNOW_INLINE bool avalancheSource(const SnowFieldsView& v, const AvalancheArgs& a, int i) {
+  return v.moving[i] != 0 && v.unstable[i] > a.stopThicknessM;
+}
 
 // Pipe d of a cell: east, south-east, south, south-west.
 SNOW_HD SNOW_INLINE int pipeDx(int d) { return d == 0 ? 1 : (d == 1 ? 1 : (d == 2 ? 0 : -1)); }
@@ -43,7 +50,7 @@ struct InBox {
 struct AvalancheFlowKernel {
   SnowFieldsView v;
   AvalancheArgs a;
-  SNOW_HD bool source(int i) const { return v.moving[i] != 0 && v.unstable[i] > 0.f; }
+  SNOW_HD bool source(int i) const { return avalancheSource(v, a, i); }
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
     float* f = v.flows + 4 * static_cast<size_t>(i);
@@ -148,13 +155,17 @@ struct AvalancheHeightKernel {
     if (in == 0.0 && out == 0.0) return;
     const double c = static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
     double u = v.avalancheU[i];
-    if (in > 0.0 && !v.moving[i]) {  // snow arrives: the cell starts moving and entrains its own
+    u = u + (static_cast<double>(a.dtS) * (in - out)) / c;
+    u = u > 0.0 ? u : 0.0;
+    // Snow arrives: once the snow it brought (U + P above their value at release) is thicker than
+    // h_stop, the cell starts moving and entrains its own unstable snow and powder. A thinner
+    // trickle rests on it (it could not flow on) and entrains nothing, so a sluff does not set
+    // every slope below it moving.
+    if (in > 0.0 && !v.moving[i] && u + v.powder[i] - v.avalancheBefore[i] > a.stopThicknessM) {
       v.moving[i] = 1;
       u = u + v.powder[i];
       v.powder[i] = 0.f;
     }
-    u = u + (static_cast<double>(a.dtS) * (in - out)) / c;
-    u = u > 0.0 ? u : 0.0;
     v.avalancheU[i] = u;
     v.unstable[i] = static_cast<float>(u);
     float speed = 0.f;  // the fastest of the cell's eight pipes, as the row statistics read them
@@ -174,7 +185,8 @@ struct AvalancheHeightKernel {
 // carry no stale flows.
 struct AvalancheClearIdleKernel {
   SnowFieldsView v;
-  SNOW_HD bool source(int i) const { return v.moving[i] != 0 && v.unstable[i] > 0.f; }
+  AvalancheArgs a;
+  SNOW_HD bool source(int i) const { return avalancheSource(v, a, i); }
   SNOW_HD void operator()(int x, int y) const {
     const int i = v.index(x, y);
     float* f = v.flows + 4 * static_cast<size_t>(i);
@@ -187,7 +199,7 @@ struct AvalancheClearIdleKernel {
 };
 
 // One thread per row of the box: the fastest pipe, the deepest moving snow and the columns of
-// the moving snow, for the host to pick the next substep and the next box.
+// the snow that can flow, for the host to pick the next substep and the next box.
 struct AvalancheRowStatsKernel {
   SnowFieldsView v;
   AvalancheArgs a;
@@ -200,7 +212,7 @@ struct AvalancheRowStatsKernel {
       const int i = v.index(x, y);
       const float* f = v.flows + 4 * static_cast<size_t>(i);
       for (int d = 0; d < 4; ++d) speed = maxf(speed, fabsf(f[d]) / c);
-      if (v.moving[i] && v.unstable[i] > 0.f) {
+      if (avalancheSource(v, a, i)) {  // the box follows the snow that can still flow
         depth = maxf(depth, v.unstable[i]);
         if (x < lo) lo = x;
         hi = x;
@@ -252,6 +264,9 @@ struct AvalancheSettleKernel {
       v.stable[i] = v.stable[i] + v.unstable[i];
       v.unstable[i] = 0.f;
       v.moving[i] = 0;
+    } else if (net > 0.f) {  // a trickle that came to rest on a cell it did not set moving
+      v.stable[i] = v.stable[i] + net;
+      v.unstable[i] = maxf(0.f, v.unstable[i] - net);
     }
   }
 };

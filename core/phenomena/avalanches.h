@@ -57,6 +57,7 @@ inline AvalancheArgs makeAvalancheArgs(const ModelParameters& p, double seaLevel
   a.seaLevelTemperatureC = static_cast<float>(seaLevelTemperatureC);
   a.alphaWet = static_cast<float>(p.avalancheWetGranularFraction);
   a.tanDynamicAngle = static_cast<float>(std::tan(p.avalancheDynamicFrictionDeg * kPi / 180.0));
+  a.stopThicknessM = static_cast<float>(p.avalancheStopThicknessM);
   a.inverseDragMps2 = p.avalancheTurbulenceMps2 > 0.0 ? static_cast<float>(1.0 / p.avalancheTurbulenceMps2) : 0.f;
   return a;
 }
@@ -87,7 +88,7 @@ void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a,
     exec.forEachCell(w, h, InBox<AvalancheHeightKernel>{AvalancheHeightKernel{v, a}, a.x0, a.y0});
   }
   if (a.x1 > a.x0 && a.y1 > a.y0) {
-    exec.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheClearIdleKernel>{AvalancheClearIdleKernel{v}, a.x0, a.y0});
+    exec.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheClearIdleKernel>{AvalancheClearIdleKernel{v, a}, a.x0, a.y0});
     exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a});
   }
 }
