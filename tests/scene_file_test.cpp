@@ -5,6 +5,7 @@
 
 #include "core/errors.h"
 #include "scene/scene.h"
+#include "temp_dir.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -14,10 +15,7 @@ namespace {
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() / ("snowbake_scene_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                                        "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path);
-    fs::create_directories(path);
+    path = snow::test::uniqueTestDir("scene_test");
   }
   ~TempDir() { fs::remove_all(path); }
   std::string write(const std::string& name, const std::string& text) const {
