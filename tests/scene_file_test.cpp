@@ -46,7 +46,7 @@ start_day = 3
 end_day = 6
 [[events]]
 type = "snowfall"
-day = 40
+day = 8
 duration_days = 2
 [parameters]
 rain_snow_limit_m = 1300
@@ -97,7 +97,7 @@ TEST(SceneFile, ValidSceneIsUnderstood) {
   ASSERT_EQ(s.weather.snowfallPeriods.size(), 1u);
   EXPECT_DOUBLE_EQ(s.weather.snowfallPeriods[0].endDay, 6.0);
   ASSERT_EQ(s.userSnowfalls.size(), 1u);
-  EXPECT_DOUBLE_EQ(s.userSnowfalls[0].endDay, 42.0);
+  EXPECT_DOUBLE_EQ(s.userSnowfalls[0].endDay, 10.0);
   EXPECT_DOUBLE_EQ(s.params.rainSnowLimitM, 1300.0);
   EXPECT_DOUBLE_EQ(s.params.meltRateMPerDayPerC, 0.02);
   EXPECT_DOUBLE_EQ(s.params.snowfallRatePerDay, 1e-4);  // untouched default
