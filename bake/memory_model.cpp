@@ -91,8 +91,16 @@ struct GridSizes {
   double cells, state, backend, layersOneDay;
 };
 
+// Pixels of a grid layer's files: outputs.resize, else the grid's cells.
+double outputPixels(const OutputRequest& o, double cells) {
+  return o.resizeWidth > 0 ? static_cast<double>(o.resizeWidth) * o.resizeHeight : cells;
+}
+
 // What writing one day's outputs holds beside the state: one layer at a time, or all of them
-// for the multi-channel EXR, the encodings' integer copy, the day's wind and sun, displacement.
+// for the multi-channel EXR, the encodings' integer copy, the day's wind and sun, displacement;
+// the deliverables' own buffers: the layer resized with its valid mask (outputs.resize), the
+// file being written cut from it (a tile, or the whole image copied untiled) with its mask, and
+// the engine maps' weights and pixels.
 std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
   const OutputRequest& o = s.outputs;
   uint8_t needs = 0;
@@ -100,7 +108,17 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
     if (const LayerInfo* l = findLayer(name)) needs |= l->needs;
   std::vector<MemoryOwner> w;
   const double layers = static_cast<double>(o.layers.size());
+  const double px = outputPixels(o, cells);
   w.push_back({"layers being written", cells * 4.0 * (o.multichannelExr ? layers + 1 : 2.0), o.multichannelExr ? "outputs.multichannel_exr" : "outputs.layers"});
+  if (o.resizeWidth > 0) w.push_back({"resized layer and its mask", px * 5.0, "outputs.resize"});
+  const bool tiled = o.tiles.convention != TileConvention::None && o.tiles.sizePx > 0;
+  w.push_back({tiled ? "tile being written" : "image being written", (tiled ? static_cast<double>(o.tiles.sizePx) * o.tiles.sizePx : px) * 5.0,
+               tiled ? "outputs.tiles.size_px" : "outputs.layers"});
+  // The splat map: three weights, their mask and the RGBA pixels; the normal map: the surface,
+  // its mask and the RGB pixels (one of them at a time).
+  const double splat = hasLayer(s, "splat_map") ? px * (3.0 * 4.0 + 1.0 + 4.0) : 0.0;
+  const double normal = hasLayer(s, "snow_normal") ? px * (4.0 + 1.0 + 3.0) : 0.0;
+  if (splat + normal > 0) w.push_back({"engine map being written", std::max(splat, normal), "outputs.layers"});
   if (!o.encodings.empty()) w.push_back({"encodings", cells * 2.0, "outputs.encodings"});
   if (needs & kNeedsWind) w.push_back({"the day's wind", cells * 16.0, "outputs.layers"});
   if (needs & kNeedsSun) w.push_back({"the day's sun", cells * 4.0, "outputs.layers"});
@@ -110,15 +128,17 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
   return w;
 }
 
-// Encodings on a "season" range wait for the season's end: each frame's layer is held until then.
-double seasonRangeHeldBytes(const Scene& s, double cells) {
+// Encodings on a "season" range wait for the season's end: each day's layer (at the output size)
+// and its mask are held until then, once for each encoding but r32 (floats need no range); the
+// ski-track texture (`skiTextureBytes`, its own size) without a mask. The bytes of one day.
+double seasonRangeBytesPerDay(const Scene& s, double cells, double skiTextureBytes) {
   const OutputRequest& o = s.outputs;
-  if (o.encodings.empty()) return 0.0;
-  double perFrame = 0.0;
+  const double encodings = static_cast<double>(std::count_if(o.encodings.begin(), o.encodings.end(), [](const std::string& e) { return e != "r32"; }));
+  double perDay = 0.0;
   for (const auto& name : o.layers)
     if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
-      perFrame += cells * 4.0 * (name == "ski_tracks" ? o.skiTrackFactor * o.skiTrackFactor : 1.0);
-  return perFrame * static_cast<double>(o.frameDays.size());
+      perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : outputPixels(o, cells) * 5.0;
+  return perDay * encodings;
 }
 
 double vdbBytes(const Scene& s, const GridSpec& spec) {
@@ -200,6 +220,8 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   const double track = s.outputs.skiTrackFactor;
   const bool skiTracks = hasLayer(s, "ski_tracks");
   const MemoryOwner skiTexture{"ski-track texture", skiTracks ? cells * track * track * 4.0 : 0.0, "outputs.ski_track_factor"};
+  // The frames (and, once written, the season's end) whose encodings wait for a "season" range.
+  const double heldPerDay = seasonRangeBytesPerDay(s, cells, skiTexture.bytes);
   if (occlusion) {
     MemoryPhase occ{"occlusion", {terrain, stateOwner,
                                   {"ray scene (Embree)", rayScene, "terrain.size"},
@@ -234,14 +256,14 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
     season.owners.push_back({"frame in flight: state copies", 2.0 * state, "outputs.frames_days"});
     if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor"});
     for (const auto& w : writer) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key});
-    season.owners.push_back({"frames held for their season range", seasonRangeHeldBytes(s, cells), "outputs.ranges"});
+    season.owners.push_back({"frames held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size()), "outputs.ranges"});
   }
   p.phases.push_back(season);
 
   MemoryPhase out{"outputs", {terrain, stateOwner, exposure, wind, {"backend fields", backend, "terrain.size"}}};
   if (skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * skiTexture.bytes, "outputs.ski_track_factor"});
   out.owners.insert(out.owners.end(), writer.begin(), writer.end());
-  out.owners.push_back({"frames held for their season range", seasonRangeHeldBytes(s, cells), "outputs.ranges"});
+  out.owners.push_back({"days held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size() + 1), "outputs.ranges"});
   if (s.outputs.vdb) out.owners.push_back({"VDB", vdbBytes(s, spec), "outputs.vdb_voxel_size_m"});
   p.phases.push_back(out);
   return p;

@@ -73,49 +73,68 @@ std::string encodingExtension(const std::string& encoding) {
   throw std::invalid_argument("unknown encoding '" + encoding + "'");
 }
 
-void writeQuantised(const std::string& path, const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid,
-                    double lo, double hi, int nodataPixel, int compressionLevel) {
+namespace {
+// std::lround for v >= 0, without the library call: v - trunc(v) is exact in double. NaN gives 0
+// (as lround's LONG_MIN did once cast to a pixel).
+long roundHalfUp(double v) {
+  if (!(v >= 0.0)) return 0;
+  const long r = static_cast<long>(v);
+  return r + (v - static_cast<double>(r) >= 0.5 ? 1 : 0);
+}
+}  // namespace
+
+std::vector<uint16_t> quantisedPixels(const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid, double lo,
+                                      double hi, int nodataPixel) {
   encodingExtension(encoding);  // refuses an unknown encoding
-  const bool eight = encoding == "png8";
-  const double levels = eight ? 255.0 : 65535.0, span = hi - lo;
+  const double levels = encoding == "png8" ? 255.0 : 65535.0, span = hi - lo;
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
-  auto quantise = [&](size_t i) -> long {
-    if (masked && !valid->values()[i]) return nodataPixel;
-    if (!(span > 0.0)) return 0L;
-    return std::lround(std::clamp((static_cast<double>(grid.values()[i]) - lo) / span, 0.0, 1.0) * levels);
-  };
+  std::vector<uint16_t> pixels(grid.size());
+  for (size_t i = 0; i < grid.size(); ++i) {
+    if (masked && !valid->values()[i]) pixels[i] = static_cast<uint16_t>(nodataPixel);
+    else if (!(span > 0.0)) pixels[i] = 0;
+    else pixels[i] = static_cast<uint16_t>(roundHalfUp(std::clamp((static_cast<double>(grid.values()[i]) - lo) / span, 0.0, 1.0) * levels));
+  }
+  return pixels;
+}
+
+void writeQuantisedPixels(const std::string& path, const std::string& encoding, int width, int height, const uint16_t* pixels,
+                          int compressionLevel) {
+  encodingExtension(encoding);
+  const size_t n = static_cast<size_t>(width) * height;
   writeAtomically(path, [&](const std::string& temp) {
     if (encoding == "r16") {
-      std::string bytes(grid.size() * 2, '\0');
-      for (size_t i = 0; i < grid.size(); ++i) {
-        const auto q = static_cast<uint16_t>(quantise(i));
-        bytes[2 * i] = static_cast<char>(q & 0xff);
-        bytes[2 * i + 1] = static_cast<char>(q >> 8);
+      std::string bytes(n * 2, '\0');
+      for (size_t i = 0; i < n; ++i) {
+        bytes[2 * i] = static_cast<char>(pixels[i] & 0xff);
+        bytes[2 * i + 1] = static_cast<char>(pixels[i] >> 8);
       }
       std::ofstream out(temp, std::ios::binary);
       out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
       if (!out) throw std::runtime_error("cannot write " + path);
       return;
     }
+    const bool eight = encoding == "png8";
     auto out = OIIO::ImageOutput::create("png");
     if (!out) throw std::runtime_error("cannot create a PNG writer for " + path + ": " + OIIO::geterror());
-    OIIO::ImageSpec spec(grid.width(), grid.height(), 1, eight ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
+    OIIO::ImageSpec spec(width, height, 1, eight ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::UINT16);
     spec.attribute("oiio:ColorSpace", "Linear");
     spec.attribute("png:compressionLevel", compressionLevel);
     setPngFilter(spec, compressionLevel);
     spec.attribute("Software", "snowbake");
     spec.attribute("DateTime", "");
-    std::vector<uint16_t> wide(eight ? 0 : grid.size());
-    std::vector<uint8_t> narrow(eight ? grid.size() : 0);
-    for (size_t i = 0; i < grid.size(); ++i) {
-      if (eight) narrow[i] = static_cast<uint8_t>(quantise(i));
-      else wide[i] = static_cast<uint16_t>(quantise(i));
-    }
+    std::vector<uint8_t> narrow(eight ? n : 0);
+    for (size_t i = 0; i < narrow.size(); ++i) narrow[i] = static_cast<uint8_t>(pixels[i]);
     const bool ok = out->open(temp, spec) &&
-                    (eight ? out->write_image(OIIO::TypeDesc::UINT8, narrow.data()) : out->write_image(OIIO::TypeDesc::UINT16, wide.data())) &&
+                    (eight ? out->write_image(OIIO::TypeDesc::UINT8, narrow.data()) : out->write_image(OIIO::TypeDesc::UINT16, pixels)) &&
                     out->close();
     if (!ok) throw std::runtime_error("cannot write " + path + ": " + out->geterror());
   });
+}
+
+void writeQuantised(const std::string& path, const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid,
+                    double lo, double hi, int nodataPixel, int compressionLevel) {
+  const std::vector<uint16_t> pixels = quantisedPixels(encoding, grid, valid, lo, hi, nodataPixel);
+  writeQuantisedPixels(path, encoding, grid.width(), grid.height(), pixels.data(), compressionLevel);
 }
 
 WrittenImage writeNormalised(const std::string& base, const std::string& encoding, const Grid<float>& grid, int compressionLevel) {

@@ -49,6 +49,12 @@ std::string encodingExtension(const std::string& encoding);
 // size) is 0 are written as pixel `nodataPixel`. Written atomically.
 void writeQuantised(const std::string& path, const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid,
                     double lo, double hi, int nodataPixel, int compressionLevel = kDefaultCompressionLevel);
+// writeQuantised in two halves, so that the tiles of one image share the quantising: the pixels
+// (0..255 for png8, 0..65535 otherwise, one a cell), and `width` x `height` of them written.
+std::vector<uint16_t> quantisedPixels(const std::string& encoding, const Grid<float>& grid, const Grid<uint8_t>* valid, double lo,
+                                      double hi, int nodataPixel);
+void writeQuantisedPixels(const std::string& path, const std::string& encoding, int width, int height, const uint16_t* pixels,
+                          int compressionLevel = kDefaultCompressionLevel);
 
 // Bilinear resampling of a cell-centred grid to width x height cells over the same extent (the
 // displacement maps at a requested resolution). Edge cells clamp. Exact for linear fields.

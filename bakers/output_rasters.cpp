@@ -33,17 +33,21 @@ void OutputWriter::writeFloatRaster(const BaseOf& base, double day, const std::s
   const auto& out = scene_.outputs;
   const TileLayout l = tileLayout(out.tiles, grid.width(), grid.height());
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
+  Grid<float> cut;
+  Grid<uint8_t> cutValid;
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
-      const Grid<float> tile = cutTile(grid, l, c, r);
-      const Grid<uint8_t> tileValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
+      // Untiled, the image itself (no copy).
+      if (l.tiled()) cut = cutTile(grid, l, c, r), cutValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
+      const Grid<float>& tile = l.tiled() ? cut : grid;
+      const Grid<uint8_t>* tileValid = !masked ? nullptr : l.tiled() ? &cutValid : valid;
       const std::string tileBase = base(stem + tileSuffix(l, c, r));
       // TIFF through GDAL with the terrain's CRS and this tile's geotransform; EXR through OpenImageIO.
       const std::string path = out.format == ImageFormat::Tiff ? tileBase + ".tif" : writeFloatImage(tileBase, "exr", tile, layerName, out.compressionLevel).path;
       if (out.format == ImageFormat::Tiff)
         writeGeoTiff(path, tile, src_.geo.pixels(grid.width(), grid.height(), c * l.step, r * l.step), layerName);
       SeenRange seen;  // NODATA left out
-      seen.widen(tile, masked ? &tileValid : nullptr);
+      seen.widen(tile, tileValid);
       listFile(path, content, unit, floatImageFormat_, day, static_cast<float>(seen.mapping(RangeMode::Own).lo),
                static_cast<float>(seen.mapping(RangeMode::Own).hi));
       noteTile(l, c, r, grid.width(), grid.height());
@@ -56,14 +60,18 @@ void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std:
   const auto& out = scene_.outputs;
   const TileLayout l = tileLayout(out.tiles, grid.width(), grid.height());
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
+  // Quantised once for every tile: a pixel depends on its cell alone, so cutting the pixels
+  // gives each tile's bytes.
+  const std::vector<uint16_t> pixels = write ? quantisedPixels(encoding, grid, masked ? valid : nullptr, m.lo, m.hi, kNodataPixel)
+                                             : std::vector<uint16_t>();
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + encodingExtension(encoding);
-      if (write) {
-        const Grid<float> tile = cutTile(grid, l, c, r);
-        const Grid<uint8_t> tileValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
-        writeQuantised(path, encoding, tile, masked ? &tileValid : nullptr, m.lo, m.hi, kNodataPixel, out.compressionLevel);
-      }
+      if (write && l.tiled())
+        writeQuantisedPixels(path, encoding, l.tileWidth, l.tileHeight,
+                             cutTile(pixels.data(), grid.width(), grid.height(), 1, l, c, r).data(), out.compressionLevel);
+      else if (write)
+        writeQuantisedPixels(path, encoding, grid.width(), grid.height(), pixels.data(), out.compressionLevel);
       listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi));
       ManifestFile& f = currentSink().files.back();
       f.rangeMode = rangeModeName(m.mode), f.rangeLo = m.lo, f.rangeHi = m.hi, f.nodataPixel = kNodataPixel;
@@ -91,7 +99,8 @@ void OutputWriter::writeRawFloatRaster(const BaseOf& base, double day, const std
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
-      const Grid<float> tile = cutTile(grid, l, c, r);
+      const Grid<float> cut = l.tiled() ? cutTile(grid, l, c, r) : Grid<float>();
+      const Grid<float>& tile = l.tiled() ? cut : grid;
       writeRawFloat32(path, tile);
       SeenRange seen;
       seen.widen(tile, nullptr);

@@ -3,6 +3,7 @@
 // both hold); the last row and column of tiles reach past the image, padded with its edge pixels,
 // so every tile has the same size. Untiled (convention none) an image is one tile, itself.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -31,13 +32,12 @@ template <class T>
 std::vector<T> cutTile(const T* image, int width, int height, int channels, const TileLayout& l, int column, int row) {
   std::vector<T> tile(static_cast<size_t>(l.tileWidth) * l.tileHeight * channels);
   const int x0 = column * l.step, y0 = row * l.step;
+  const int inside = std::clamp(width - x0, 0, l.tileWidth);  // columns of the tile within the image
   for (int y = 0; y < l.tileHeight; ++y) {
-    const int sy = std::min(y0 + y, height - 1);
-    for (int x = 0; x < l.tileWidth; ++x) {
-      const int sx = std::min(x0 + x, width - 1);
-      for (int c = 0; c < channels; ++c)
-        tile[(static_cast<size_t>(y) * l.tileWidth + x) * channels + c] = image[(static_cast<size_t>(sy) * width + sx) * channels + c];
-    }
+    const T* source = image + static_cast<size_t>(std::min(y0 + y, height - 1)) * width * channels;
+    T* out = tile.data() + static_cast<size_t>(y) * l.tileWidth * channels;
+    if (inside > 0) std::copy_n(source + static_cast<size_t>(x0) * channels, static_cast<size_t>(inside) * channels, out);
+    for (int x = inside; x < l.tileWidth; ++x) std::copy_n(source + static_cast<size_t>(width - 1) * channels, channels, out + static_cast<size_t>(x) * channels);
   }
   return tile;
 }

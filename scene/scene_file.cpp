@@ -327,9 +327,9 @@ void readEvents(Scene& scene, const toml::table& root, const std::string& source
     requireKeys(e, {"type", "day"}, source, "events");
     EventSpec ev;
     applyBindings(ev, e, "events", source, scene);
+    if (ev.day > scene.days)
+      fail(source, *e.get("day"), "events.day", "day " + numberText(ev.day) + " is after the season's end (season.days = " + numberText(scene.days) + ")");
     if (ev.type != EventType::Snowfall) {
-      if (ev.day > scene.days)
-        fail(source, *e.get("day"), "events.day", "day " + numberText(ev.day) + " is after the season's end (season.days = " + numberText(scene.days) + ")");
       addPointEvent(scene, ev, e, source);
       continue;
     }

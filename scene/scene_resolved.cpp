@@ -56,6 +56,17 @@ bool alwaysFilled(const std::string& section) {
   return false;
 }
 
+// The table a rule's key would go in when the scene left it out, as "[name]": its section when
+// that is absent and not always filled, else its sub-table ([outputs.tiles]) when that is absent
+// (each is a choice the scene makes); "" when the key can be written.
+std::string absentScope(const toml::table& root, const std::string& path) {
+  const std::string section = path.find('.') == std::string::npos ? "" : path.substr(0, path.find('.'));
+  if (!alwaysFilled(section) && !root.contains(section)) return "[" + section + "]";
+  const std::string parent = path.substr(0, path.rfind('.'));
+  if (parent.find('.') != std::string::npos && !root.at_path(parent).node()) return "[" + parent + "]";
+  return "";
+}
+
 // The keys left out, with the defaults that cannot be written listed in `unwritten`.
 void addDefaults(toml::table& root, const Scene& scene, std::vector<std::string>& unwritten) {
   for (const Rule& rule : sceneRules()) {
@@ -65,16 +76,8 @@ void addDefaults(toml::table& root, const Scene& scene, std::vector<std::string>
     // is left as the scene has it so that the resolved scene is the same for any).
     const bool fromCommandLine = rule.path == "run.seed" || rule.path == "run.backend";
     if (root.at_path(rule.path).node() && !fromCommandLine) continue;
-    const std::string section = rule.path.find('.') == std::string::npos ? "" : rule.path.substr(0, rule.path.find('.'));
-    // A sub-table ([outputs.tiles]) is a choice the scene makes, like a section above.
-    const std::string parent = rule.path.substr(0, rule.path.rfind('.'));
-    const bool absentSubTable = parent.find('.') != std::string::npos && !root.at_path(parent).node();
-    if (absentSubTable) {
-      if (unwritten.empty() || unwritten.back() != "[" + parent + "]") unwritten.push_back("[" + parent + "]");
-      continue;
-    }
-    if (!alwaysFilled(section) && !root.contains(section)) {
-      if (unwritten.empty() || unwritten.back() != "[" + section + "]") unwritten.push_back("[" + section + "]");
+    if (const std::string scope = absentScope(root, rule.path); !scope.empty()) {
+      if (unwritten.empty() || unwritten.back() != scope) unwritten.push_back(scope);
       continue;
     }
     static const Scene defaults;

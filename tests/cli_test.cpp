@@ -12,6 +12,7 @@
 
 #include "bakers/grid_writer.h"
 #include "bake/bake.h"
+#include "temp_dir.h"
 
 using namespace std::string_literals;
 namespace fs = std::filesystem;
@@ -25,11 +26,7 @@ struct ProcessResult {
 };
 
 fs::path workDir() {
-  const fs::path p = fs::temp_directory_path() / ("snowbake_cli_" +
-                                                  std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
+  return snow::test::uniqueTestDir("cli");
 }
 
 ProcessResult snowbake(const fs::path& dir, const std::string& args) {

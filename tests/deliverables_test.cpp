@@ -14,6 +14,7 @@
 #include <ogr_spatialref.h>
 
 #include "bake_support.h"
+#include "geotiff_support.h"
 #include "bakers/grid_writer.h"
 #include "core/errors.h"
 #include "scene/scene.h"
@@ -289,18 +290,13 @@ TEST(Deliverables, BadTilesAndRangesAreSceneErrorsWithLineAndKey) {
 namespace {
 // A 90 x 70 GeoTIFF hill in UTM 32N (EPSG:32632), 10 m cells, north-west corner (600000, 5200000).
 void writeUtmHill(const std::string& path) {
-  GDALAllRegister();
-  GDALDataset* ds = GetGDALDriverManager()->GetDriverByName("GTiff")->Create(path.c_str(), 90, 70, 1, GDT_Float32, nullptr);
-  double gt[6] = {600000.0, 10.0, 0, 5200000.0, 0, -10.0};
-  ds->SetGeoTransform(gt);
-  OGRSpatialReference srs;
-  srs.importFromEPSG(32632);
-  ds->SetSpatialRef(&srs);
-  std::vector<float> v(90 * 70);
-  for (int y = 0; y < 70; ++y)
-    for (int x = 0; x < 90; ++x) v[y * 90 + x] = static_cast<float>(1500.0 + 400.0 * std::exp(-((x - 45.0) * (x - 45.0) + (y - 35.0) * (y - 35.0)) / 600.0));
-  EXPECT_EQ(ds->GetRasterBand(1)->RasterIO(GF_Write, 0, 0, 90, 70, v.data(), 90, 70, GDT_Float32, 0, 0), CE_None);
-  GDALClose(ds);
+  test::GeoTiffSpec g;
+  g.width = 90, g.height = 70;
+  const double gt[6] = {600000.0, 10.0, 0, 5200000.0, 0, -10.0};
+  std::copy(gt, gt + 6, g.geotransform);
+  test::writeGeoTiff(path, g, [](int x, int y) {
+    return static_cast<float>(1500.0 + 400.0 * std::exp(-((x - 45.0) * (x - 45.0) + (y - 35.0) * (y - 35.0)) / 600.0));
+  });
 }
 }  // namespace
 

@@ -15,17 +15,14 @@
 #include "bake_support.h"
 #include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
+#include "temp_dir.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
 
 namespace {
 fs::path tempDir() {
-  fs::path p = fs::temp_directory_path() / ("snowbake_writer_" +
-                                            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
+  return snow::test::uniqueTestDir("writer");
 }
 std::string bytesOf(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -12,6 +12,7 @@
 
 #include "bake/memory_model.h"
 #include "core/errors.h"
+#include "temp_dir.h"
 
 using namespace std::string_literals;
 namespace fs = std::filesystem;
@@ -30,10 +31,7 @@ struct Outcome {
 };
 
 fs::path workDir() {
-  const fs::path p = fs::temp_directory_path() / ("snowbake_memory_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
+  return snow::test::uniqueTestDir("memory");
 }
 
 std::string slurp(const fs::path& p) {

@@ -13,6 +13,7 @@
 #include "bake_support.h"
 #include "core/default_terrain.h"
 #include "inputs/mesh.h"
+#include "temp_dir.h"
 
 namespace snow {
 namespace {
@@ -109,8 +110,7 @@ TEST(AdaptiveMesh, SnowBodyIsWatertightAndHoldsTheSnowVolume) {
   const MeshData body = snowBodyMesh(m, s.bedrock, s.depth, s.valid, s.spec);
   ASSERT_FALSE(body.triangles.empty());
   // Written and read back by assimp: every edge shared by exactly two triangles.
-  const fs::path dir = fs::temp_directory_path() / "snowbake_mesh_body_test";
-  fs::create_directories(dir);
+  const fs::path dir = test::uniqueTempDir("mesh_body_test");
   for (const std::string format : {"ply", "glb", "obj", "fbx"}) {
     const std::string path = (dir / ("body." + format)).string();
     writeMesh(path, format, body);
@@ -201,8 +201,7 @@ TEST(AdaptiveMesh, SurfaceMeshHeightsAndUvsLineUpWithTheGrid) {
   const Surface s = makeSurface(64, 48, false);
   const RtinMesh m = buildRtin({&s.surface}, s.valid, 0.2);
   const MeshData mesh = surfaceMesh(m, s.surface, s.spec);
-  const fs::path dir = fs::temp_directory_path() / "snowbake_mesh_surface_test";
-  fs::create_directories(dir);
+  const fs::path dir = test::uniqueTempDir("mesh_surface_test");
   const std::string path = (dir / "surface.glb").string();
   writeMesh(path, "glb", mesh);
   const TriangleMesh back = loadTriangleMesh(path, UpAxis::Y);  // glTF is y up

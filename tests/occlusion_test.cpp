@@ -22,6 +22,7 @@
 #include "static_snow/occlusion.h"
 #include "precompute/ray_scene.h"
 #include "scene/scene.h"
+#include "temp_dir.h"
 
 namespace snow {
 namespace {
@@ -287,8 +288,7 @@ TEST(Occlusion, MeshVerticesGetSnowPerVertex) {
 TEST(Occlusion, BakeOnAMeshWritesTheDisplacedMeshAndAllBakers) {
   // The pit mesh as an OBJ terrain: the raster layers, the VDB and the meshes all come out, and
   // the mesh baker's vertices are the input's raised by their own snow.
-  const fs::path dir = fs::temp_directory_path() / "snowbake_occlusion_mesh_input";
-  fs::create_directories(dir);
+  const fs::path dir = test::uniqueTempDir("occlusion_mesh_input");
   const TriangleMesh m = pitMesh();
   {
     std::ofstream obj(dir / "pit.obj");

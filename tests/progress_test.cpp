@@ -8,6 +8,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include "temp_dir.h"
 
 using namespace std::string_literals;
 namespace fs = std::filesystem;
@@ -30,9 +31,7 @@ struct JsonBake {
 
 JsonBake bakeWithJsonProgress(const std::string& args) {
   JsonBake b;
-  b.dir = fs::temp_directory_path() / ("snowbake_progress_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::remove_all(b.dir);
-  fs::create_directories(b.dir);
+  b.dir = snow::test::uniqueTestDir("progress");
   const std::string cmd = "'"s + SNOWBAKE_BINARY + "' bake " + args + " --out '" + (b.dir / "o").string() + "' --log-file '" +
                           (b.dir / "log.txt").string() + "' --progress json 2>'" + (b.dir / "err.txt").string() + "' </dev/null";
   const int raw = std::system(cmd.c_str());

@@ -9,6 +9,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include "temp_dir.h"
 
 using namespace std::string_literals;
 namespace fs = std::filesystem;
@@ -24,10 +25,7 @@ std::string slurp(const fs::path& p) {
 }
 
 fs::path workDir() {
-  const fs::path p = fs::temp_directory_path() / ("snowbake_resolved_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
+  return snow::test::uniqueTestDir("resolved");
 }
 
 int bake(const std::string& args, const fs::path& log) {
@@ -107,6 +105,12 @@ TEST(ResolvedScene, HasEveryKeyTheSceneLeftOutAtItsDefaultAndTheCommandLineInThe
   EXPECT_NE(resolved.find("days = 5"), std::string::npos) << "the --set override";
   EXPECT_NE(resolved.find("threads = 0"), std::string::npos) << "run.threads, left at its default";
   EXPECT_NE(resolved.find("[parameters]"), std::string::npos) << "every model parameter";
+  // The second line lists the tables left out: a sub-table the scene did not write once, by its
+  // name, and none of its keys written at defaults.
+  const std::string leftOut = resolved.substr(resolved.find('\n') + 1, resolved.find('\n', resolved.find('\n') + 1) - resolved.find('\n') - 1);
+  EXPECT_NE(leftOut.find(" [outputs.tiles]"), std::string::npos) << leftOut;
+  EXPECT_EQ(leftOut.find("[outputs.tiles]"), leftOut.rfind("[outputs.tiles]")) << leftOut;
+  EXPECT_EQ(resolved.find("size_px"), std::string::npos) << "a key of the absent [outputs.tiles]";
   const json m = json::parse(slurp(dir / "a" / "manifest.json"));
   ASSERT_TRUE(m["command_line"].is_array());
   EXPECT_EQ(m["command_line"][1], "bake");

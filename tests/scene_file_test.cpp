@@ -5,6 +5,7 @@
 
 #include "core/errors.h"
 #include "scene/scene.h"
+#include "temp_dir.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -14,10 +15,7 @@ namespace {
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() / ("snowbake_scene_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                                        "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(path);
-    fs::create_directories(path);
+    path = snow::test::uniqueTestDir("scene_test");
   }
   ~TempDir() { fs::remove_all(path); }
   std::string write(const std::string& name, const std::string& text) const {
@@ -48,7 +46,7 @@ start_day = 3
 end_day = 6
 [[events]]
 type = "snowfall"
-day = 40
+day = 8
 duration_days = 2
 [parameters]
 rain_snow_limit_m = 1300
@@ -99,7 +97,7 @@ TEST(SceneFile, ValidSceneIsUnderstood) {
   ASSERT_EQ(s.weather.snowfallPeriods.size(), 1u);
   EXPECT_DOUBLE_EQ(s.weather.snowfallPeriods[0].endDay, 6.0);
   ASSERT_EQ(s.userSnowfalls.size(), 1u);
-  EXPECT_DOUBLE_EQ(s.userSnowfalls[0].endDay, 42.0);
+  EXPECT_DOUBLE_EQ(s.userSnowfalls[0].endDay, 10.0);
   EXPECT_DOUBLE_EQ(s.params.rainSnowLimitM, 1300.0);
   EXPECT_DOUBLE_EQ(s.params.meltRateMPerDayPerC, 0.02);
   EXPECT_DOUBLE_EQ(s.params.snowfallRatePerDay, 1e-4);  // untouched default

@@ -15,6 +15,7 @@
 #include "inputs/mesh.h"
 #include "inputs/terrain_loader.h"
 #include "tools/info.h"
+#include "temp_dir.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -34,9 +35,7 @@ double hillAtCell(int x, int y, double cell = kCell) { return hill((x + 0.5) * c
 struct TempDir {
   fs::path path;
   TempDir() {
-    path = fs::temp_directory_path() / ("snowbake_formats_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(path);
-    fs::create_directories(path);
+    path = snow::test::uniqueTestDir("formats");
   }
   ~TempDir() { fs::remove_all(path); }
   std::string operator/(const std::string& name) const { return (path / name).string(); }

@@ -8,6 +8,7 @@
 
 #include "core/errors.h"
 #include "inputs/terrain_loader.h"
+#include "temp_dir.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -15,11 +16,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path tempDir() {
-  fs::path p = fs::temp_directory_path() / ("snowbake_terrain_test_" +
-                                            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::remove_all(p);
-  fs::create_directories(p);
-  return p;
+  return snow::test::uniqueTestDir("terrain_test");
 }
 
 std::string writeAsc(const fs::path& dir, const std::string& name, const std::string& header, int w, int h,

@@ -9,6 +9,7 @@
 #include <iterator>
 
 #include "bakers/vdb_writer.h"
+#include "temp_dir.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -28,9 +29,7 @@ TEST(Vdb, SnowBodyReadsBackWithItsSurfaceWithinAVoxel) {
       s.unstableM(x, y) = 0.3f;
       s.powderM(x, y) = 0.4f;
     }
-  const fs::path dir = fs::temp_directory_path() / "snowbake_vdb_test";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = test::uniqueTempDir("vdb_test");
   VdbOptions o;
   o.voxelSizeM = 0.25;
   const std::string path = (dir / "snow.vdb").string();

@@ -9,6 +9,7 @@
 #include "precompute/wind_timeline.h"
 
 #include <filesystem>
+#include "temp_dir.h"
 
 using namespace snow;
 
@@ -218,10 +219,7 @@ WeatherTimeline twoWinds() {
   return t;
 }
 std::string tempCacheDir() {
-  const auto p = std::filesystem::temp_directory_path() /
-                 ("snowbake_wind_cache_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  std::filesystem::remove_all(p);
-  return p.string();
+  return test::uniqueTestDir("wind_cache").string();
 }
 }  // namespace
 

@@ -73,6 +73,9 @@ bake "builtin 512², ski_tracks at factor 16" preset:default --set terrain.size=
   --set 'outputs.layers=["depth","ski_tracks"]' --set outputs.ski_track_factor=16
 bake "occlusion mode, builtin 512²" preset:default --set terrain.size=512 --set mode=occlusion --set 'outputs.frames_days=[]'
 bake "mesh mode, a box on a 3 m ground, 2 cm sites" "$work/mesh.toml"
+bake "builtin 512² resized to 1009², Unreal tiles of 505, splat and normal maps" preset:default --set terrain.size=512 "${season[@]}" \
+  --set 'outputs.resize=[1009,1009]' --set 'outputs.tiles.convention="unreal"' --set outputs.tiles.size_px=505 \
+  --set 'outputs.layers=["depth","surface","splat_map","snow_normal"]' --set 'outputs.encodings=["png16","r16"]'
 if [ -f "$dem/tyrol_avaKot_5m.asc" ]; then
   dem_scene "$dem/tyrol_avaKot_5m.asc"
   bake "tyrol_avaKot_5m.asc (439 × 517), 20 days, a frame" "$work/dem.toml" "${season[@]}"
