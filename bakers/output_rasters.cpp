@@ -35,9 +35,13 @@ void OutputWriter::writeFloatRaster(const BaseOf& base, double day, const std::s
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
+      const std::string tileBase = base(stem + tileSuffix(l, c, r));
+      if (src_.plan) {
+        planFile(tileBase + (out.format == ImageFormat::Tiff ? ".tif" : ".exr"), floatImageFormat_, content, 4.0 * l.tileWidth * l.tileHeight);
+        continue;
+      }
       const Grid<float> tile = cutTile(grid, l, c, r);
       const Grid<uint8_t> tileValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
-      const std::string tileBase = base(stem + tileSuffix(l, c, r));
       // TIFF through GDAL with the terrain's CRS and this tile's geotransform; EXR through OpenImageIO.
       const std::string path = out.format == ImageFormat::Tiff ? tileBase + ".tif" : writeFloatImage(tileBase, "exr", tile, layerName, out.compressionLevel).path;
       if (out.format == ImageFormat::Tiff)
@@ -59,6 +63,11 @@ void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std:
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + encodingExtension(encoding);
+      if (src_.plan) {  // r16: the samples alone; png16 and png8 compressed
+        planFile(path, normalisedFormat(encoding, l.tileWidth, l.tileHeight), content,
+                 (encoding == "png8" ? 1.0 : 2.0) * l.tileWidth * l.tileHeight, encoding == "r16");
+        continue;
+      }
       if (write) {
         const Grid<float> tile = cutTile(grid, l, c, r);
         const Grid<uint8_t> tileValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
@@ -78,6 +87,10 @@ void OutputWriter::writeRgbRaster(const BaseOf& base, double day, const std::str
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".png";
+      if (src_.plan) {
+        planFile(path, format.empty() ? kRgbPngFormat : format, content, static_cast<double>(channels) * l.tileWidth * l.tileHeight);
+        continue;
+      }
       writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), width, height, channels, l, c, r) : pixels,
                 scene_.outputs.compressionLevel);
       listFile(path, content, unit, format.empty() ? kRgbPngFormat : format, day, 0.f, 255.f);
@@ -91,14 +104,17 @@ void OutputWriter::writeRawFloatRaster(const BaseOf& base, double day, const std
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
+      const std::string format = "raw float32 little-endian, " + std::to_string(l.tileWidth) + " x " + std::to_string(l.tileHeight) +
+                                 ", row 0 north, no header, in the layer's unit (NODATA 0)";
+      if (src_.plan) {
+        planFile(path, format, content, 4.0 * l.tileWidth * l.tileHeight, true);
+        continue;
+      }
       const Grid<float> tile = cutTile(grid, l, c, r);
       writeRawFloat32(path, tile);
       SeenRange seen;
       seen.widen(tile, nullptr);
-      listFile(path, content, unit,
-               "raw float32 little-endian, " + std::to_string(l.tileWidth) + " x " + std::to_string(l.tileHeight) +
-                   ", row 0 north, no header, in the layer's unit (NODATA 0)",
-               day, static_cast<float>(seen.mapping(RangeMode::Own).lo), static_cast<float>(seen.mapping(RangeMode::Own).hi));
+      listFile(path, content, unit, format, day, static_cast<float>(seen.mapping(RangeMode::Own).lo), static_cast<float>(seen.mapping(RangeMode::Own).hi));
       noteTile(l, c, r, grid.width(), grid.height());
     }
 }
@@ -109,7 +125,7 @@ void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Gr
   if (out.encodings.empty()) return;
   const LayerRange range = rangeOf(out, layer);
   ValueMapping m{range.mode, range.lo, range.hi};
-  if (range.mode != RangeMode::Fixed) {
+  if (range.mode != RangeMode::Fixed && !src_.plan) {
     SeenRange seen;
     seen.widen(grid, valid);
     m = seen.mapping(range.mode);
@@ -118,7 +134,7 @@ void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Gr
       seasonRanges_[layer.name].widen(seen);
     }
   }
-  const bool now = range.mode != RangeMode::Season;
+  const bool now = range.mode != RangeMode::Season || src_.plan;  // plan: listed once, on the day
   for (const std::string& encoding : out.encodings) {
     if (encoding == "r32") {  // floats as they are: no range
       writeRawFloatRaster(baseOf(d), d.day, layer.name, grid, content, layer.unit);

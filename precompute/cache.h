@@ -20,6 +20,8 @@ class PrecomputeCache {
   const std::string& directory() const { return directory_; }
   // Fills `grids` (all of size width x height) from the entry `key`; false when absent or unusable.
   bool load(const std::string& stage, const std::string& key, int width, int height, const std::vector<Grid<float>*>& grids) const;
+  // Whether an entry `key` is stored (not whether it is usable: load checks that).
+  bool contains(const std::string& stage, const std::string& key) const;
   void store(const std::string& stage, const std::string& key, const std::vector<const Grid<float>*>& grids) const;
 
  private:

@@ -35,6 +35,20 @@ def test_builtin_64_bake_layer_is_the_exr_bit_for_bit_and_progress_sees_every_st
     assert exr.tobytes() == depth.tobytes()
 
 
+def test_plan_lists_the_files_the_bake_then_writes_and_writes_nothing(tmp_path):
+    out = tmp_path / "o"
+    plan = snowbake.plan("preset:default", out=str(out), overrides=SMALL, threads=2)
+    assert not out.exists()
+    assert plan["grid"] == [64, 64] and plan["memory"]["peak_bytes"] > 0 and plan["time_class"]
+    assert {s["name"] for s in plan["stages"]} >= {"terrain", "season", "outputs", "manifest"}
+    planned = {f["path"] for f in plan["files"] if not f["condition"]}
+    result = snowbake.bake("preset:default", out=str(out), overrides=SMALL, threads=2)
+    written = {os.path.relpath(os.path.join(d, f), out) for d, _, fs in os.walk(out) for f in fs}
+    assert planned <= written
+    assert written - planned <= {f["path"] for f in plan["files"] if f["condition"]}, written - planned
+    assert len(written) == len(result.files)
+
+
 def test_bad_key_raises_scene_error_with_file_line_and_key(tmp_path):
     scene = tmp_path / "bad.toml"
     scene.write_text('[terrain]\nbuiltin = "ridged"\nsize = 64\n[season]\ndayz = 3\n')
