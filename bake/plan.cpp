@@ -20,8 +20,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Rough: calibrated on this project's bakes (docs/command-line.md, "snowbake plan"); avalanches
-// can make a season far slower than its cells and days say.
+// Rough: the rates are tools/plan-vs-bake.sh's bakes on this 2-core machine under load (2 us a
+// cell-day, 0.1 ms an occlusion cell, 1.5 ms a launch site); avalanches can make a season far
+// slower than its cells and days say.
 std::string timeClassOf(double work, double secondsPerUnit) {
   const double s = work * secondsPerUnit;
   return s < 10 ? "seconds" : s < 60 ? "tens of seconds" : s < 3600 ? "minutes" : "hours";
@@ -101,7 +102,7 @@ void planGrid(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
   plan.files.push_back({resolvedScenePath(options.outDir), "TOML", "the resolved scene"});
   plan.files.push_back({manifestPath(options.outDir), "JSON", "the manifest"});
   plan.work = occlusion ? static_cast<double>(spec.cellCount()) : static_cast<double>(spec.cellCount()) * scene.days;
-  plan.timeClass = timeClassOf(plan.work, occlusion ? 2e-5 : 2e-6);
+  plan.timeClass = timeClassOf(plan.work, occlusion ? 1e-4 : 2e-6);
 }
 
 void planMesh(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
@@ -121,8 +122,10 @@ void planMesh(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
                  {"outputs", true, "the snow body"},
                  {"manifest", true, "manifest.json, last"}};
   plan.files = planMeshBakeFiles(scene, options.outDir);
-  plan.work = static_cast<double>(mesh.triangles.size());
-  plan.timeClass = timeClassOf(plan.work, 1e-4);
+  // The launch sites of the lattice over the footprint: what placement and stability cost.
+  const double spacing = scene.meshSnow.placement.siteSpacingM;
+  plan.work = extent[0] * extent[1] / (spacing * spacing);
+  plan.timeClass = timeClassOf(plan.work, 1.5e-3);
 }
 
 }  // namespace
@@ -183,7 +186,7 @@ void printPlan(const BakePlan& p, std::ostream& out) {
     out << "\n";
   }
   out << "memory: " << p.memory.summary() << "; budget " << fixed(p.budgetBytes / (1024.0 * 1024.0), 0) << " MiB\n";
-  out << "time: " << p.timeClass << " (rough, from " << fixed(p.work, 0) << (p.mode == "mesh" ? " triangles" : p.mode == "occlusion" ? " cells" : " cell-days")
+  out << "time: " << p.timeClass << " (rough, from " << fixed(p.work, 0) << (p.mode == "mesh" ? " launch sites" : p.mode == "occlusion" ? " cells" : " cell-days")
       << ")\n";
 }
 

@@ -30,7 +30,7 @@ struct BakePlan {
   MemoryPrediction memory;
   double budgetBytes = 0;
   std::string timeClass;  // "seconds", "tens of seconds", "minutes", "hours": from the work (cells x days), rough
-  double work = 0;        // what the time class is read from: cell-days (season), cells (occlusion), triangles (mesh)
+  double work = 0;        // what the time class is read from: cell-days (season), cells (occlusion), launch sites (mesh)
 };
 
 // Throws InputError (exit status 2) for what the bake would refuse before any work.
