@@ -82,11 +82,11 @@ size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
   return n;
 }
 
-void reportFilesWritten(const std::vector<std::string>& paths) {
+void reportFilesWritten(const std::vector<std::string>& paths, const char* stage) {
   for (const std::string& path : paths) {
     std::error_code ec;
     const auto bytes = fs::file_size(path, ec);
-    progress().event("outputs", "file", {{"path", jsonText(path)}, {"bytes", ec ? "null" : std::to_string(bytes)}});
+    progress().event(stage, "file", {{"path", jsonText(path)}, {"bytes", ec ? "null" : std::to_string(bytes)}});
   }
 }
 
@@ -139,9 +139,11 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   OcclusionResult occlusion;
   SeasonOutputs seasonOutputs;
-  OutputWriter writer({&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,
-                       &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())},
-                      log);
+  OutputSources sources{&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,
+                        &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())};
+  // "file" events as each file is written: a frame's during the season, the rest in the outputs stage.
+  sources.fileWritten = [](const std::string& path, double day) { reportFilesWritten({path}, day >= 0.0 ? "season" : "outputs"); };
+  OutputWriter writer(sources, log);
   SeasonReport report;
   if (occlusionMode) {
     stage.emplace("occlusion");
@@ -174,7 +176,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   result.files = files.paths;
   writeTextAtomically(manifestPath(options.outDir), manifestToJson(manifest));
   result.files.push_back(manifestPath(options.outDir));
-  reportFilesWritten(result.files);
+  reportFilesWritten({result.files.end() - 2, result.files.end()});  // the resolved scene and the manifest (the rest as written)
   progress().stage("manifest", 1.0);
   log << writer.occluderNotes();
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";

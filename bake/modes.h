@@ -10,7 +10,7 @@ namespace snow {
 // The output folder (and its parents), or an InputError naming it.
 void createOutputFolder(const std::string& dir);
 // One "file" progress event per path written (its size in bytes).
-void reportFilesWritten(const std::vector<std::string>& paths);
+void reportFilesWritten(const std::vector<std::string>& paths, const char* stage = "outputs");
 // DIR/scene.resolved.toml (scene.h, resolvedSceneToml), listed in the current output sink; its path.
 std::string writeResolvedScene(const Scene& scene, const std::string& outDir);
 std::string resolvedScenePath(const std::string& outDir);

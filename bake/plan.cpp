@@ -56,7 +56,7 @@ std::vector<PlannedStage> gridStages(const Scene& scene, const BakeTerrain& terr
     st.push_back({"occlusion", true, "Foldes & Benes' static cover"});
   } else {
     st.push_back({"season", true, fixed(scene.days, 0) + " days, backend " + std::string(enumName(scene.backend))});
-    st.push_back({"frames", !scene.outputs.frameDays.empty(), std::to_string(scene.outputs.frameDays.size()) + " frame days (outputs.frames_days)"});
+    st.push_back({"frames", !scene.outputs.frameDays.empty(), std::to_string(scene.outputs.frameDays.size()) + " frame day(s) (outputs.frames_days)"});
   }
   st.push_back({"outputs", true, "the season's end"});
   st.push_back({"manifest", true, "manifest.json, last"});
@@ -130,13 +130,15 @@ void planMesh(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
 
 }  // namespace
 
-BakePlan planBake(const BakeOptions& options) {
+BakePlan planBake(const BakeOptions& given) {
+  BakeOptions options = given;
+  options.outDir = fs::absolute(given.outDir).string();  // the files' paths absolute, listed relative to it
   const Scene scene = resolveScene(options);
   BakePlan plan;
   plan.scene = scene.sourceName;
   plan.sceneName = scene.name;
   plan.mode = enumName(scene.mode);
-  plan.outDir = fs::absolute(options.outDir).string();
+  plan.outDir = options.outDir;
   plan.days = scene.days;
   if (scene.mode == SceneMode::Mesh)
     planMesh(scene, options, plan);

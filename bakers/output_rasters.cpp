@@ -73,7 +73,8 @@ void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std:
         const Grid<uint8_t> tileValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
         writeQuantised(path, encoding, tile, masked ? &tileValid : nullptr, m.lo, m.hi, kNodataPixel, out.compressionLevel);
       }
-      listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi));
+      listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi),
+               write);
       ManifestFile& f = currentSink().files.back();
       f.rangeMode = rangeModeName(m.mode), f.rangeLo = m.lo, f.rangeHi = m.hi, f.nodataPixel = kNodataPixel;
       noteTile(l, c, r, grid.width(), grid.height());

@@ -43,7 +43,8 @@ OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std:
 }
 
 void OutputWriter::listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
-                            double day, float minValue, float maxValue) const {
+                            double day, float minValue, float maxValue, bool written) const {
+  if (written && src_.fileWritten) src_.fileWritten(path, day);
   OutputSink& sink = currentSink();
   sink.addSeconds(format.substr(0, format.find(',')));
   ManifestFile f;

@@ -45,7 +45,9 @@ struct OutputSources {
   // writeDay then needs only its spec.
   bool plan = false;
   bool planSnowMesh = false;
-  bool planNodata = false;    // plan mode: the terrain has NODATA cells (mesh tiles over them may be left out)  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
+  bool planNodata = false;    // plan mode: the terrain has NODATA cells (mesh tiles over them may be left out)
+  // Called as each file is written (from the writers' threads): the progress's live "file" events.
+  std::function<void(const std::string& path, double day)> fileWritten;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
 };
 
 class OutputWriter {
@@ -74,8 +76,9 @@ class OutputWriter {
   void planAvalancheMaps();
 
   // Lists a file written in the current sink.
+  // `written` false: listed now, written later (encodings with "season" ranges).
   void listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format, double day,
-                float minValue, float maxValue) const;
+                float minValue, float maxValue, bool written = true) const;
 
  private:
   // One day's outputs: what they show and where they go.

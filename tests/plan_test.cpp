@@ -99,14 +99,15 @@ TEST(Plan, ListsExactlyTheFilesTheBakeWritesOnSixScenesOfEveryModeAndWritesNothi
   fs::remove_all(dir);
 }
 
-TEST(Plan, SaysWhichStagesRunAndWhyOthersAreSkipped) {
+TEST(Plan, SaysWhichStagesRunAndWhyOthersAreSkippedAndListsPathsRelativeToARelativeOut) {
   const fs::path dir = workDir("stages");
   std::ofstream(dir / "s.toml") << kBuiltin + kSeason + "[outputs]\nlayers = [\"depth\"]\n";
   BakeOptions o;
   o.scene = (dir / "s.toml").string();
-  o.outDir = (dir / "out").string();
+  o.outDir = "snowbake_plan_relative_out";  // relative to the working folder, as on a command line
   o.useCache = false;
   const BakePlan plan = planBake(o);
+  EXPECT_FALSE(fs::exists(o.outDir));
   std::map<std::string, PlannedStage> byName;
   for (const auto& s : plan.stages) byName[s.name] = s;
   EXPECT_FALSE(byName["sun exposure"].runs);
