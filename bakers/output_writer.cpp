@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/format.h"
 #include "core/stop_request.h"
@@ -44,6 +45,8 @@ OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std:
 
 void OutputWriter::listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
                             double day, float minValue, float maxValue, bool written) const {
+  // A writer without its plan branch has just written a file during `snowbake plan`.
+  if (src_.plan) throw std::logic_error(path + ": written in plan mode (a writer lacks its plan branch: OutputSources::plan)");
   if (written && src_.fileWritten) src_.fileWritten(path, day);
   OutputSink& sink = currentSink();
   sink.addSeconds(format.substr(0, format.find(',')));
