@@ -3,6 +3,8 @@
 #include <atomic>
 #include <exception>
 
+#include "core/stop_request.h"
+
 namespace snow {
 
 namespace {
@@ -12,7 +14,8 @@ std::atomic<const char*> stage{""};
 
 const char* currentBakeStage() { return stage.load(); }
 
-BakeStage::BakeStage(const char* name) : previous_(stage.exchange(name)), exceptions_(std::uncaught_exceptions()) {}
+// A new stage is a point where Ctrl-C stops the bake (core/stop_request.h).
+BakeStage::BakeStage(const char* name) : previous_(stage.exchange(name)), exceptions_(std::uncaught_exceptions()) { throwIfStopRequested(); }
 BakeStage::~BakeStage() {
   if (std::uncaught_exceptions() == exceptions_) stage.store(previous_);
 }

@@ -33,14 +33,14 @@ SnowState initialState(const BakeTerrain& t) {
   return state;
 }
 
-// The scene's layers, and valid_mask with them where the terrain has NODATA cells.
+}  // namespace
+
 std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti) {
   std::vector<std::string> layers = scene.outputs.layers;
   if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
   return layers;
 }
 
-// The terrain's georeference for the raster outputs (metres from the north-west corner without one).
 GeoFrame geoFrameOf(const TerrainInfo& ti) {
   GeoFrame g;
   g.georeferenced = ti.georeferenced;
@@ -52,6 +52,8 @@ GeoFrame geoFrameOf(const TerrainInfo& ti) {
   return g;
 }
 
+namespace {
+
 // The memory model's prediction for the grid, logged; refused above the budget before any work.
 void checkGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, std::ostream& log) {
   refuseBeyondTheModel(scene, spec);
@@ -61,7 +63,8 @@ void checkGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTr
   log << "memory: " << p.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
 }
 
-// A builtin terrain's grid is known before it is made: refused before it is generated.
+}  // namespace
+
 void checkBuiltinMemory(const Scene& scene) {
   const TerrainSource& t = scene.terrain;
   if (!t.builtin || t.cropM || t.resampleCellSizeM || t.resampleSize) return;
@@ -79,18 +82,19 @@ size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
   return n;
 }
 
-}  // namespace
-
-void reportFilesWritten(const std::vector<std::string>& paths) {
+void reportFilesWritten(const std::vector<std::string>& paths, const char* stage) {
   for (const std::string& path : paths) {
     std::error_code ec;
     const auto bytes = fs::file_size(path, ec);
-    progress().event("outputs", "file", {{"path", jsonText(path)}, {"bytes", ec ? "null" : std::to_string(bytes)}});
+    progress().event(stage, "file", {{"path", jsonText(path)}, {"bytes", ec ? "null" : std::to_string(bytes)}});
   }
 }
 
+std::string resolvedScenePath(const std::string& outDir) { return (fs::path(outDir) / "scene.resolved.toml").string(); }
+std::string manifestPath(const std::string& outDir) { return (fs::path(outDir) / "manifest.json").string(); }
+
 std::string writeResolvedScene(const Scene& scene, const std::string& outDir) {
-  const std::string path = (fs::path(outDir) / "scene.resolved.toml").string();
+  const std::string path = resolvedScenePath(outDir);
   writeTextAtomically(path, resolvedSceneToml(scene));
   currentSink().files.push_back({"scene.resolved.toml", "the resolved scene: every key, defaults and --set overrides included, paths absolute",
                                  "", "TOML"});
@@ -135,9 +139,11 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   OcclusionResult occlusion;
   SeasonOutputs seasonOutputs;
-  OutputWriter writer({&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,
-                       &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())},
-                      log);
+  OutputSources sources{&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,
+                        &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())};
+  // "file" events as each file is written: a frame's during the season, the rest in the outputs stage.
+  sources.fileWritten = [](const std::string& path, double day) { reportFilesWritten({path}, day >= 0.0 ? "season" : "outputs"); };
+  OutputWriter writer(sources, log);
   SeasonReport report;
   if (occlusionMode) {
     stage.emplace("occlusion");
@@ -168,10 +174,9 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
                                                   occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
                                                   options.commandLine});
   result.files = files.paths;
-  const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
-  writeTextAtomically(manifestPath, manifestToJson(manifest));
-  result.files.push_back(manifestPath);
-  reportFilesWritten(result.files);
+  writeTextAtomically(manifestPath(options.outDir), manifestToJson(manifest));
+  result.files.push_back(manifestPath(options.outDir));
+  reportFilesWritten({result.files.end() - 2, result.files.end()});  // the resolved scene and the manifest (the rest as written)
   progress().stage("manifest", 1.0);
   log << writer.occluderNotes();
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";

@@ -22,6 +22,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
+constexpr const char* kMeshVdbName = "snow.vdb";
+std::string meshBodyName(const std::string& format) { return "snow_body." + format; }
+
 MeshSnowManifest meshManifest(const Scene& scene, const TriangleMesh& mesh, const float lo[3], const float hi[3],
                               const FallenSnowSettings& placement, const FallenSnowStability& stability, const FallenSnow& snow,
                               const FallenSnowStabilityReport& st, const MeshSnowBody& body) {
@@ -94,21 +97,21 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   t0 = WallClock::now();
   createOutputFolder(options.outDir);
   const MeshSnowBodyOptions& bo = scene.meshSnow.body;
-  const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / "snow.vdb").string() : std::string();
+  const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / kMeshVdbName).string() : std::string();
   stage.emplace("snow body");
   const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo, vdbPath);
   log << "snow body: " << body.snowVoxels << " voxels of " << fixed(body.voxelSizeM, 4) << " m, " << body.mesh.triangles.size()
       << " triangles (" << fixed(body.seconds, 2) << " s)\n";
   MeshSnowManifest manifest = meshManifest(scene, mesh, lo, hi, placement, stability, snow, st, body);
   if (!vdbPath.empty()) {
-    manifest.files.push_back({"snow.vdb",
+    manifest.files.push_back({kMeshVdbName,
                               "the snow body: snow_sdf (level set, metres) and density (fog volume, kg/m^3 of " + fixed(bo.densityKgPerM3, 0) +
                                   " inside)",
                               "m; kg/m^3", "OpenVDB"});
     result.files.push_back(vdbPath);
   }
   for (const std::string& format : scene.outputs.meshes) {
-    const std::string name = "snow_body." + format;
+    const std::string name = meshBodyName(format);
     const std::string path = (fs::path(options.outDir) / name).string();
     writeMesh(path, format, body.mesh);
     manifest.files.push_back({name, "the snow body, closed, in the input mesh's frame", "m", meshFormatDescription(format)});
@@ -123,14 +126,24 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   manifest.commandLine = options.commandLine;
   progress().stage("outputs", 1.0);
   progress().stage("manifest", 0.0);
-  const std::string manifestPath = (fs::path(options.outDir) / "manifest.json").string();
-  writeTextAtomically(manifestPath, meshSnowManifestToJson(manifest));
-  result.files.push_back(manifestPath);
+  writeTextAtomically(manifestPath(options.outDir), meshSnowManifestToJson(manifest));
+  result.files.push_back(manifestPath(options.outDir));
   reportFilesWritten(result.files);
   progress().stage("manifest", 1.0);
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   log << "total: " << fixed(elapsedSeconds(tStart), 2) << " s\n";
   return result;
+}
+
+std::vector<PlannedFile> planMeshBakeFiles(const Scene& scene, const std::string& outDir) {
+  std::vector<PlannedFile> files;
+  if (scene.outputs.vdb)
+    files.push_back({(fs::path(outDir) / kMeshVdbName).string(), "OpenVDB", "the snow body: snow_sdf (level set) and density (fog)"});
+  for (const std::string& format : scene.outputs.meshes)
+    files.push_back({(fs::path(outDir) / meshBodyName(format)).string(), meshFormatDescription(format), "the snow body, closed"});
+  files.push_back({resolvedScenePath(outDir), "TOML", "the resolved scene"});
+  files.push_back({manifestPath(outDir), "JSON", "the manifest"});
+  return files;
 }
 
 }  // namespace snow

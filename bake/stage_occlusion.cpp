@@ -10,6 +10,9 @@
 #include "stages.h"
 
 namespace snow {
+
+bool occlusionWritesSnowMesh(const Scene& scene, const TerrainInfo& terrain) { return terrain.format == "mesh" && !scene.outputs.meshes.empty(); }
+
 namespace {
 
 // The season day of the sun trajectory: occlusion.day, or the season's middle.
@@ -91,7 +94,7 @@ void runOcclusion(const Scene& scene, const BakeTerrain& terrain, SnowState& sta
   if (o.sun.empty()) log << "  the sun stays below the horizon on that day (polar night): no dissipation\n";
   result.manifest = {os.sMaxM, os.tauAmbient, os.tauSun, os.aoRadiusM, sunDay, os.dayOfYear, os.turbidity, os.aoRays, {}, ""};
   for (const SunSample& x : o.sun) result.manifest.sunHoursAndWeights.push_back({x.solarHour, x.weight});
-  if (terrain.info().format == "mesh" && !scene.outputs.meshes.empty()) {
+  if (occlusionWritesSnowMesh(scene, terrain.info())) {
     result.snowMesh = snowOnInputMesh(scene, terrain, state, os, log);
     result.manifest.meshSource = result.snowMesh->source;
   }

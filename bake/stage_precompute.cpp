@@ -13,21 +13,7 @@ namespace {
 // Sun exposure, from the cache when every input is unchanged.
 Exposure loadOrComputeExposure(const SnowState& state, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,
                                const ExposureSettings& es, const PrecomputeCache& cache, std::ostream& log) {
-  Fnv1a64 h;
-  h.add("exposure-v2");
-  h.add(es.horizonSweep ? "horizon-sweep" : "embree");
-  h.add(state.bedrockM.data(), state.bedrockM.size() * sizeof(float));
-  h.add(state.validCell.data(), state.validCell.size());
-  const double numbers[] = {static_cast<double>(state.spec.width), static_cast<double>(state.spec.height), state.spec.cellSizeXM,
-                            state.spec.cellSizeYM, es.latitudeDeg, static_cast<double>(es.startDayOfYear), es.seasonDays,
-                            p.directSunWeightHours, p.skyAmbientWeightHours, p.indirectSunWeightHours};
-  h.add(numbers, sizeof numbers);
-  h.add(es.quality.name);
-  for (const auto& m : occluders) {
-    h.add(m.positions.data(), m.positions.size() * sizeof(m.positions[0]));
-    h.add(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
-  }
-  const std::string key = h.hex();
+  const std::string key = exposureCacheKey(state.bedrockM, state.validCell, state.spec, occluders, p, es);
   // The sample days are fixed by the settings: list them, then fill the grids from the cache.
   Exposure e;
   e.days = exposureSampleDays(es);
@@ -58,13 +44,7 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
 void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const PrecomputeCache& cache,
                         Precomputed& pre, std::ostream& log) {
   const auto t0 = WallClock::now();
-  ExposureSettings es;
-  es.quality = sunQuality(scene.sunQuality);
-  es.latitudeDeg = terrain.latitudeDeg;
-  es.startDayOfYear = scene.startDayOfYear();
-  es.seasonDays = scene.days;
-  // The fast path where it is valid (a pure height field) unless the scene asks for rays.
-  es.horizonSweep = scene.sunMethod == SunMethod::Horizon || (scene.sunMethod == SunMethod::Auto && terrain.occluders.empty());
+  const ExposureSettings es = exposureSettings(scene, terrain);
   if (scene.sunMethod == SunMethod::Horizon && !terrain.occluders.empty())
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
   pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, log);
@@ -73,6 +53,36 @@ void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const Sn
 }
 
 }  // namespace
+
+ExposureSettings exposureSettings(const Scene& scene, const BakeTerrain& terrain) {
+  ExposureSettings es;
+  es.quality = sunQuality(scene.sunQuality);
+  es.latitudeDeg = terrain.latitudeDeg;
+  es.startDayOfYear = scene.startDayOfYear();
+  es.seasonDays = scene.days;
+  // The fast path where it is valid (a pure height field) unless the scene asks for rays.
+  es.horizonSweep = scene.sunMethod == SunMethod::Horizon || (scene.sunMethod == SunMethod::Auto && terrain.occluders.empty());
+  return es;
+}
+
+std::string exposureCacheKey(const Grid<float>& bedrockM, const Grid<uint8_t>& valid, const GridSpec& spec,
+                             const std::vector<TriangleMesh>& occluders, const ModelParameters& p, const ExposureSettings& es) {
+  Fnv1a64 h;
+  h.add("exposure-v2");
+  h.add(es.horizonSweep ? "horizon-sweep" : "embree");
+  h.add(bedrockM.data(), bedrockM.size() * sizeof(float));
+  h.add(valid.data(), valid.size());
+  const double numbers[] = {static_cast<double>(spec.width), static_cast<double>(spec.height), spec.cellSizeXM,
+                            spec.cellSizeYM, es.latitudeDeg, static_cast<double>(es.startDayOfYear), es.seasonDays,
+                            p.directSunWeightHours, p.skyAmbientWeightHours, p.indirectSunWeightHours};
+  h.add(numbers, sizeof numbers);
+  h.add(es.quality.name);
+  for (const auto& m : occluders) {
+    h.add(m.positions.data(), m.positions.size() * sizeof(m.positions[0]));
+    h.add(m.triangles.data(), m.triangles.size() * sizeof(m.triangles[0]));
+  }
+  return h.hex();
+}
 
 void Precomputed::temperatureForDay(int day, SnowState& s, const ModelParameters& params) const {
   if (exposure) s.exposureHours = exposure->totalAt(day);

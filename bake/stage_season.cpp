@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "core/format.h"
+#include "core/stop_request.h"
 #include "frame_writer.h"
 #include "progress.h"
 #include "stages.h"
@@ -13,8 +14,13 @@ SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int 
   progress().stage("season", 0.0);
   FrameWriter frames(writer, outputs.skiTracks ? &*outputs.skiTracks : nullptr, threads, options.framesBesideSeason);
   SeasonReport report = runSeason(
-      backend, state, config, [&](double f) { progress().stage("season", f); },
+      backend, state, config,
+      [&](double f) {
+        throwIfStopRequested();  // once a simulated day
+        progress().stage("season", f);
+      },
       [&](double day, const SnowState& s) {
+        throwIfStopRequested();
         frames.write(day, s);
         progress().event("season", "frame", {{"day", jsonNumber(day)}});
       });

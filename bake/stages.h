@@ -49,6 +49,10 @@ struct Precomputed {
   // The day's wind (calm: no wind, W_z on the ground).
   void windForDay(int day, SnowState& s) const;
 };
+// The sun exposure's settings, and the cache key of its grids (every input they depend on).
+ExposureSettings exposureSettings(const Scene& scene, const BakeTerrain& terrain);
+std::string exposureCacheKey(const Grid<float>& bedrockM, const Grid<uint8_t>& valid, const GridSpec& spec,
+                             const std::vector<TriangleMesh>& occluders, const ModelParameters& p, const ExposureSettings& es);
 Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
                           std::ostream& log);
 
@@ -64,6 +68,8 @@ struct OcclusionResult {
   std::optional<TriangleMesh> snowMesh;
   SeasonReport report;  // the final snow and the time taken
 };
+// Whether occlusion mode also writes the input mesh raised by its snow (snow_mesh.*): a mesh terrain with outputs.meshes.
+bool occlusionWritesSnowMesh(const Scene& scene, const TerrainInfo& terrain);
 void runOcclusion(const Scene& scene, const BakeTerrain& terrain, SnowState& state, OcclusionResult& result, std::ostream& log);
 
 // season_config.cpp: what the season runs: the scene's events as cells, art direction's edits

@@ -55,4 +55,15 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
   }
 }
 
+void OutputWriter::planAvalancheMaps() {
+  if (!scene_.outputs.avalancheMaps) return;
+  const std::string ext = scene_.outputs.format == ImageFormat::Tiff ? ".tif" : ".exr";
+  const std::string every = "one per released avalanche NNN: how many the season decides";
+  for (const char* map : {"release", "scour", "deposit", "peak_thickness", "peak_speed"})
+    planFile((fs::path(src_.outDir) / ("avalanches/NNN_" + std::string(map) + ext)).string(), floatImageFormat_, map, 0.0, false, every);
+  if (scene_.outputs.avalancheFrameIntervalS > 0)
+    planFile((fs::path(src_.outDir) / ("avalanches/NNN/depth.FFFF" + ext)).string(), floatImageFormat_, "motion frames", 0.0, false,
+             every + ", one frame per outputs.avalanche_frame_interval_s of its run");
+}
+
 }  // namespace snow

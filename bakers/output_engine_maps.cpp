@@ -42,8 +42,13 @@ std::array<uint8_t, 3> bytesSummingTo255(const std::array<double, 3>& w) {
 }
 }  // namespace
 
+constexpr const char* kSplatFormat = "PNG, 4 channels uint8, linear weights: R snow, G rock, B ground, A 0; R + G + B = 255";
+
 void OutputWriter::writeSplatMap(const Day& d, const LayerInfo& layer) {
   const auto& out = scene_.outputs;
+  if (src_.plan)
+    return writeRgbRaster(baseOf(d), d.day, layer.name, out.resizeWidth > 0 ? out.resizeWidth : d.s.spec.width,
+                          out.resizeWidth > 0 ? out.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 4, kSplatFormat);
   LayerInputs in{&d.s, &scene_.params, &out};
   std::array<Grid<float>, 3> w;
   Grid<uint8_t> valid;
@@ -58,12 +63,15 @@ void OutputWriter::writeSplatMap(const Day& d, const LayerInfo& layer) {
     const auto q = bytesSummingTo255(weights);
     std::copy(q.begin(), q.end(), &rgba[i * 4]);
   }
-  writeRgbRaster(baseOf(d), d.day, layer.name, width, height, rgba, layer.content, layer.unit, 4,
-                 "PNG, 4 channels uint8, linear weights: R snow, G rock, B ground, A 0; R + G + B = 255");
+  writeRgbRaster(baseOf(d), d.day, layer.name, width, height, rgba, layer.content, layer.unit, 4, kSplatFormat);
 }
 
 void OutputWriter::writeNormalMap(const Day& d, const LayerInfo& layer) {
   const auto& out = scene_.outputs;
+  const std::string format = "PNG, 3 channels uint8, linear (not sRGB): n = 2 p / 255 - 1, tangent space (u east, v north), " + out.normalMapConvention;
+  if (src_.plan)
+    return writeRgbRaster(baseOf(d), d.day, layer.name, out.resizeWidth > 0 ? out.resizeWidth : d.s.spec.width,
+                          out.resizeWidth > 0 ? out.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 3, format);
   Grid<uint8_t> valid;
   const Grid<float> surface = atOutputSize(out, findLayer("surface")->compute(LayerInputs{&d.s}), d.s.validCell, valid);
   const int w = surface.width(), h = surface.height();
@@ -83,8 +91,7 @@ void OutputWriter::writeNormalMap(const Day& d, const LayerInfo& layer) {
       uint8_t* p = &rgb[(static_cast<size_t>(y) * w + x) * 3];
       for (int k = 0; k < 3; ++k) p[k] = static_cast<uint8_t>(std::lround(127.5 + 127.5 * v[k]));
     }
-  writeRgbRaster(baseOf(d), d.day, layer.name, w, h, rgb, layer.content, layer.unit, 3,
-                 "PNG, 3 channels uint8, linear (not sRGB): n = 2 p / 255 - 1, tangent space (u east, v north), " + out.normalMapConvention);
+  writeRgbRaster(baseOf(d), d.day, layer.name, w, h, rgb, layer.content, layer.unit, 3, format);
 }
 
 }  // namespace snow

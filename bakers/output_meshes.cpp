@@ -47,10 +47,50 @@ double snowDepthRoundMesh(const SnowState& s, const TriangleMesh& mesh, long& ri
 }  // namespace
 
 void OutputWriter::writeMeshes(const Day& d) {
+  if (src_.plan) return planMeshes(d);
   if (scene_.meshSnow.onOccluders && !d.frame) writeOccluderSnow(d);
   if (scene_.outputs.meshes.empty()) return;
   writeGridMeshParts(d);
   if (src_.snowMesh && !d.frame) writeSnowMesh(d);
+}
+
+// The meshes writeMeshes would write, by the same names; whether some are left out depends on the snow.
+void OutputWriter::planMeshes(const Day& d) {
+  const auto& out = scene_.outputs;
+  auto planAll = [&](const std::string& stem, const std::string& what, const std::string& condition) {
+    for (const std::string& format : out.meshes) planFile(d.base(stem, src_.outDir) + "." + format, meshFormatDescription(format), what, 0.0, false, condition);
+  };
+  if (scene_.meshSnow.onOccluders && !d.frame)
+    for (size_t k = 0; k < src_.occluders->size(); ++k) {
+      const std::string& source = (*src_.occluders)[k].source;
+      for (const std::string& format : out.meshes)
+        planFile(d.base("occluder_" + std::to_string(k) + "_snow", src_.outDir) + "." + format, meshFormatDescription(format),
+                 "snow body on the occluder " + source, 0.0, false, "left out when no snow lies on the terrain round the mesh");
+    }
+  if (out.meshes.empty()) return;
+  const GridSpec& spec = d.s.spec;
+  for (const std::string& part : out.meshParts) {
+    if (part == "body") {
+      planAll("snow_body", "the snow body alone, closed", "left out when there is no snow");
+      continue;
+    }
+    const int tileCells = out.meshTileSizeM > 0.0 ? std::max(1, static_cast<int>(std::lround(out.meshTileSizeM / spec.cellSizeXM))) : 0;
+    if (tileCells == 0 || tileCells >= std::max(spec.width, spec.height)) {
+      planAll("snow_surface", "snow surface B+C+S+U+P", "");
+      continue;
+    }
+    // cutIntoTiles: vertices at cell centres, so the last tile holds the centre of the last cell.
+    const int columns = static_cast<int>(std::floor((spec.width - 0.5) / tileCells)) + 1;
+    const int rows = static_cast<int>(std::floor((spec.height - 0.5) / tileCells)) + 1;
+    for (int row = 0; row < rows; ++row)
+      for (int column = 0; column < columns; ++column)
+        planAll("snow_surface_x" + std::to_string(column) + "_y" + std::to_string(row), "snow surface B+C+S+U+P, a tile",
+                src_.planNodata ? "left out when it holds no triangle (NODATA cells only)" : "");
+  }
+  if (src_.planSnowMesh && !d.frame)
+    for (const std::string& format : out.meshes)
+      planFile((fs::path(src_.outDir) / ("snow_mesh." + format)).string(), meshFormatDescription(format),
+               "the input mesh with its vertices raised by their snow depth", 0.0);
 }
 
 // Snow on the [[occluders]] (Fearing, as mode = "mesh"), as deep as the terrain's snow round each

@@ -37,11 +37,15 @@ void OutputWriter::writeFloatRaster(const BaseOf& base, double day, const std::s
   Grid<uint8_t> cutValid;
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
+      const std::string tileBase = base(stem + tileSuffix(l, c, r));
+      if (src_.plan) {
+        planFile(tileBase + (out.format == ImageFormat::Tiff ? ".tif" : ".exr"), floatImageFormat_, content, 4.0 * l.tileWidth * l.tileHeight);
+        continue;
+      }
       // Untiled, the image itself (no copy).
       if (l.tiled()) cut = cutTile(grid, l, c, r), cutValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
       const Grid<float>& tile = l.tiled() ? cut : grid;
       const Grid<uint8_t>* tileValid = !masked ? nullptr : l.tiled() ? &cutValid : valid;
-      const std::string tileBase = base(stem + tileSuffix(l, c, r));
       // TIFF through GDAL with the terrain's CRS and this tile's geotransform; EXR through OpenImageIO.
       const std::string path = out.format == ImageFormat::Tiff ? tileBase + ".tif" : writeFloatImage(tileBase, "exr", tile, layerName, out.compressionLevel).path;
       if (out.format == ImageFormat::Tiff)
@@ -62,17 +66,23 @@ void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std:
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   // Quantised once for every tile: a pixel depends on its cell alone, so cutting the pixels
   // gives each tile's bytes.
-  const std::vector<uint16_t> pixels = write ? quantisedPixels(encoding, grid, masked ? valid : nullptr, m.lo, m.hi, kNodataPixel)
+  const std::vector<uint16_t> pixels = write && !src_.plan ? quantisedPixels(encoding, grid, masked ? valid : nullptr, m.lo, m.hi, kNodataPixel)
                                              : std::vector<uint16_t>();
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + encodingExtension(encoding);
+      if (src_.plan) {  // r16: the samples alone; png16 and png8 compressed
+        planFile(path, normalisedFormat(encoding, l.tileWidth, l.tileHeight), content,
+                 (encoding == "png8" ? 1.0 : 2.0) * l.tileWidth * l.tileHeight, encoding == "r16");
+        continue;
+      }
       if (write && l.tiled())
         writeQuantisedPixels(path, encoding, l.tileWidth, l.tileHeight,
                              cutTile(pixels.data(), grid.width(), grid.height(), 1, l, c, r).data(), out.compressionLevel);
       else if (write)
         writeQuantisedPixels(path, encoding, grid.width(), grid.height(), pixels.data(), out.compressionLevel);
-      listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi));
+      listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi),
+               write);
       ManifestFile& f = currentSink().files.back();
       f.rangeMode = rangeModeName(m.mode), f.rangeLo = m.lo, f.rangeHi = m.hi, f.nodataPixel = kNodataPixel;
       noteTile(l, c, r, grid.width(), grid.height());
@@ -86,6 +96,10 @@ void OutputWriter::writeRgbRaster(const BaseOf& base, double day, const std::str
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".png";
+      if (src_.plan) {
+        planFile(path, format.empty() ? kRgbPngFormat : format, content, static_cast<double>(channels) * l.tileWidth * l.tileHeight);
+        continue;
+      }
       writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), width, height, channels, l, c, r) : pixels,
                 scene_.outputs.compressionLevel);
       listFile(path, content, unit, format.empty() ? kRgbPngFormat : format, day, 0.f, 255.f);
@@ -99,15 +113,18 @@ void OutputWriter::writeRawFloatRaster(const BaseOf& base, double day, const std
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
+      const std::string format = "raw float32 little-endian, " + std::to_string(l.tileWidth) + " x " + std::to_string(l.tileHeight) +
+                                 ", row 0 north, no header, in the layer's unit (NODATA 0)";
+      if (src_.plan) {
+        planFile(path, format, content, 4.0 * l.tileWidth * l.tileHeight, true);
+        continue;
+      }
       const Grid<float> cut = l.tiled() ? cutTile(grid, l, c, r) : Grid<float>();
       const Grid<float>& tile = l.tiled() ? cut : grid;
       writeRawFloat32(path, tile);
       SeenRange seen;
       seen.widen(tile, nullptr);
-      listFile(path, content, unit,
-               "raw float32 little-endian, " + std::to_string(l.tileWidth) + " x " + std::to_string(l.tileHeight) +
-                   ", row 0 north, no header, in the layer's unit (NODATA 0)",
-               day, static_cast<float>(seen.mapping(RangeMode::Own).lo), static_cast<float>(seen.mapping(RangeMode::Own).hi));
+      listFile(path, content, unit, format, day, static_cast<float>(seen.mapping(RangeMode::Own).lo), static_cast<float>(seen.mapping(RangeMode::Own).hi));
       noteTile(l, c, r, grid.width(), grid.height());
     }
 }
@@ -118,7 +135,7 @@ void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Gr
   if (out.encodings.empty()) return;
   const LayerRange range = rangeOf(out, layer);
   ValueMapping m{range.mode, range.lo, range.hi};
-  if (range.mode != RangeMode::Fixed) {
+  if (range.mode != RangeMode::Fixed && !src_.plan) {
     SeenRange seen;
     seen.widen(grid, valid);
     m = seen.mapping(range.mode);
@@ -127,7 +144,7 @@ void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Gr
       seasonRanges_[layer.name].widen(seen);
     }
   }
-  const bool now = range.mode != RangeMode::Season;
+  const bool now = range.mode != RangeMode::Season || src_.plan;  // plan: listed once, on the day
   for (const std::string& encoding : out.encodings) {
     if (encoding == "r32") {  // floats as they are: no range
       writeRawFloatRaster(baseOf(d), d.day, layer.name, grid, content, layer.unit);

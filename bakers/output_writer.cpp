@@ -10,8 +10,10 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/format.h"
+#include "core/stop_request.h"
 #include "grid_writer.h"
 #include "precompute/solar.h"
 #include "vdb_writer.h"
@@ -42,7 +44,10 @@ OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std:
 }
 
 void OutputWriter::listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format,
-                            double day, float minValue, float maxValue) const {
+                            double day, float minValue, float maxValue, bool written) const {
+  // A writer without its plan branch has just written a file during `snowbake plan`.
+  if (src_.plan) throw std::logic_error(path + ": written in plan mode (a writer lacks its plan branch: OutputSources::plan)");
+  if (written && src_.fileWritten) src_.fileWritten(path, day);
   OutputSink& sink = currentSink();
   sink.addSeconds(format.substr(0, format.find(',')));
   ManifestFile f;
@@ -57,11 +62,16 @@ void OutputWriter::listFile(const std::string& path, const std::string& content,
   sink.paths.push_back(path);
 }
 
+void OutputWriter::planFile(const std::string& path, const std::string& format, const std::string& content, double dataBytes,
+                            bool exactBytes, const std::string& condition) const {
+  currentSink().planned.push_back({path, format, content, dataBytes, exactBytes, condition});
+}
+
 void OutputWriter::writeDay(const SnowState& s, double day, const Grid<float>* skiDepth) {
   OutputSink& parent = currentSink();
   Day d{s, day, day >= 0.0 ? day : scene_.days, day >= 0.0, "", skiDepth};
   if (d.frame) {
-    fs::create_directories(fs::path(src_.outDir) / "frames");
+    if (!src_.plan) fs::create_directories(fs::path(src_.outDir) / "frames");
     std::ostringstream o;
     o << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
     d.dayTag = o.str();
@@ -98,6 +108,7 @@ void OutputWriter::writeLayers(const Day& d) {
   for (const auto& name : src_.layers) needs |= findLayer(name)->needs;
   WindFieldsAtDay wind;
   Grid<float> sunHours;
+  if (src_.plan) needs = 0;  // nothing computed
   LayerInputs in;
   in.state = &d.s;
   in.params = &scene_.params;
@@ -117,15 +128,24 @@ void OutputWriter::writeLayers(const Day& d) {
   std::vector<std::string> channelNames;
   std::vector<Grid<float>> channels;
   for (const auto& name : src_.layers) {
+    throwIfStopRequested();  // Ctrl-C between two layers' files, never within one
     if (d.frame && name == "valid_mask") continue;
     const LayerInfo& layer = *findLayer(name);
     if (layer.kind == LayerKind::Preview)
       writePreview(d, layer);
+    else if (src_.plan)  // a grid of the layer's size, its values never read
+      writeFloatLayer(d, layer, planGrid(d, layer), channelNames, channels);
     else
       writeFloatLayer(d, layer, layer.compute(in), channelNames, channels);
   }
   writeDisplacement(d);
   writeMultiChannel(d, channelNames, channels);
+}
+
+Grid<float> OutputWriter::planGrid(const Day& d, const LayerInfo& layer) const {
+  // The ski-track texture is the one layer finer than the grid (LayerInputs::skiDepth).
+  const int f = (layer.needs & kNeedsSkiTracks) ? src_.skiTrackFactor : 1;
+  return Grid<float>(d.s.spec.width * f, d.s.spec.height * f);
 }
 
 void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
@@ -140,7 +160,7 @@ void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<fl
   Grid<uint8_t> resizedValid;
   const Grid<uint8_t>* valid = &d.s.validCell;
   if (out.resizeWidth > 0 && !ownSize) {
-    grid = resampleValid(grid, d.s.validCell, out.resizeWidth, out.resizeHeight, resizedValid);
+    grid = src_.plan ? Grid<float>(out.resizeWidth, out.resizeHeight) : resampleValid(grid, d.s.validCell, out.resizeWidth, out.resizeHeight, resizedValid);
     valid = &resizedValid;
     content += ", resampled (bilinear over valid cells) to " + std::to_string(grid.width()) + " x " + std::to_string(grid.height()) + " over the same extent";
   }
@@ -156,6 +176,11 @@ void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   const SnowState& s = d.s;
   if (std::string(layer.name) == "splat_map") return writeSplatMap(d, layer);
   if (std::string(layer.name) == "snow_normal") return writeNormalMap(d, layer);
+  if (src_.plan) {  // an sRGB preview of the grid's size; the snow preview also goes on the contact sheet
+    writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, {}, layer.content, layer.unit);
+    if (std::string(layer.name) != "avalanche_preview") previews_.emplace_back();
+    return;
+  }
   if (std::string(layer.name) == "avalanche_preview") {
     const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
     writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height,
@@ -188,7 +213,7 @@ void OutputWriter::writeDisplacement(const Day& d) {
   if (out.displacementWidth <= 0) return;
   for (const std::string what : {"depth", "surface"}) {
     const LayerInfo& layer = *findLayer(what);
-    const Grid<float> g = resampleBilinear(layer.compute(LayerInputs{&d.s}), out.displacementWidth, out.displacementHeight);
+    const Grid<float> g = src_.plan ? Grid<float>(out.displacementWidth, out.displacementHeight) : resampleBilinear(layer.compute(LayerInputs{&d.s}), out.displacementWidth, out.displacementHeight);
     writeFloatRaster(baseOf(d), d.day, "displacement_" + std::string(what), g, nullptr, what,
                      std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
                          " over the same extent",
@@ -199,14 +224,16 @@ void OutputWriter::writeDisplacement(const Day& d) {
 void OutputWriter::writeMultiChannel(const Day& d, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels) {
   if (channels.empty()) return;
   const std::string path = d.base("layers", src_.outDir) + ".exr";
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  const std::string content = "all layers as named channels: " + list;
+  const std::string format = "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression_ + "), linear";
+  if (src_.plan)
+    return planFile(path, format, content, 4.0 * channels[0].width() * channels[0].height() * static_cast<double>(channels.size()));
   std::vector<const Grid<float>*> grids;
   for (const auto& g : channels) grids.push_back(&g);
   writeMultiChannelExr(path, names, grids, scene_.outputs.compressionLevel);
-  std::string list;
-  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-  listFile(path, "all layers as named channels: " + list, "per channel, as the single-layer files",
-           "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression_ + "), linear",
-           d.day, 0.f, 0.f);
+  listFile(path, content, "per channel, as the single-layer files", format, d.day, 0.f, 0.f);
 }
 
 void OutputWriter::writeVdb(const Day& d) {
@@ -214,6 +241,7 @@ void OutputWriter::writeVdb(const Day& d) {
   VdbOptions vo;
   vo.voxelSizeM = scene_.outputs.vdbVoxelSizeM > 0.0 ? scene_.outputs.vdbVoxelSizeM : std::min(d.s.spec.cellSizeXM, d.s.spec.cellSizeYM);
   const std::string path = d.base("snow", src_.outDir) + ".vdb";
+  if (src_.plan) return planFile(path, "OpenVDB", "snow body: snow_sdf (level set), density and the layers' densities (fog)", 0.0);
   const VdbSummary v = writeSnowVdb(path, d.s, vo);
   listFile(path,
            "snow body: snow_sdf (level set), density (fog, 1 in snow), compacted/stable/unstable/powder (fog, kg/m^3: " +
@@ -229,6 +257,7 @@ void OutputWriter::writeContactSheet() {
   const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(previews_.size()))));
   const std::vector<uint8_t> sheet = contactSheetRgb(previews_, previewWidth_, previewHeight_, columns, sw, sh);
   const std::string path = (fs::path(src_.outDir) / "contact_sheet.png").string();
+  if (src_.plan) return planFile(path, kRgbPngFormat, "contact sheet of the season: the previews of the frame days, then the season's end", 0.0);
   writeRgbPng(path, sw, sh, sheet, scene_.outputs.compressionLevel);
   listFile(path,
            "contact sheet of the season: the previews of the frame days in order, then the season's end, " + std::to_string(columns) +

@@ -40,6 +40,14 @@ struct OutputSources {
   const std::vector<TriangleMesh>* occluders = nullptr;
   const TriangleMesh* snowMesh = nullptr;  // occlusion mode on a mesh terrain: the mesh with its snow
   GeoFrame geo;                            // the terrain's georeference (tiles and GeoTIFFs)
+  // `snowbake plan`: every writer lists its files (PlannedFile, output_sink.h) from the grid's
+  // size and the scene alone; no value is computed, nothing is written. The state given to
+  // writeDay then needs only its spec.
+  bool plan = false;
+  bool planSnowMesh = false;
+  bool planNodata = false;    // plan mode: the terrain has NODATA cells (mesh tiles over them may be left out)
+  // Called as each file is written (from the writers' threads): the progress's live "file" events.
+  std::function<void(const std::string& path, double day)> fileWritten;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
 };
 
 class OutputWriter {
@@ -61,9 +69,16 @@ class OutputWriter {
   // Lines about snow on the occluders, gathered while the writers ran beside each other.
   const std::string& occluderNotes() const { return occluderNotes_; }
 
+  // Plan mode: lists a file the bake would write in the current sink.
+  void planFile(const std::string& path, const std::string& format, const std::string& content, double dataBytes, bool exactBytes = false,
+                const std::string& condition = {}) const;
+  // Plan mode: the per-avalanche maps, whose number the season decides.
+  void planAvalancheMaps();
+
   // Lists a file written in the current sink.
+  // `written` false: listed now, written later (encodings with "season" ranges).
   void listFile(const std::string& path, const std::string& content, const std::string& unit, const std::string& format, double day,
-                float minValue, float maxValue) const;
+                float minValue, float maxValue, bool written = true) const;
 
  private:
   // One day's outputs: what they show and where they go.
@@ -99,6 +114,8 @@ class OutputWriter {
   void noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const;
   void writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content);
   void writeLayers(const Day& d);
+  // Plan mode: a grid of the size `layer` is written at (values unset).
+  Grid<float> planGrid(const Day& d, const LayerInfo& layer) const;
   void writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
                        std::vector<Grid<float>>& channels);
   void writePreview(const Day& d, const LayerInfo& layer);
@@ -106,6 +123,7 @@ class OutputWriter {
   void writeMultiChannel(const Day& d, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels);
   void writeVdb(const Day& d);
   void writeMeshes(const Day& d);
+  void planMeshes(const Day& d);
   void writeGridMeshParts(const Day& d);
   void writeOccluderSnow(const Day& d);
   void writeSnowMesh(const Day& d);

@@ -237,7 +237,7 @@ void SeasonRun::addStaticFieldRefresh() {
 
 void SeasonRun::addFrames() {
   for (double day : cfg_.frameDays) {
-    if (day < 0.0 || day > cfg_.days || !onFrame_) continue;
+    if (!frameDayInSeason(day, cfg_.days) || !onFrame_) continue;
     scheduler_.addAction(day, [this](double now) {
       SnowState frame = state_;
       if (noSnow_) frame.validCell = terrainValid_;

@@ -124,4 +124,7 @@ inline float temperatureBaseC(const ModelParameters& p, float altitudeM, float e
 // Fills temperatureBaseC from the bedrock and the exposure (T = T0 + base).
 void computeTemperatureBase(SnowState& state, const ModelParameters& params);
 
+// Whether a frame day is handed to onFrame: within the season, its start (0) and end included.
+inline bool frameDayInSeason(double day, double seasonDays) { return day >= 0.0 && day <= seasonDays; }
+
 }  // namespace snow

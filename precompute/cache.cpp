@@ -131,6 +131,11 @@ std::string PrecomputeCache::pathFor(const std::string& stage, const std::string
   return (fs::path(directory_) / (stage + "-" + key + ".bin")).string();
 }
 
+bool PrecomputeCache::contains(const std::string& stage, const std::string& key) const {
+  std::error_code ec;
+  return enabled_ && std::filesystem::exists(pathFor(stage, key), ec);
+}
+
 bool PrecomputeCache::load(const std::string& stage, const std::string& key, int width, int height,
                            const std::vector<Grid<float>*>& grids) const {
   if (!enabled_) return false;

@@ -33,6 +33,8 @@ class PrecomputeCache {
   // unusable (then the caller recomputes and stores). A hit marks the entry as just used (its
   // modification time), which `snowbake cache prune` reads as its age.
   bool load(const std::string& stage, const std::string& key, int width, int height, const std::vector<Grid<float>*>& grids) const;
+  // Whether an entry `key` is stored (not whether it is usable: load checks that).
+  bool contains(const std::string& stage, const std::string& key) const;
   void store(const std::string& stage, const std::string& key, const std::vector<const Grid<float>*>& grids) const;
 
   // Reads a whole entry file and checks it (header, length, checksum), without keeping it.

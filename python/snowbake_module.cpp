@@ -1,4 +1,4 @@
-// The Python module `snowbake` (docs/python.md): bake, info, SceneError. The bake runs with the
+// The Python module `snowbake` (docs/python.md): bake, plan, info, SceneError. The bake runs with the
 // GIL released; the progress callable is called with the GIL held, from the bake's threads.
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
@@ -13,8 +13,10 @@
 #include <sstream>
 
 #include "bake/bake.h"
+#include "bake/plan.h"
 #include "bake/progress.h"
 #include "core/errors.h"
+#include "core/stop_request.h"
 #include "tools/info.h"
 
 namespace py = pybind11;
@@ -104,25 +106,42 @@ struct Result {
   }
 };
 
-Result bake(const std::string& scene, const std::string& out, const py::dict& overrides, std::optional<int> threads,
-            const py::object& progress) {
+BakeOptions bakeOptions(const std::string& scene, const std::string& out, const py::dict& overrides, std::optional<int> threads) {
   BakeOptions o;
   o.scene = scene;
   o.outDir = out;
   o.threads = threads;
   o.progress = false;
   for (const auto& [key, value] : overrides) o.sets.push_back(py::str(key).cast<std::string>() + "=" + tomlValue(value));
+  return o;
+}
+
+Result bake(const std::string& scene, const std::string& out, const py::dict& overrides, std::optional<int> threads,
+            const py::object& progress) {
+  BakeOptions o = bakeOptions(scene, out, overrides, threads);
   std::optional<PythonProgress> sink;
   if (!progress.is_none()) o.progressSink = &sink.emplace(progress);
   std::ostringstream log;
   BakeResult r;
   {
+    const StopOnSignals stopOnSignals;  // Ctrl-C: the bake stops between steps, then KeyboardInterrupt
     py::gil_scoped_release released;
     r = runBake(o, log);
   }
   if (sink) sink->rethrow();
   Result result{out, r.files, py::module_::import("json").attr("loads")(slurp(r.files.back()))};
   return result;
+}
+
+// `snowbake plan --json` as a dict: what bake(...) with the same arguments would write.
+py::object plan(const std::string& scene, const std::string& out, const py::dict& overrides, std::optional<int> threads) {
+  const BakeOptions o = bakeOptions(scene, out, overrides, threads);
+  std::string json;
+  {
+    py::gil_scoped_release released;
+    json = planToJson(planBake(o));
+  }
+  return py::module_::import("json").attr("loads")(json);
 }
 
 }  // namespace
@@ -136,6 +155,8 @@ PYBIND11_MODULE(snowbake, m) {
       if (p) std::rethrow_exception(p);
     } catch (const InputError& e) {
       sceneError(e.what());
+    } catch (const Interrupted& e) {
+      PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
     }
   });
   py::class_<Result>(m, "Result")
@@ -146,6 +167,9 @@ PYBIND11_MODULE(snowbake, m) {
   m.def("bake", &bake, py::arg("scene"), py::kw_only(), py::arg("out") = "snowbake-out", py::arg("overrides") = py::dict(),
         py::arg("threads") = py::none(), py::arg("progress") = py::none(),
         "Bake SCENE (a path or preset:default) into OUT; overrides are --set KEY=VALUE. Raises SceneError on bad input.");
+  m.def("plan", &plan, py::arg("scene"), py::kw_only(), py::arg("out") = "snowbake-out", py::arg("overrides") = py::dict(),
+        py::arg("threads") = py::none(),
+        "What bake(...) with the same arguments would do, as `snowbake plan --json`: files, stages, peak memory, time class. Writes nothing.");
   m.def("info", [](const std::string& path) { return py::module_::import("json").attr("loads")(describeTerrain(path, true)); },
         py::arg("path"), "What snowbake understands of a terrain file or scene, as `snowbake info --json`.");
 }

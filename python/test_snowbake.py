@@ -35,6 +35,20 @@ def test_builtin_64_bake_layer_is_the_exr_bit_for_bit_and_progress_sees_every_st
     assert exr.tobytes() == depth.tobytes()
 
 
+def test_plan_lists_the_files_the_bake_then_writes_and_writes_nothing(tmp_path):
+    out = tmp_path / "o"
+    plan = snowbake.plan("preset:default", out=str(out), overrides=SMALL, threads=2)
+    assert not out.exists()
+    assert plan["grid"] == [64, 64] and plan["memory"]["peak_bytes"] > 0 and plan["time_class"]
+    assert {s["name"] for s in plan["stages"]} >= {"terrain", "season", "outputs", "manifest"}
+    planned = {f["path"] for f in plan["files"] if not f["condition"]}
+    result = snowbake.bake("preset:default", out=str(out), overrides=SMALL, threads=2)
+    written = {os.path.relpath(os.path.join(d, f), out) for d, _, fs in os.walk(out) for f in fs}
+    assert planned <= written
+    assert written - planned <= {f["path"] for f in plan["files"] if f["condition"]}, written - planned
+    assert len(written) == len(result.files)
+
+
 def test_bad_key_raises_scene_error_with_file_line_and_key(tmp_path):
     scene = tmp_path / "bad.toml"
     scene.write_text('[terrain]\nbuiltin = "ridged"\nsize = 64\n[season]\ndayz = 3\n')
@@ -48,3 +62,33 @@ def test_bad_key_raises_scene_error_with_file_line_and_key(tmp_path):
 def test_info_reads_the_builtin_terrain():
     info = snowbake.info("builtin:ridged")
     assert info["width"] > 0 and info["height"] > 0
+
+
+def test_sigint_during_a_bake_raises_keyboard_interrupt_and_writes_no_manifest(tmp_path):
+    """Ctrl-C from a terminal is SIGINT to the process: the bake stops between steps, Python gets KeyboardInterrupt."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    out = tmp_path / "o"
+    code = (
+        "import snowbake, sys\n"
+        "try:\n"
+        "    snowbake.bake('preset:default', out=sys.argv[1], threads=2, progress=lambda e: print(e.get('event', ''), flush=True),\n"
+        "                  overrides={'terrain.size': 256, 'season.days': 120, 'outputs.frames_days': list(range(1, 30))})\n"
+        "except KeyboardInterrupt as e:\n"
+        "    print('KeyboardInterrupt:', e, flush=True)\n"
+        "    sys.exit(3)\n"
+    )
+    child = subprocess.Popen([sys.executable, "-c", code, str(out)], stdout=subprocess.PIPE, text=True, env=os.environ)
+    for line in child.stdout:  # once the season writes frames
+        if line.strip() == "frame":
+            break
+    start = time.monotonic()
+    child.send_signal(signal.SIGINT)
+    rest, _ = child.communicate(timeout=60)
+    assert child.returncode == 3, rest
+    assert "KeyboardInterrupt: interrupted by SIGINT" in rest, rest
+    assert time.monotonic() - start < 20
+    assert not (out / "manifest.json").exists()
+    assert not [p for p in out.rglob("*") if ".tmp" in p.name]

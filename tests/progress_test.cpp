@@ -46,7 +46,7 @@ JsonBake bakeWithJsonProgress(const std::string& args) {
 
 }  // namespace
 
-TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseAndTheFinalFileCountIsTheManifests) {
+TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileEventsLiveAndTheFinalFileCountIsTheManifests) {
   const JsonBake b = bakeWithJsonProgress("preset:default --backend cpu --no-cache --set terrain.size=96 --set terrain.cell_size_m=20 "
                                           "--set season.days=40 --set outputs.frames_days=[20]");
   ASSERT_EQ(b.status, 0) << slurp(b.dir / "log.txt");
@@ -78,7 +78,16 @@ TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseAndTheFinalFileCount
   EXPECT_EQ(done["exit_status"], 0);
   const json manifest = json::parse(slurp(b.dir / "o" / "manifest.json"));
   EXPECT_EQ(done["files"].get<size_t>(), manifest["files"].size());
-  EXPECT_EQ(events["outputs/file"], static_cast<int>(manifest["files"].size()) + 1) << "every file and the manifest";
+  EXPECT_EQ(events["season/file"] + events["outputs/file"], static_cast<int>(manifest["files"].size()) + 1) << "every file and the manifest";
+  // Live: the frame's files are reported while the season still runs, before its fraction 1.
+  size_t firstFrameFile = b.lines.size(), seasonEnd = b.lines.size();
+  for (size_t i = 0; i < b.lines.size(); ++i) {
+    const json& l = b.lines[i];
+    if (l["type"] == "event" && l["stage"] == "season" && l["event"] == "file" && firstFrameFile == b.lines.size()) firstFrameFile = i;
+    if (l["type"] == "progress" && l["stage"] == "season" && l["fraction"] == 1.0 && seasonEnd == b.lines.size()) seasonEnd = i;
+  }
+  EXPECT_GT(events["season/file"], 5);
+  EXPECT_LT(firstFrameFile, seasonEnd) << "a frame's file event came after the season ended";
   EXPECT_LT(done["mass_balance_relative_error"].get<double>(), 1e-5);
   EXPECT_NE(slurp(b.dir / "log.txt").find("season:"), std::string::npos) << "the human log goes to --log-file";
   fs::remove_all(b.dir);

@@ -1,6 +1,7 @@
 // snowbake: the command-line program. The only translation unit that includes CLI11.
 //   snowbake bake SCENE | --scene-list FILE --index N  [--terrain FILE] [--out DIR] [--seed N] [--threads N] [--backend cpu|cuda|auto] [--set KEY=VALUE]...
 //                [--cache-dir DIR] [--no-cache] [--quiet] [--progress human|json] [--log-file FILE]
+//   snowbake plan SCENE [every option of bake] [--json]
 //   snowbake demo [--out DIR]
 //   snowbake cache prune [--cache-dir DIR] [--older-than-days D] [--max-size-gb G] [--dry-run]
 //   snowbake cache check [--cache-dir DIR]
@@ -10,7 +11,7 @@
 //                  [--backend cpu|cuda|auto] [--sun-size N] [--csv-dir DIR] [--data DIR]
 //   snowbake --version | --help
 // Exit status: 0 success, 2 usage or input error (one line naming the file and the problem),
-// 1 any other failure.
+// 130 bake stopped by SIGINT or SIGTERM (core/stop_request.h), 1 any other failure.
 #include <CLI/CLI.hpp>
 
 #include <chrono>
@@ -24,8 +25,10 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "core/stop_request.h"
 #include "bake/bake.h"
 #include "bake/bake_stage.h"
+#include "bake/plan.h"
 #include "bake/progress.h"
 #include "bake/scene_list.h"
 #include "bench/bench.h"
@@ -53,6 +56,7 @@ struct BakeCommand {
   std::string cacheDir;
   bool noCache = false;
   std::string progress = "human", logFile;
+  bool json = false;  // plan --json
 };
 
 struct CacheCommand {
@@ -88,10 +92,10 @@ struct BenchCommand {
   std::string sizes;
 };
 
-void addBakeCommand(CLI::App& app, BakeCommand& c) {
-  c.cmd = app.add_subcommand("bake", "Simulate a season on a scene's terrain and write its outputs.");
+// The options of bake, which plan takes too (so a plan is of the very bake the same line runs).
+void addBakeOptions(BakeCommand& c) {
   c.cmd->add_option("SCENE", c.scene, "Scene file (TOML), or preset:NAME (preset:default)");
-  c.cmd->add_option("--scene-list", c.sceneList, "Bake one level of a list, `NAME SCENE [KEY=VALUE ...]` a line, into OUT/NAME (docs/farm.md)");
+  c.cmd->add_option("--scene-list", c.sceneList, "One level of a list, `NAME SCENE [KEY=VALUE ...]` a line, into OUT/NAME (docs/farm.md)");
   c.cmd->add_option("--index", c.index, "Which level of --scene-list, from 0 (e.g. $SLURM_ARRAY_TASK_ID)");
   c.cmd->add_option("--terrain", c.terrainFile, "Terrain file that replaces the scene's terrain");
   c.cmd->add_option("--out", c.bake.outDir, "Output folder (created if missing)")->capture_default_str();
@@ -107,6 +111,17 @@ void addBakeCommand(CLI::App& app, BakeCommand& c) {
       ->check(CLI::IsMember({"human", "json"}))
       ->capture_default_str();
   c.cmd->add_option("--log-file", c.logFile, "Write the human log to FILE (with --progress json, stderr carries only JSON)");
+}
+
+void addBakeCommand(CLI::App& app, BakeCommand& c) {
+  c.cmd = app.add_subcommand("bake", "Simulate a season on a scene's terrain and write its outputs.");
+  addBakeOptions(c);
+}
+
+void addPlanCommand(CLI::App& app, BakeCommand& c) {
+  c.cmd = app.add_subcommand("plan", "Say what `bake` would do with the same options: files, stages, peak memory, time class. Writes nothing.");
+  addBakeOptions(c);
+  c.cmd->add_flag("--json", c.json, "Print JSON (docs/command-line.md)");
 }
 
 void addDemoCommand(CLI::App& app, DemoCommand& c) {
@@ -212,6 +227,7 @@ int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
     JsonProgress(std::cerr).finish({"input_error", 2, -1, "", -1, e.what()});
     return 2;
   }
+  const StopOnSignals stopOnSignals;  // Ctrl-C and SIGTERM stop the bake between steps: exit 130
   std::ofstream logFile;
   std::ostream nowhere(nullptr);
   std::ostream* log = &std::cerr;
@@ -236,11 +252,24 @@ int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
     *log << "snowbake: error: " << e.what() << "\n";
     json.finish({"input_error", 2, -1, "", -1, e.what()});
     return 2;
+  } catch (const Interrupted& e) {
+    *log << "snowbake: " << e.what() << "\n";
+    json.finish({"interrupted", kInterruptedExitStatus, -1, "", -1, e.what()});
+    return kInterruptedExitStatus;
   } catch (const std::exception& e) {
     *log << "snowbake: failed: " << e.what() << "\n";
     json.finish({"failed", 1, -1, "", -1, e.what()});
     return 1;
   }
+}
+
+void runPlanCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
+  std::ostringstream levelNote;  // the level's line is for a bake's log
+  const BakePlan plan = planBake(bakeOptions(c, argv, levelNote));
+  if (c.json)
+    std::cout << planToJson(plan);
+  else
+    printPlan(plan, std::cout);
 }
 
 void runDemoCommand(const DemoCommand& c) {
@@ -316,13 +345,14 @@ int main(int argc, char** argv) {
   CLI::App app{"snowbake: turns a terrain into a season of snow, and bakes it into maps, meshes and volumes."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("snowbake ") + programVersion());
-  BakeCommand bake;
+  BakeCommand bake, plan;
   DemoCommand demo;
   CacheCommand cache;
   InfoCommand info;
   HelpCommand help;
   BenchCommand bench;
   addBakeCommand(app, bake);
+  addPlanCommand(app, plan);
   addDemoCommand(app, demo);
   addCacheCommand(app, cache);
   addInfoCommand(app, info);
@@ -333,6 +363,8 @@ int main(int argc, char** argv) {
   try {
     if (*bake.cmd) {
       return runBakeCommand(bake, std::vector<std::string>(argv, argv + argc));
+    } else if (*plan.cmd) {
+      runPlanCommand(plan, std::vector<std::string>(argv, argv + argc));
     } else if (*demo.cmd) {
       runDemoCommand(demo);
     } else if (*cache.prune) {
@@ -349,6 +381,9 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << "snowbake: error: " << e.what() << "\n";
     return 2;
+  } catch (const Interrupted& e) {
+    std::cerr << "snowbake: " << e.what() << "\n";
+    return kInterruptedExitStatus;
   } catch (const std::bad_alloc&) {
     // The memory model refuses what it predicts will not fit; this is what it did not foresee.
     const std::string stage = currentBakeStage();

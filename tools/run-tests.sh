@@ -6,6 +6,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/setup-debian.sh --with-blender
-bash tools/build.sh -DSNOWBAKE_PYTHON=ON  # the Python module too (python/), so ctest runs its pytest
+# The Python module too (python/), so ctest runs its pytest: built for Debian's python3, which has
+# pytest and numpy from setup-debian.sh (a pyenv python first on PATH may have neither).
+bash tools/build.sh -DSNOWBAKE_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3
 (cd build && ctest --output-on-failure -j"$(nproc)" --timeout 900)
 if [ "${SNOWBAKE_SANITIZED_SUITE:-0}" != 0 ]; then bash tools/run-sanitized-tests.sh; fi
