@@ -3,6 +3,8 @@
 #include <atomic>
 #include <exception>
 
+#include "memory_trace.h"
+
 namespace snow {
 
 namespace {
@@ -12,9 +14,11 @@ std::atomic<const char*> stage{""};
 
 const char* currentBakeStage() { return stage.load(); }
 
-BakeStage::BakeStage(const char* name) : previous_(stage.exchange(name)), exceptions_(std::uncaught_exceptions()) {}
+BakeStage::BakeStage(const char* name) : name_(name), previous_(stage.exchange(name)), exceptions_(std::uncaught_exceptions()) {}
 BakeStage::~BakeStage() {
-  if (std::uncaught_exceptions() == exceptions_) stage.store(previous_);
+  if (std::uncaught_exceptions() != exceptions_) return;
+  stage.store(previous_);
+  noteStageMemory(name_);
 }
 
 }  // namespace snow

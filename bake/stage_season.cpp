@@ -14,7 +14,7 @@ SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int 
   FrameWriter frames(writer, outputs.skiTracks ? &*outputs.skiTracks : nullptr, threads, options.framesBesideSeason);
   SeasonReport report = runSeason(
       backend, state, config, [&](double f) { progress().stage("season", f); },
-      [&](double day, const SnowState& s) {
+      [&](double day, SnowState& s) {
         frames.write(day, s);
         progress().event("season", "frame", {{"day", jsonNumber(day)}});
       });
