@@ -136,7 +136,9 @@ std::vector<MemoryOwner> dayWriters(const Scene& s, const GridSpec& spec, double
   for (const auto& o : layers) layerBytes += o.bytes;
   const double vdb = s.outputs.vdb ? vdbBytes(s, spec) : 0.0;
   const double mesh = s.outputs.meshes.empty() ? 0.0 : cells * kSurfaceMeshBytesPerCell;
-  if (vdb >= layerBytes && vdb >= mesh) return {{"VDB", vdb, "outputs.vdb_voxel_size_m", MemoryGroup::Writers}};
+  // The VDB's voxels are the grid's cells unless the scene sets their size: then the grid sizes it.
+  const char* vdbKey = s.outputs.vdbVoxelSizeM > 0 ? "outputs.vdb_voxel_size_m" : "terrain.size";
+  if (vdb >= layerBytes && vdb >= mesh) return {{"VDB", vdb, vdbKey, MemoryGroup::Writers}};
   if (mesh >= layerBytes) return {{"snow-surface mesh", mesh, "outputs.meshes", MemoryGroup::Writers}};
   return layers;
 }
