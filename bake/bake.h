@@ -27,6 +27,8 @@ struct BakeOptions {
   bool progress = true;
   std::optional<std::string> cacheDir;     // precompute cache folder (default: PrecomputeCache::defaultDirectory())
   bool useCache = true;                    // --no-cache: neither read nor write it
+  // --verbose: the memory breakdown (the model's groups against the measured peak) in the log.
+  bool verbose = false;
   // Frame days' outputs written on their own thread while the season goes on (false: in place,
   // the season waiting; the same files, for tests and timing comparisons).
   bool framesBesideSeason = true;

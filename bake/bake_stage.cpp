@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "core/stop_request.h"
+#include "memory_trace.h"
 
 namespace snow {
 
@@ -15,9 +16,13 @@ std::atomic<const char*> stage{""};
 const char* currentBakeStage() { return stage.load(); }
 
 // A new stage is a point where Ctrl-C stops the bake (core/stop_request.h).
-BakeStage::BakeStage(const char* name) : previous_(stage.exchange(name)), exceptions_(std::uncaught_exceptions()) { throwIfStopRequested(); }
+BakeStage::BakeStage(const char* name) : name_(name), previous_(stage.exchange(name)), exceptions_(std::uncaught_exceptions()) {
+  throwIfStopRequested();
+}
 BakeStage::~BakeStage() {
-  if (std::uncaught_exceptions() == exceptions_) stage.store(previous_);
+  if (std::uncaught_exceptions() != exceptions_) return;
+  stage.store(previous_);
+  noteStageMemory(name_);
 }
 
 }  // namespace snow

@@ -19,10 +19,10 @@ void FrameWriter::join() {
   sink_ = OutputSink();
 }
 
-void FrameWriter::write(double day, const SnowState& s) {
+void FrameWriter::write(double day, SnowState& s) {
   if (!beside_) return writer_.writeDay(s, day, skiTracks_ ? &skiTracks_->depth() : nullptr);
   join();
-  state_ = s;
+  state_ = std::move(s);  // the season's frame copy, taken: one copy of the state in flight, not two
   if (skiTracks_) skiDepth_ = skiTracks_->depth();
   thread_ = std::thread([this, day] {
     try {
@@ -31,6 +31,8 @@ void FrameWriter::write(double day, const SnowState& s) {
     } catch (...) {
       error_ = std::current_exception();
     }
+    state_ = SnowState();  // freed once written, not held until the next frame
+    skiDepth_ = Grid<float>();
   });
 }
 

@@ -23,8 +23,8 @@ class FrameWriter {
   FrameWriter(const FrameWriter&) = delete;
   FrameWriter& operator=(const FrameWriter&) = delete;
 
-  // The outputs of frame day `day` from `state`.
-  void write(double day, const SnowState& state);
+  // The outputs of frame day `day` from `state`, which it takes (moves from) to write beside the season.
+  void write(double day, SnowState& state);
   // Waits for the frame in flight, merges its files into the current sink, rethrows its error.
   void join();
 

@@ -43,6 +43,9 @@ constexpr int kVdbGrids = 4;  // level set + density + about two layers' leaves 
 constexpr double kSiteBytes = 160.0;
 constexpr double kMeshTriangleBytes = 200.0;
 constexpr double kRecordBytes = 4096.0;
+// Measured: bytes a cell the grid's snow-surface mesh holds while it is built and written
+// (the adaptive triangulation, the mesh's arrays and the file's buffer; tools/measure-memory.sh).
+constexpr double kSurfaceMeshBytesPerCell = 100.0;
 
 // Bytes a cell of the state's fields with the roles `pick` accepts, optional fields only when
 // `present` says the scene makes them.
@@ -108,23 +111,24 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
     if (const LayerInfo* l = findLayer(name)) needs |= l->needs;
   std::vector<MemoryOwner> w;
   const double layers = static_cast<double>(o.layers.size());
+  constexpr MemoryGroup W = MemoryGroup::Writers;
   const double px = outputPixels(o, cells);
-  w.push_back({"layers being written", cells * 4.0 * (o.multichannelExr ? layers + 1 : 2.0), o.multichannelExr ? "outputs.multichannel_exr" : "outputs.layers"});
-  if (o.resizeWidth > 0) w.push_back({"resized layer and its mask", px * 5.0, "outputs.resize"});
+  w.push_back({"layers being written", cells * 4.0 * (o.multichannelExr ? layers + 1 : 2.0), o.multichannelExr ? "outputs.multichannel_exr" : "outputs.layers", W});
+  if (o.resizeWidth > 0) w.push_back({"resized layer and its mask", px * 5.0, "outputs.resize", W});
   const bool tiled = o.tiles.convention != TileConvention::None && o.tiles.sizePx > 0;
   w.push_back({tiled ? "tile being written" : "image being written", (tiled ? static_cast<double>(o.tiles.sizePx) * o.tiles.sizePx : px) * 5.0,
-               tiled ? "outputs.tiles.size_px" : "outputs.layers"});
+               tiled ? "outputs.tiles.size_px" : "outputs.layers", W});
   // The splat map: three weights, their mask and the RGBA pixels; the normal map: the surface,
   // its mask and the RGB pixels (one of them at a time).
   const double splat = hasLayer(s, "splat_map") ? px * (3.0 * 4.0 + 1.0 + 4.0) : 0.0;
   const double normal = hasLayer(s, "snow_normal") ? px * (4.0 + 1.0 + 3.0) : 0.0;
-  if (splat + normal > 0) w.push_back({"engine map being written", std::max(splat, normal), "outputs.layers"});
-  if (!o.encodings.empty()) w.push_back({"encodings", cells * 2.0, "outputs.encodings"});
-  if (needs & kNeedsWind) w.push_back({"the day's wind", cells * 16.0, "outputs.layers"});
-  if (needs & kNeedsSun) w.push_back({"the day's sun", cells * 4.0, "outputs.layers"});
+  if (splat + normal > 0) w.push_back({"engine map being written", std::max(splat, normal), "outputs.layers", W});
+  if (!o.encodings.empty()) w.push_back({"encodings", cells * 2.0, "outputs.encodings", W});
+  if (needs & kNeedsWind) w.push_back({"the day's wind", cells * 16.0, "outputs.layers", W});
+  if (needs & kNeedsSun) w.push_back({"the day's sun", cells * 4.0, "outputs.layers", W});
   if (o.displacementWidth > 0)
     w.push_back({"displacement map", static_cast<double>(o.displacementWidth) * o.displacementHeight * 4.0 + cells * 4.0,
-                 "outputs.displacement_size"});
+                 "outputs.displacement_size", W});
   return w;
 }
 
@@ -139,6 +143,24 @@ double seasonRangeBytesPerDay(const Scene& s, double cells, double skiTextureByt
     if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
       perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : outputPixels(o, cells) * 5.0;
   return perDay * encodings;
+}
+
+double vdbBytes(const Scene& s, const GridSpec& spec);
+
+// A day's writers run one after another (OutputWriter::writeDay): the layers (with their
+// encodings, displacement and multi-channel EXR), then the VDB, then the meshes; the day holds
+// the largest of the three.
+std::vector<MemoryOwner> dayWriters(const Scene& s, const GridSpec& spec, double cells) {
+  std::vector<MemoryOwner> layers = writerOwners(s, cells);
+  double layerBytes = 0;
+  for (const auto& o : layers) layerBytes += o.bytes;
+  const double vdb = s.outputs.vdb ? vdbBytes(s, spec) : 0.0;
+  const double mesh = s.outputs.meshes.empty() ? 0.0 : cells * kSurfaceMeshBytesPerCell;
+  // The VDB's voxels are the grid's cells unless the scene sets their size: then the grid sizes it.
+  const char* vdbKey = s.outputs.vdbVoxelSizeM > 0 ? "outputs.vdb_voxel_size_m" : "terrain.size";
+  if (vdb >= layerBytes && vdb >= mesh) return {{"VDB", vdb, vdbKey, MemoryGroup::Writers}};
+  if (mesh >= layerBytes) return {{"snow-surface mesh", mesh, "outputs.meshes", MemoryGroup::Writers}};
+  return layers;
 }
 
 double vdbBytes(const Scene& s, const GridSpec& spec) {
@@ -177,14 +199,74 @@ std::string MemoryPrediction::summary() const {
   return o.str();
 }
 
+const std::vector<MemoryGroupInfo>& memoryGroups() {
+  static const std::vector<MemoryGroupInfo> table{
+      {MemoryGroup::State, "state", "the terrain and the snow layers (host and backend copies), the mesh in mesh mode"},
+      {MemoryGroup::StaticFields, "static fields", "exposure, temperature base and wind fields of the day (host and backend), occlusion fields"},
+      {MemoryGroup::ExposureSamples, "exposure samples", "I_sky and each sample day's I_sun + I_ind, interpolated each day"},
+      {MemoryGroup::WindFields, "wind fields", "each distinct wind state's field, wind-effect surface and loading"},
+      {MemoryGroup::Scratch, "scratch", "the backend's working fields, the avalanche runner's, the skiers' route map, mesh mode's lattice"},
+      {MemoryGroup::Records, "records", "scour, deposit, melt and avalanche-peak fields, skier and avalanche records, the ski-track texture"},
+      {MemoryGroup::Writers, "writers", "the layers, encodings, displacement maps and VDB being written"},
+      {MemoryGroup::FramesInFlight, "frames in flight", "a frame day's copy of the state written beside the season, frames held for season ranges"},
+      {MemoryGroup::PrecomputeWork, "precompute working sets", "horizon angles or Embree's ray scene, the wind solver: freed before the season"},
+  };
+  return table;
+}
+
+const char* memoryGroupName(MemoryGroup g) {
+  for (const auto& i : memoryGroups())
+    if (i.group == g) return i.name;
+  return "?";
+}
+
+std::vector<std::pair<MemoryGroup, double>> MemoryPrediction::peakByGroup() const {
+  std::vector<std::pair<MemoryGroup, double>> out;
+  for (const auto& i : memoryGroups()) {
+    double b = 0;
+    for (const auto& o : peakPhase().owners)
+      if (o.group == i.group) b += o.bytes;
+    out.emplace_back(i.group, b);
+  }
+  return out;
+}
+
+std::string memoryBreakdownText(const MemoryPrediction& p, double measured, const std::string& stage, double cells) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(0) << "memory: measured peak " << measured / kMiB << " MiB (VmHWM)"
+    << (stage.empty() ? "" : ", reached by the end of the " + stage + " stage") << "; predicted " << p.peakBytes() / kMiB << " MiB in the "
+    << p.peakPhase().name << " (" << std::showpos << std::setprecision(1) << 100.0 * (p.peakBytes() - measured) / std::max(measured, 1.0)
+    << std::noshowpos << " %)\n" << std::setprecision(0);
+  o << "  " << std::left << std::setw(26) << "libraries" << std::right << std::setw(8) << p.libraryBytes / kMiB << " MiB\n";
+  for (const auto& [g, bytes] : p.peakByGroup())
+    o << "  " << std::left << std::setw(26) << memoryGroupName(g) << std::right << std::setw(8) << bytes / kMiB << " MiB  "
+      << std::setw(5) << bytes / std::max(cells, 1.0) << " B/cell\n";
+  o << "  measured above the libraries: " << std::setprecision(1) << (measured - p.libraryBytes) / std::max(cells, 1.0) << " bytes a cell\n";
+  return o.str();
+}
+
+std::string memoryBreakdownJson(const MemoryPrediction& p, double measured, const std::string& stage, double cells) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(1) << "{\"measured_peak_mib\": " << measured / kMiB << ", \"measured_peak_stage\": \"" << stage
+    << "\", \"measured_bytes_per_cell_above_libraries\": " << (measured - p.libraryBytes) / std::max(cells, 1.0)
+    << ", \"predicted_peak_mib\": " << p.peakBytes() / kMiB << ", \"predicted_peak_phase\": \"" << p.peakPhase().name
+    << "\", \"predicted_mib\": {\"libraries\": " << p.libraryBytes / kMiB;
+  for (const auto& [g, bytes] : p.peakByGroup()) o << ", \"" << memoryGroupName(g) << "\": " << bytes / kMiB;
+  o << "}}";
+  return o.str();
+}
+
 MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles) {
+  using G = MemoryGroup;
   const double cells = static_cast<double>(spec.width) * spec.height;
   const OptionalFields present{s};
   const bool occlusion = s.mode == SceneMode::Occlusion;
-  const double state = cells * fieldBytes([](FieldRole) { return true; }, present);
-  const double backend = cells * fieldBytes([](FieldRole r) { return heldByBackend(r); }, present);
-  const MemoryOwner terrain{"terrain", cells * 5.0, "terrain.size"};
-  const MemoryOwner stateOwner{"snow state", state, "terrain.size"};
+  auto bytesOf = [&](auto pick) { return cells * fieldBytes(pick, present); };
+  const double state = bytesOf([](FieldRole) { return true; });
+  const MemoryOwner terrain{"terrain", cells * 5.0, "terrain.size", G::State};
+  const MemoryOwner stateOwner{"snow state", bytesOf([](FieldRole r) { return r != FieldRole::Static && r != FieldRole::Record; }), "terrain.size", G::State};
+  const MemoryOwner staticOwner{"snow state: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields};
+  const MemoryOwner recordOwner{"snow state: record fields", bytesOf([](FieldRole r) { return r == FieldRole::Record; }), "terrain.size", G::Records};
   MemoryPrediction p;
   p.libraryBytes = kLibraryBytes;
 
@@ -194,77 +276,96 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   es.seasonDays = s.days;
   const bool sweep = s.sunMethod == SunMethod::Horizon || (s.sunMethod == SunMethod::Auto && s.occluders.empty());
   const double samples = (!occlusion && s.sunExposure) ? static_cast<double>(exposureSampleDays(es).size()) : 0.0;
-  const MemoryOwner exposure{"exposure samples", cells * 4.0 * (samples > 0 ? 1.0 + 2.0 * samples : 0.0), "precompute.sun_quality"};
+  // I_sky and, per sample day, I_sun and I_ind; the season keeps I_sun + I_ind (Exposure::foldIndirect).
+  const MemoryOwner computedExposure{"exposure samples", cells * 4.0 * (samples > 0 ? 1.0 + 2.0 * samples : 0.0), "precompute.sun_quality", G::ExposureSamples};
+  const MemoryOwner exposure{"exposure samples", cells * 4.0 * (samples > 0 ? 1.0 + samples : 0.0), "precompute.sun_quality", G::ExposureSamples};
   size_t windStates = 0;
+  bool calmKeyframe = false;
   {
     std::vector<std::pair<double, double>> seen;
-    for (const auto& k : s.weather.keyframes)
+    for (const auto& k : s.weather.keyframes) {
+      calmKeyframe = calmKeyframe || k.state.windSpeedMps <= 0.0;
       if (k.state.windSpeedMps > 0.0 && std::find(seen.begin(), seen.end(), std::make_pair(k.state.windDirectionDeg, k.state.windSpeedMps)) == seen.end())
         seen.emplace_back(k.state.windDirectionDeg, k.state.windSpeedMps);
+    }
     windStates = occlusion ? 0 : seen.size();
   }
-  const MemoryOwner wind{"wind fields", cells * 20.0 * static_cast<double>(windStates), "weather.keyframe"};
+  const MemoryOwner wind{"wind fields", cells * 20.0 * static_cast<double>(windStates), "weather.keyframe", G::WindFields};
   const double rayScene = cells * kEmbreeGridBytesPerCell + static_cast<double>(occluderTriangles) * kEmbreeBytesPerTriangle;
-  MemoryPhase pre{"precompute", {terrain, stateOwner}};
+  MemoryPhase pre{"precompute", {terrain, stateOwner, staticOwner}};  // the record fields are made after it
   if (samples > 0) {
+    // The sky's horizon grids (one an azimuth), or the shadows' sweep (three grids, the normals,
+    // a bit a cell for each sun position above the horizon: precompute/horizon.h).
+    const double sunPositions = samples * 24.0 / es.quality.hourStep * 0.5;
     if (sweep)
-      pre.owners.push_back({"horizon angles", cells * (4.0 * 5.0 * es.quality.azimuths + 12.0 + kSweepScratchPerCell), "precompute.sun_quality"});
+      pre.owners.push_back({"horizon angles", cells * (std::max(4.0 * es.quality.azimuths, 12.0 + 12.0 + sunPositions / 8.0) + kSweepScratchPerCell),
+                            "precompute.sun_quality", G::PrecomputeWork});
     else
-      pre.owners.push_back({"ray scene (Embree)", rayScene, "precompute.sun_method"});
-    pre.owners.push_back(exposure);
+      pre.owners.push_back({"ray scene (Embree)", rayScene, "precompute.sun_method", G::PrecomputeWork});
+    pre.owners.push_back(computedExposure);
   }
-  if (windStates > 0) pre.owners.push_back({"wind solver", cells * kWindSolverPerCell + wind.bytes, "weather.keyframe"});
+  if (windStates > 0) pre.owners.push_back({"wind solver", cells * kWindSolverPerCell, "weather.keyframe", G::PrecomputeWork});
+  if (windStates > 0) pre.owners.push_back(wind);
   p.phases.push_back(pre);
 
-  std::vector<MemoryOwner> writer = writerOwners(s, cells);
+  const std::vector<MemoryOwner> writer = dayWriters(s, spec, cells);
   const double track = s.outputs.skiTrackFactor;
   const bool skiTracks = hasLayer(s, "ski_tracks");
-  const MemoryOwner skiTexture{"ski-track texture", skiTracks ? cells * track * track * 4.0 : 0.0, "outputs.ski_track_factor"};
+  const MemoryOwner skiTexture{"ski-track texture", skiTracks ? cells * track * track * 4.0 : 0.0, "outputs.ski_track_factor", G::Records};
   // The frames (and, once written, the season's end) whose encodings wait for a "season" range.
   const double heldPerDay = seasonRangeBytesPerDay(s, cells, skiTexture.bytes);
   if (occlusion) {
-    MemoryPhase occ{"occlusion", {terrain, stateOwner,
-                                  {"ray scene (Embree)", rayScene, "terrain.size"},
-                                  {"ray origins and normals", cells * 25.0, "terrain.size"},
-                                  {"occlusion fields", cells * 16.0, "terrain.size"}}};
+    MemoryPhase occ{"occlusion", {terrain, stateOwner, staticOwner, recordOwner,
+                                  {"ray scene (Embree)", rayScene, "terrain.size", G::PrecomputeWork},
+                                  {"ray origins and normals", cells * 25.0, "terrain.size", G::Scratch},
+                                  {"occlusion fields", cells * 16.0, "terrain.size", G::StaticFields}}};
     p.phases.push_back(occ);
-    MemoryPhase out{"outputs", {terrain, stateOwner, {"occlusion fields", cells * 16.0, "terrain.size"}}};
+    MemoryPhase out{"outputs", {terrain, stateOwner, staticOwner, recordOwner, {"occlusion fields", cells * 16.0, "terrain.size", G::StaticFields}}};
     out.owners.insert(out.owners.end(), writer.begin(), writer.end());
-    if (s.outputs.vdb) out.owners.push_back({"VDB", vdbBytes(s, spec), "outputs.vdb_voxel_size_m"});
     p.phases.push_back(out);
     return p;
   }
 
-  // The season: the state, the backend's copies and scratch, the avalanche runner's two copies
-  // of the state and its scratch, the route map, a frame in flight.
-  MemoryPhase season{"season", {terrain, stateOwner, exposure, wind,
-                                {"backend fields", backend, "terrain.size"},
-                                {"backend scratch", cells * (scratchBytes(true, true) + 16.0), "terrain.size"},
-                                {"avalanche runner", 2.0 * state + cells * (scratchBytes(false, true) + 28.0), "terrain.size"},
-                                {"ski route map", cells * 28.0, "parameters.skiers_per_hour"}}};
+  // The season: the backend holds the state's fields (the host keeps the terrain and, unless
+  // they are refilled daily, the static fields: SeasonRun::releaseHostCopies), its scratch, the
+  // avalanche runner's layers at release and scratch, the route map, a frame in flight.
+  const bool windVaries = windStates > 1 || (windStates > 0 && calmKeyframe);
+  const bool staticOnHost = !((samples > 0 || windVaries) && !s.bedforms.enabled);
+  MemoryPhase season{"season", {terrain, {"snow state: terrain on the host", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || optionalField(r); }), "terrain.size", G::State},
+                                exposure, wind,
+                                {"backend: state", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || r == FieldRole::Evolved || r == FieldRole::ArtDirection; }), "terrain.size", G::State},
+                                {"backend: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields},
+                                {"backend: record fields", recordOwner.bytes, "terrain.size", G::Records},
+                                {"backend scratch", cells * (scratchBytes(true, true) + 16.0), "terrain.size", G::Scratch}}};
+  // The avalanche runner and the route map exist only where the season can have avalanches and skiers.
+  const bool skiing = (s.params.skiersPerHour > 0.0 && s.params.skiHoursPerDay > 0.0) || !s.userSkiers.empty();
+  if (s.params.avalancheRatePerKm2PerDay > 0.0 || !s.userAvalanches.empty() || (skiing && s.params.skiTriggerFactor > 0.0))
+    season.owners.push_back({"avalanche runner", cells * (16.0 + 1.0 + scratchBytes(false, true)), "terrain.size", G::Scratch});
+  if (skiing) season.owners.push_back({"ski route map", cells * 20.0, "parameters.skiers_per_hour", G::Scratch});
+  if (staticOnHost) season.owners.push_back({"snow state: static fields on the host", staticOwner.bytes, "terrain.size", G::StaticFields});
   if (skiTracks) season.owners.push_back(skiTexture);
   {
     // Each skier's record (its refined track, about 4 KiB) and each scene avalanche's.
     double skiers = s.params.skiersPerHour * s.params.skiHoursPerDay * s.days;
     for (const auto& e : s.userSkiers) skiers += e.count;
     season.owners.push_back({"skier and avalanche records", (skiers + static_cast<double>(s.userAvalanches.size())) * kRecordBytes,
-                             "parameters.skiers_per_hour"});
+                             "parameters.skiers_per_hour", G::Records});
   }
   if (!s.outputs.frameDays.empty()) {
-    // Two copies of the state (the season's snapshot and the writer's), and of the texture the
-    // writer's copy and the ski_tracks layer computed from it.
-    season.owners.push_back({"frame in flight: state copies", 2.0 * state, "outputs.frames_days"});
-    if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor"});
-    for (const auto& w : writer) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key});
-    season.owners.push_back({"frames held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size()), "outputs.ranges"});
+    // One copy of the state (the season's download, which the frame writer takes) without the
+    // static fields the host released, and two of the texture (the writer's and its layer).
+    season.owners.push_back({"frame in flight: state copy", state - (staticOnHost ? 0.0 : staticOwner.bytes), "outputs.frames_days", G::FramesInFlight});
+    if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::FramesInFlight});
+    for (const auto& w : writer) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
+    season.owners.push_back({"frames held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size()), "outputs.ranges", G::FramesInFlight});
   }
   p.phases.push_back(season);
 
-  MemoryPhase out{"outputs", {terrain, stateOwner, exposure, wind, {"backend fields", backend, "terrain.size"}}};
-  if (skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * skiTexture.bytes, "outputs.ski_track_factor"});
+  // The outputs: the backend is freed once the season ends; the state has its static fields again.
+  MemoryPhase out{"outputs", {terrain, stateOwner, staticOwner, recordOwner, exposure, wind}};
+  if (skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::Records});
   out.owners.insert(out.owners.end(), writer.begin(), writer.end());
-  out.owners.push_back({"days held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size() + 1), "outputs.ranges"});
-  if (s.outputs.vdb) out.owners.push_back({"VDB", vdbBytes(s, spec), "outputs.vdb_voxel_size_m"});
+  out.owners.push_back({"days held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size() + 1), "outputs.ranges", G::FramesInFlight});
   p.phases.push_back(out);
   return p;
 }
@@ -280,10 +381,10 @@ MemoryPrediction predictMeshBake(const Scene& s, size_t triangles, const double 
   const double leafLayers = std::ceil((pl.depthM + 6.0 * voxel) / voxel / 8.0) + 1.0;
   MemoryPrediction p;
   p.libraryBytes = kLibraryBytes;
-  const MemoryOwner mesh{"mesh and its ray scene", static_cast<double>(triangles) * kMeshTriangleBytes, "terrain.file"};
-  p.phases.push_back({"placement", {mesh, {"launch-site lattice", sites * kSiteBytes, "mesh_snow.site_spacing_m"}}});
-  p.phases.push_back({"snow body", {mesh, {"launch-site lattice", sites * kSiteBytes, "mesh_snow.site_spacing_m"},
-                                    {"snow body voxels", columns / 64.0 * leafLayers * kVdbLeafBytes * 3.0, voxelKey}}});
+  const MemoryOwner mesh{"mesh and its ray scene", static_cast<double>(triangles) * kMeshTriangleBytes, "terrain.file", MemoryGroup::State};
+  const MemoryOwner lattice{"launch-site lattice", sites * kSiteBytes, "mesh_snow.site_spacing_m", MemoryGroup::Scratch};
+  p.phases.push_back({"placement", {mesh, lattice}});
+  p.phases.push_back({"snow body", {mesh, lattice, {"snow body voxels", columns / 64.0 * leafLayers * kVdbLeafBytes * 3.0, voxelKey, MemoryGroup::Writers}}});
   return p;
 }
 

@@ -15,10 +15,24 @@
 
 namespace snow {
 
+// The groups of the breakdown that `bake --verbose` prints and the manifest's "memory" line holds
+// (memoryGroups(): their names and what each holds); every owner belongs to one.
+enum class MemoryGroup : uint8_t {
+  State, StaticFields, ExposureSamples, WindFields, Scratch, Records, Writers, FramesInFlight, PrecomputeWork
+};
+struct MemoryGroupInfo {
+  MemoryGroup group;
+  const char* name;  // as printed and in the manifest: "state", "static fields", ...
+  const char* holds;
+};
+const std::vector<MemoryGroupInfo>& memoryGroups();
+const char* memoryGroupName(MemoryGroup g);
+
 struct MemoryOwner {
   std::string name;   // "snow state", "ski-track texture", ...
   double bytes = 0;
   std::string key;    // the scene key that sizes it most ("" where it is the grid itself)
+  MemoryGroup group = MemoryGroup::State;
 };
 
 struct MemoryPhase {
@@ -35,7 +49,14 @@ struct MemoryPrediction {
   double peakBytes() const { return libraryBytes + peakPhase().bytes(); }
   // One line: the peak, its phase and its three largest owners.
   std::string summary() const;
+  // The peak phase's bytes by group (memoryGroups() order; the libraries not included).
+  std::vector<std::pair<MemoryGroup, double>> peakByGroup() const;
 };
+
+// The breakdown against the measured peak (VmHWM) and the stage it came in: the lines `bake
+// --verbose` prints, and the manifest's one-line JSON object ("memory"). `cells`: the grid's.
+std::string memoryBreakdownText(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double cells);
+std::string memoryBreakdownJson(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double cells);
 
 // What a grid bake (mode = "season" or "occlusion") holds on a grid of `spec`, with
 // `occluderTriangles` triangles of occluder meshes.

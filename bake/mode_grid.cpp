@@ -14,6 +14,7 @@
 #include "core/errors.h"
 #include "core/format.h"
 #include "memory_model.h"
+#include "memory_trace.h"
 #include "modes.h"
 #include "progress.h"
 #include "stages.h"
@@ -55,12 +56,13 @@ GeoFrame geoFrameOf(const TerrainInfo& ti) {
 namespace {
 
 // The memory model's prediction for the grid, logged; refused above the budget before any work.
-void checkGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, std::ostream& log) {
+MemoryPrediction checkGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, std::ostream& log) {
   refuseBeyondTheModel(scene, spec);
   const MemoryPrediction p = predictGridBake(scene, spec, occluderTriangles);
   const double budget = memoryBudgetBytes(scene);
   refuseAboveBudget(scene, p, budget);
   log << "memory: " << p.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
+  return p;
 }
 
 }  // namespace
@@ -110,10 +112,11 @@ void createOutputFolder(const std::string& dir) {
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
   checkBuiltinMemory(scene);
+  resetStageMemory();
   std::optional<BakeStage> stage(std::in_place, "terrain");
   progress().stage("terrain", 0.0);
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
-  checkGridMemory(scene, terrain.info().spec, triangleCount(terrain.occluders), log);
+  const MemoryPrediction memory = checkGridMemory(scene, terrain.info().spec, triangleCount(terrain.occluders), log);
   progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
@@ -128,7 +131,10 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
       throw InputError(scene.sourceName + ": " + problem);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
+  // The record fields stay zero until the season: not held through the precompute's peak.
+  state.releaseFields([](FieldRole r) { return r == FieldRole::Record; });
   const Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
+  state.restoreFields([](FieldRole r) { return r == FieldRole::Record; });
 
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : chooseBackend(scene.backend, log);
   const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
@@ -155,6 +161,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
     stage.emplace("season");
     const SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
     report = runSeasonStage(scene, options, threads, *backend, state, config, seasonOutputs, writer, log);
+    backend.reset();  // its copies of the state and its scratch, freed before the outputs
   }
 
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
@@ -168,11 +175,17 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   writer.writeAvalancheMaps(report.avalanches, state.spec);
   writeResolvedScene(scene, options.outDir);
   progress().stage("outputs", 1.0);
+  stage.emplace("manifest");  // the outputs stage's memory noted: every owner has had its peak
   progress().stage("manifest", 0.0);
   BakeResult result;
-  const Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
-                                                  occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
-                                                  options.commandLine});
+  Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
+                                            occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
+                                            options.commandLine});
+  const double measuredPeak = readProcessMemory().peakBytes;
+  const std::string peakStage = stageOfPeak(stageMemory(), measuredPeak);
+  const double cells = static_cast<double>(state.spec.cellCount());
+  manifest.memoryJson = memoryBreakdownJson(memory, measuredPeak, peakStage, cells);
+  if (options.verbose) log << memoryBreakdownText(memory, measuredPeak, peakStage, cells);
   result.files = files.paths;
   writeTextAtomically(manifestPath(options.outDir), manifestToJson(manifest));
   result.files.push_back(manifestPath(options.outDir));

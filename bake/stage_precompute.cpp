@@ -48,6 +48,7 @@ void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const Sn
   if (scene.sunMethod == SunMethod::Horizon && !terrain.occluders.empty())
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
   pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, log);
+  pre.exposure->foldIndirect();  // the season and the layers read I_sun + I_ind only
   log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", "
       << pre.exposure->days.size() << " sample days) (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
 }

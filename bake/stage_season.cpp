@@ -19,7 +19,7 @@ SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int 
         throwIfStopRequested();  // once a simulated day
         progress().stage("season", f);
       },
-      [&](double day, const SnowState& s) {
+      [&](double day, SnowState& s) {
         throwIfStopRequested();
         frames.write(day, s);
         progress().event("season", "frame", {{"day", jsonNumber(day)}});

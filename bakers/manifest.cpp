@@ -143,7 +143,10 @@ std::string manifestToJson(const Manifest& m) {
                           {"melt_removed", m.meltRemovedM3},
                           {"final_snow", m.finalSnowM3}};
   j["files"] = filesJson(m);
-  return j.dump(2) + "\n";
+  std::string text = j.dump(2) + "\n";
+  if (!m.memoryJson.empty())
+    if (const size_t at = text.find("\n  \"files\": "); at != std::string::npos) text.insert(at, "\n  \"memory\": " + m.memoryJson + ",");
+  return text;
 }
 
 std::string meshSnowManifestToJson(const MeshSnowManifest& m) {

@@ -110,6 +110,9 @@ struct Manifest {
   // How it was run: the command line (empty when a library called it) and every input file's hash.
   std::vector<std::string> commandLine;
   std::vector<std::pair<std::string, std::string>> inputHashes;  // path, FNV-1a 64
+  // The memory breakdown, one JSON object (bake/memory_model.h): written on one line of its own,
+  // the only line that differs between two runs of a bake (the measured peak varies).
+  std::string memoryJson;
 };
 
 std::string manifestToJson(const Manifest& manifest);

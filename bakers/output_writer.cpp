@@ -2,11 +2,8 @@
 // contact sheet. The meshes are in output_meshes.cpp, each avalanche's maps in output_avalanches.cpp.
 #include "output_writer.h"
 
-#include <tbb/task_group.h>
-
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
@@ -76,27 +73,22 @@ void OutputWriter::writeDay(const SnowState& s, double day, const Grid<float>* s
     o << "." << std::setw(4) << std::setfill('0') << static_cast<long>(std::lround(day));
     d.dayTag = o.str();
   }
-  // The VDB and the meshes (the larger writers) run beside the layers as tasks of their own,
-  // each listing into its own sink, merged below in a fixed order.
+  // The layers, the VDB and the meshes one after the other, so that only one of their working
+  // sets is held at a time (side by side they were the bake's peak: the VDB's tree and the
+  // mesh's buffers beside every layer); each lists into its own sink, merged in a fixed order.
   OutputSink layerSink, vdbSink, meshSink;
-  tbb::task_group group;
-  group.run([&] {
-    SinkScope scope(vdbSink);
-    writeVdb(d);
-  });
-  group.run([&] {
-    SinkScope scope(meshSink);
-    writeMeshes(d);
-  });
-  std::exception_ptr layerError;
-  try {
+  {
     SinkScope scope(layerSink);
     writeLayers(d);
-  } catch (...) {
-    layerError = std::current_exception();
   }
-  group.wait();  // rethrows the VDB and mesh writers' error
-  if (layerError) std::rethrow_exception(layerError);
+  {
+    SinkScope scope(vdbSink);
+    writeVdb(d);
+  }
+  {
+    SinkScope scope(meshSink);
+    writeMeshes(d);
+  }
   parent.merge(layerSink);
   parent.merge(vdbSink);
   parent.merge(meshSink);

@@ -24,21 +24,32 @@ void writeVdbGridsAtomically(const std::string& path, const openvdb::GridPtrVec&
     const std::string tag = file.getUniqueTag();
     file.close();
     // OpenVDB stamps each file with a random UUID; replace it with one derived from the content
-    // so the same bake gives the same bytes.
+    // so the same bake gives the same bytes. The content is hashed in chunks as it is read (the
+    // file is not held in memory: it was, twice) and the 36 bytes are patched in place.
     std::ifstream in(temp, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    in.close();
-    const size_t at = bytes.find(tag);
+    std::string head(512, '\0');  // the tag is looked for in the first 256 bytes
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<size_t>(in.gcount()));
+    const size_t at = head.find(tag);
     if (tag.size() == 36 && at != std::string::npos && at < 256) {
-      std::string rest = bytes;
-      rest.replace(at, tag.size(), std::string(tag.size(), '0'));
-      const uint64_t a = Fnv1a64().add(rest).value(), b = Fnv1a64().add("snowbake").add(rest).value();
+      head.replace(at, tag.size(), std::string(tag.size(), '0'));
+      Fnv1a64 ha, hb;
+      hb.add("snowbake");
+      ha.add(head), hb.add(head);
+      std::vector<char> chunk(1 << 20);
+      while (in) {
+        in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+        const size_t n = static_cast<size_t>(in.gcount());
+        ha.add(chunk.data(), n), hb.add(chunk.data(), n);
+      }
+      in.close();
+      const uint64_t a = ha.value(), b = hb.value();
       char uuid[40];
       std::snprintf(uuid, sizeof uuid, "%08x-%04x-%04x-%04x-%012llx", static_cast<unsigned>(a >> 32), static_cast<unsigned>((a >> 16) & 0xffff),
                     static_cast<unsigned>(a & 0xffff), static_cast<unsigned>(b >> 48), static_cast<unsigned long long>(b & 0xffffffffffffull));
-      bytes.replace(at, tag.size(), std::string(uuid, 36));
-      std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+      std::fstream out(temp, std::ios::binary | std::ios::in | std::ios::out);
+      out.seekp(static_cast<std::streamoff>(at));
+      out.write(uuid, 36);
       if (!out) throw std::runtime_error("cannot write " + path);
     }
   });

@@ -21,55 +21,79 @@ GridCrop crop(const Grid<float>& g, int x0, int y0, int x1, int y1) {
   return c;
 }
 
-double surfaceAt(const SnowState& s, size_t i) {
-  return static_cast<double>(s.bedrockM.values()[i]) + s.compactedM.values()[i] + s.stableM.values()[i] +
-         s.unstableM.values()[i] + s.powderM.values()[i];
+// A = B + C + S + U + P of cell i (of the box's cell j), summed in double.
+double surfaceAt(const Grid<float>& bedrock, size_t i, const SnowBox& b, size_t j) {
+  return static_cast<double>(bedrock.values()[i]) + b.compacted.values()[j] + b.stable.values()[j] + b.unstable.values()[j] +
+         b.powder.values()[j];
 }
 }  // namespace
 
 AvalancheRun::AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain)
-    : backend_(backend), p_(params), before_(terrain), after_(terrain) {}
+    : backend_(backend), p_(params), terrain_(terrain) {}
+
+double AvalancheRun::surfaceBefore(size_t i) const { return surfaceAt(terrain_.bedrockM, i, before_, i); }
+
+void AvalancheRun::downloadBefore() {
+  before_.x0 = before_.y0 = 0;
+  before_.width = terrain_.spec.width, before_.height = terrain_.spec.height;
+  backend_.downloadBox(before_, false);
+}
 
 bool AvalancheRun::release(int x, int y, double day, double seaLevelTemperatureC, bool user) {
-  backend_.download(before_);
+  downloadBefore();
   return releaseFromSnapshot(x, y, day, seaLevelTemperatureC, user);
 }
 
 double AvalancheRun::steepestDrop(int x, int y) const {
-  const GridSpec& g = before_.spec;
-  const double a = surfaceAt(before_, static_cast<size_t>(y) * g.width + x);
+  const GridSpec& g = terrain_.spec;
+  const double a = surfaceBefore(static_cast<size_t>(y) * g.width + x);
   double slope = 0.0;
   for (int ny = std::max(0, y - 1); ny < std::min(g.height, y + 2); ++ny)
     for (int nx = std::max(0, x - 1); nx < std::min(g.width, x + 2); ++nx) {
-      if ((nx == x && ny == y) || !before_.validCell(nx, ny)) continue;
+      if ((nx == x && ny == y) || !terrain_.validCell(nx, ny)) continue;
       const double dist = std::hypot((nx - x) * g.cellSizeXM, (ny - y) * g.cellSizeYM);
-      slope = std::max(slope, (a - surfaceAt(before_, static_cast<size_t>(ny) * g.width + nx)) / dist);
+      slope = std::max(slope, (a - surfaceBefore(static_cast<size_t>(ny) * g.width + nx)) / dist);
     }
   return slope;
 }
 
 bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC) {
-  backend_.download(before_);
-  const GridSpec& g = before_.spec;
+  downloadBefore();
+  const GridSpec& g = terrain_.spec;
   const double tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
-  const bool factors = before_.avalancheReleaseFactor.size() == g.cellCount();
-  std::vector<double> cumulative(g.cellCount(), 0.0);
-  double total = 0.0;
-  for (int y = 0; y < g.height; ++y)
-    for (int x = 0; x < g.width; ++x) {
-      const size_t i = static_cast<size_t>(y) * g.width + x;
-      const double u = before_.unstableM.values()[i];
-      if (before_.validCell.values()[i] && u >= p_.avalancheMinUnstableM) {
-        const double excess = steepestDrop(x, y) - tanRest;
-        const double factor = factors ? before_.avalancheReleaseFactor.values()[i] : 1.0;
-        if (excess > 0.0) total += std::min(1.0, factor * u * excess / std::max(1e-6, 1.0 - tanRest));
-      }
-      cumulative[i] = total;
+  const bool factors = terrain_.avalancheReleaseFactor.size() == g.cellCount();
+  // The weight of cell (x, y), added to the running total in row order.
+  auto addWeight = [&](int x, int y, double& total) {
+    const size_t i = static_cast<size_t>(y) * g.width + x;
+    const double u = before_.unstable.values()[i];
+    if (terrain_.validCell.values()[i] && u >= p_.avalancheMinUnstableM) {
+      const double excess = steepestDrop(x, y) - tanRest;
+      const double factor = factors ? terrain_.avalancheReleaseFactor.values()[i] : 1.0;
+      if (excess > 0.0) total += std::min(1.0, factor * u * excess / std::max(1e-6, 1.0 - tanRest));
     }
+  };
+  rowStartWeights_.assign(static_cast<size_t>(g.height) + 1, 0.0);
+  double total = 0.0;
+  for (int y = 0; y < g.height; ++y) {
+    rowStartWeights_[static_cast<size_t>(y)] = total;
+    for (int x = 0; x < g.width; ++x) addWeight(x, y, total);
+  }
+  rowStartWeights_[static_cast<size_t>(g.height)] = total;
   if (!(total > 0.0)) return false;
+  // The first cell whose running total passes the target: its row is the last whose start total
+  // is at most the target, then that row is summed again in the same order (the same doubles).
   const double target = cellDraw * total;
-  const size_t cell = std::min(static_cast<size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), target) - cumulative.begin()),
-                               g.cellCount() - 1);
+  size_t cell = g.cellCount() - 1;
+  const auto above = std::upper_bound(rowStartWeights_.begin(), rowStartWeights_.end() - 1, target);
+  for (int y = std::max(0, static_cast<int>(above - rowStartWeights_.begin()) - 1); y < g.height; ++y) {
+    double running = rowStartWeights_[static_cast<size_t>(y)];
+    bool found = false;
+    for (int x = 0; x < g.width && !found; ++x) {
+      addWeight(x, y, running);
+      if (running > target) cell = static_cast<size_t>(y) * g.width + x, found = true;
+    }
+    if (found) break;
+  }
   return releaseFromSnapshot(static_cast<int>(cell % g.width), static_cast<int>(cell / g.width), day, seaLevelTemperatureC, false);
 }
 
@@ -84,16 +108,16 @@ void AvalancheRun::beginRecord(int rx, int ry, double day, bool user) {
 
 bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, double seaLevelTemperatureC, bool user) {
   const auto t0 = WallClock::now();
-  backend_.download(before_);
-  const SnowState& s = before_;
+  downloadBefore();
+  const SnowState& s = terrain_;
   const int w = s.spec.width;
   std::vector<uint8_t> moving(s.spec.cellCount(), 0);
   int rx = -1, ry = -1;
   double highest = -std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < moving.size() && i < zone.size(); ++i) {
-    if (!zone[i] || !s.validCell.values()[i] || s.unstableM.values()[i] < p_.avalancheMinUnstableM) continue;
+    if (!zone[i] || !s.validCell.values()[i] || before_.unstable.values()[i] < p_.avalancheMinUnstableM) continue;
     moving[i] = 1;
-    const double a = surfaceAt(s, i);
+    const double a = surfaceBefore(i);
     if (a > highest) highest = a, rx = static_cast<int>(i % w), ry = static_cast<int>(i / w);
   }
   if (rx < 0) {
@@ -111,7 +135,8 @@ bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, dou
 bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLevelTemperatureC, bool user) {
   const auto t0 = WallClock::now();
   beginRecord(rx, ry, day, user);
-  const SnowState& s = before_;
+  const SnowState& s = terrain_;
+  const Grid<float>& unstable = before_.unstable;
   const int w = s.spec.width, h = s.spec.height;
   if (rx < 0 || ry < 0 || rx >= w || ry >= h || !s.validCell(rx, ry)) {
     record_.why = "rupture point outside the terrain";
@@ -119,17 +144,17 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
   }
   record_.ruptureSlopeDeg = std::atan(steepestDrop(rx, ry)) * 180.0 / kPi;
   const double minU = p_.avalancheMinUnstableM;
-  if (s.unstableM(rx, ry) < minU) {
-    record_.why = "no unstable snow at the rupture point (U = " + std::to_string(s.unstableM(rx, ry)) + " m)";
+  if (unstable(rx, ry) < minU) {
+    record_.why = "no unstable snow at the rupture point (U = " + std::to_string(unstable(rx, ry)) + " m)";
     return false;
   }
   // Release zone: connected unstable snow within the reach of the rupture point.
-  const double reach = p_.avalancheReachMPerM * s.unstableM(rx, ry);
+  const double reach = p_.avalancheReachMPerM * unstable(rx, ry);
   std::vector<uint8_t> moving(s.spec.cellCount(), 0);
   std::deque<int> queue;
   auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
   auto holds = [&](int x, int y) {
-    return x >= 0 && y >= 0 && x < w && y < h && s.validCell(x, y) && s.unstableM(x, y) >= minU;
+    return x >= 0 && y >= 0 && x < w && y < h && s.validCell(x, y) && unstable(x, y) >= minU;
   };
   moving[index(rx, ry)] = 1;
   queue.push_back(ry * w + rx);
@@ -151,7 +176,7 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
 }
 
 void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, WallClock::time_point t0) {
-  const SnowState& s = before_;
+  const SnowState& s = terrain_;
   const int w = s.spec.width, h = s.spec.height;
   auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
   int x0 = w, y0 = h, x1 = 0, y1 = 0;
@@ -159,7 +184,7 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
     for (int x = 0; x < w; ++x)
       if (moving[index(x, y)]) {
         ++record_.releaseCells;
-        record_.releasedM3 += (static_cast<double>(s.unstableM(x, y)) + s.powderM(x, y)) * s.spec.cellAreaM2();
+        record_.releasedM3 += (static_cast<double>(before_.unstable(x, y)) + before_.powder(x, y)) * s.spec.cellAreaM2();
         x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
       }
   backend_.avalancheRelease(moving);
@@ -173,7 +198,8 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
     for (size_t i = 0; i < moving.size(); ++i) zone.values()[i] = moving[i] ? 1.f : 0.f;
     record_.maps->release = crop(zone, x0, y0, x1, y1);
     if (frameIntervalS_ > 0.0) {
-      record_.maps->depthAtRelease = s.depthGrid();
+      record_.maps->depthAtRelease = Grid<float>(w, h, 0.f);
+      for (size_t i = 0; i < record_.maps->depthAtRelease.size(); ++i) record_.maps->depthAtRelease.values()[i] = before_.depth(i);
       record_.maps->frames.push_back({0.0, crop(record_.maps->depthAtRelease, x0, y0, x1, y1)});
       nextFrameS_ = frameIntervalS_;
     }
@@ -187,7 +213,7 @@ bool AvalancheRun::step() {
   if (!active_ || atRest_) return true;
   const auto t0 = WallClock::now();
   const double stepS = p_.avalancheStepS;
-  const double minCell = std::min(before_.spec.cellSizeXM, before_.spec.cellSizeYM);
+  const double minCell = std::min(terrain_.spec.cellSizeXM, terrain_.spec.cellSizeYM);
   const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
   const int substeps = static_cast<int>(std::clamp(std::ceil(stepS / maxSubstep), 1.0, 10000.0));
   AvalancheArgs a = args_;
@@ -201,7 +227,7 @@ bool AvalancheRun::step() {
   unionBox_.x1 = std::max(unionBox_.x1, bx1), unionBox_.y1 = std::max(unionBox_.y1, by1);
   record_.boxCellsMax = std::max(record_.boxCellsMax, (bx1 - bx0) * (by1 - by0));
   float speed = 0.f;
-  int x0 = before_.spec.width, y0 = before_.spec.height, x1 = 0, y1 = 0;
+  int x0 = terrain_.spec.width, y0 = terrain_.spec.height, x1 = 0, y1 = 0;
   for (int r = 0; r < by1 - by0; ++r) {
     const float* s = &stats[4 * static_cast<size_t>(r)];
     speed = std::max(speed, s[0]);
@@ -244,10 +270,25 @@ AvalancheRecord AvalancheRun::runToRest() {
   return settle();
 }
 
+// The union box's layers (and peaks) after the last step, into after_.
 void AvalancheRun::captureFrame() {
-  backend_.download(after_);
-  const Grid<float> d = after_.depthGrid();
-  record_.maps->frames.push_back({record_.simulatedS, crop(d, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
+  downloadAfter(false);
+  record_.maps->frames.push_back({record_.simulatedS, boxDepth()});
+}
+
+void AvalancheRun::downloadAfter(bool peaks) {
+  after_.x0 = unionBox_.x0, after_.y0 = unionBox_.y0;
+  after_.width = std::max(0, unionBox_.x1 - unionBox_.x0), after_.height = std::max(0, unionBox_.y1 - unionBox_.y0);
+  backend_.downloadBox(after_, peaks);
+}
+
+// The depth C + S + U + P of after_'s box, as a crop of the grid.
+GridCrop AvalancheRun::boxDepth() const {
+  GridCrop c;
+  c.x0 = after_.x0, c.y0 = after_.y0;
+  c.grid = Grid<float>(after_.width, after_.height, 0.f);
+  for (size_t j = 0; j < c.grid.size(); ++j) c.grid.values()[j] = after_.depth(j);
+  return c;
 }
 
 AvalancheRecord AvalancheRun::settle() {
@@ -255,45 +296,47 @@ AvalancheRecord AvalancheRun::settle() {
   const auto t0 = WallClock::now();
   backend_.avalancheSettle(unionBox_);
   active_ = false;
-  backend_.download(after_);
-  const SnowState& after = after_;
-  const SnowState& s = before_;
+  downloadAfter(record_.maps != nullptr);
+  const SnowBox& after = after_;
+  const SnowBox& b = before_;
+  const SnowState& s = terrain_;
   const int w = s.spec.width;
   const double area = s.spec.cellAreaM2();
-  const double ruptureA = surfaceAt(s, static_cast<size_t>(record_.ruptureY) * w + record_.ruptureX);
+  const double ruptureA = surfaceBefore(static_cast<size_t>(record_.ruptureY) * w + record_.ruptureX);
   double lowest = ruptureA;
   for (int y = unionBox_.y0; y < unionBox_.y1; ++y)
     for (int x = unionBox_.x0; x < unionBox_.x1; ++x) {
-      const size_t i = static_cast<size_t>(y) * w + x;
+      const size_t i = static_cast<size_t>(y) * w + x, j = after.index(x, y);
       if (!s.validCell.values()[i]) continue;
-      const double change = (static_cast<double>(after.stableM.values()[i]) + after.unstableM.values()[i] + after.powderM.values()[i]) -
-                            (static_cast<double>(s.stableM.values()[i]) + s.unstableM.values()[i] + s.powderM.values()[i]);
+      const double change = (static_cast<double>(after.stable.values()[j]) + after.unstable.values()[j] + after.powder.values()[j]) -
+                            (static_cast<double>(b.stable.values()[i]) + b.unstable.values()[i] + b.powder.values()[i]);
       if (std::abs(change) > 1e-3) ++record_.footprintCells;
       if (change > 0) record_.depositM3 += change * area;
       if (change > 0.01) {
         record_.runoutM = std::max(record_.runoutM, std::hypot((x - record_.ruptureX) * s.spec.cellSizeXM,
                                                                (y - record_.ruptureY) * s.spec.cellSizeYM));
-        lowest = std::min(lowest, surfaceAt(after, i));
+        lowest = std::min(lowest, surfaceAt(s.bedrockM, i, after, j));
       }
     }
   record_.fallHeightM = ruptureA - lowest;
   if (record_.maps) {
-    Grid<float> scour(w, s.spec.height, 0.f), deposit(w, s.spec.height, 0.f);
+    GridCrop scour, deposit;
+    scour.x0 = deposit.x0 = after.x0, scour.y0 = deposit.y0 = after.y0;
+    scour.grid = deposit.grid = Grid<float>(after.width, after.height, 0.f);
     for (int y = unionBox_.y0; y < unionBox_.y1; ++y)
       for (int x = unionBox_.x0; x < unionBox_.x1; ++x) {
-        const size_t i = static_cast<size_t>(y) * w + x;
+        const size_t i = static_cast<size_t>(y) * w + x, j = after.index(x, y);
         if (!s.validCell.values()[i]) continue;
-        const float change = (after.stableM.values()[i] + after.unstableM.values()[i] + after.powderM.values()[i]) -
-                             (s.stableM.values()[i] + s.unstableM.values()[i] + s.powderM.values()[i]);
-        if (change > 0.f) deposit.values()[i] = change;
-        if (change < 0.f) scour.values()[i] = -change;
+        const float change = (after.stable.values()[j] + after.unstable.values()[j] + after.powder.values()[j]) -
+                             (b.stable.values()[i] + b.unstable.values()[i] + b.powder.values()[i]);
+        if (change > 0.f) deposit.grid.values()[j] = change;
+        if (change < 0.f) scour.grid.values()[j] = -change;
       }
-    record_.maps->scour = crop(scour, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
-    record_.maps->deposit = crop(deposit, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
-    record_.maps->peakThickness = crop(after.avalanchePeakThicknessM, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
-    record_.maps->peakSpeed = crop(after.avalanchePeakSpeedMps, unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1);
-    if (frameIntervalS_ > 0.0)
-      record_.maps->frames.push_back({record_.simulatedS, crop(after.depthGrid(), unionBox_.x0, unionBox_.y0, unionBox_.x1, unionBox_.y1)});
+    record_.maps->scour = std::move(scour);
+    record_.maps->deposit = std::move(deposit);
+    record_.maps->peakThickness = GridCrop{after.x0, after.y0, after.peakThickness};
+    record_.maps->peakSpeed = GridCrop{after.x0, after.y0, after.peakSpeed};
+    if (frameIntervalS_ > 0.0) record_.maps->frames.push_back({record_.simulatedS, boxDepth()});
   }
   wallSeconds_ += elapsedSeconds(t0);
   record_.seconds = wallSeconds_;

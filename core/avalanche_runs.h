@@ -73,8 +73,10 @@ struct AvalancheRecord {
 
 class AvalancheRun {
  public:
-  // `terrain` supplies the grid, bedrock and valid cells (the backend holds the snow).
+  // `terrain` supplies the grid, bedrock, valid cells and release factors (the backend holds the
+  // snow); the run reads them through a reference, so the state must outlive it.
   AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain);
+  AvalancheRun(SnowBackend& backend, const ModelParameters& params, SnowState&& terrain) = delete;
   // It keeps a reference to the parameters: a temporary would dangle (AddressSanitizer found
   // three callers doing so: stack-use-after-scope).
   AvalancheRun(SnowBackend& backend, ModelParameters&& params, const SnowState& terrain) = delete;
@@ -118,7 +120,15 @@ class AvalancheRun {
   void start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, std::chrono::steady_clock::time_point t0);
   SnowBackend& backend_;
   const ModelParameters& p_;
-  SnowState before_, after_;  // the state at release and a reusable buffer for later downloads
+  const SnowState& terrain_;
+  // The snow layers at release (the whole grid), and those of the avalanche's box at its end or
+  // at a frame: not whole copies of the state (they were 2 x 82 bytes a cell).
+  SnowBox before_, after_;
+  // Running totals of the spontaneous release weights at each row's start (in place of one
+  // double a cell): the draw rescans only the row it falls in.
+  std::vector<double> rowStartWeights_;
+  double surfaceBefore(size_t i) const;
+  void downloadBefore();
   AvalancheArgs args_;
   AvalancheArgs unionBox_;
   AvalancheRecord record_;
@@ -127,6 +137,8 @@ class AvalancheRun {
   bool keepMaps_ = false;
   double frameIntervalS_ = 0.0, nextFrameS_ = 0.0;
   void captureFrame();
+  void downloadAfter(bool peaks);
+  GridCrop boxDepth() const;
   double wallSeconds_ = 0;
 };
 

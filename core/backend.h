@@ -63,6 +63,10 @@ class SnowBackend {
   // (clipped to the grid by the caller), row after row: a cheap look at a few cells.
   virtual void readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) = 0;
 
+  // The snow layers (and with `peaks` the current avalanche's peak thickness and speed) of the box
+  // box.x0, box.y0, box.width x box.height (clipped to the grid by the caller) into `box`.
+  virtual void downloadBox(SnowBox& box, bool peaks) = 0;
+
   // Wind bedforms (phenomena/bedforms.h): `args.rounds` polling rounds over the cells of the domain
   // (valid, inside state.bedformMask when it is set, bed slope within args.tanMaxSlope); conserves
   // mass (whole slabs). The cohesion field persists from step to step (0 at upload).

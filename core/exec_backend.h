@@ -87,6 +87,25 @@ class ExecBackend final : public SnowBackend {
     }
   }
 
+  void downloadBox(SnowBox& box, bool peaks) override {
+    std::pair<Buffer<float>*, Grid<float>*> fields[] = {{&compactedM_, &box.compacted}, {&stableM_, &box.stable}, {&unstableM_, &box.unstable},
+                                                        {&powderM_, &box.powder}, {&avalanchePeakThicknessM_, &box.peakThickness},
+                                                        {&avalanchePeakSpeedMps_, &box.peakSpeed}};
+    const bool whole = box.x0 == 0 && box.y0 == 0 && box.width == spec_.width && box.height == spec_.height;
+    for (int f = 0; f < (peaks ? 6 : 4); ++f) {
+      Grid<float>& g = *fields[f].second;
+      if (g.width() != box.width || g.height() != box.height) g.resize(box.width, box.height);
+      if (whole) {
+        exec_.downloadRange(*fields[f].first, 0, g.size(), g.data());
+        continue;
+      }
+      for (int r = 0; r < box.height; ++r)
+        exec_.downloadRange(*fields[f].first, static_cast<size_t>(box.y0 + r) * spec_.width + box.x0, static_cast<size_t>(box.width),
+                            g.data() + static_cast<size_t>(r) * box.width);
+    }
+    if (!peaks) box.peakThickness = Grid<float>(), box.peakSpeed = Grid<float>();
+  }
+
   BedformStepReport bedformStep(const BedformArgs& args) override {
     checkBedformArgs(args, spec_.width, spec_.height);
     if (!bed_.ready) makeBedformStorage(exec_, bed_, powderM_, spec_.cellCount());  // on the first bedform step only

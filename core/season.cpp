@@ -26,6 +26,7 @@ SeasonReport SeasonRun::run() {
   if (cfg_.updateStaticFields) cfg_.updateStaticFields(0, state_);
   leaveNoSnowCells();
   backend_.upload(state_);
+  releaseHostCopies();
   report_.initial = backend_.totals();
   maxTemperatureBase_ = backend_.maxTemperatureBaseC();
   addSnowfall();
@@ -60,6 +61,15 @@ void SeasonRun::leaveNoSnowCells() {
       }
     state_.validCell.values()[i] = 0;
   }
+}
+
+// While the backend holds the snow, the host's copies of the fields it downloads are freed (the
+// frames and the season's end download them again), and so are the static fields when they are
+// refilled each day (and the bedforms do not scan the host's wind): the host keeps the terrain.
+void SeasonRun::releaseHostCopies() {
+  state_.releaseFields(downloadedWithState);
+  staticReleased_ = cfg_.updateStaticFields && !cfg_.bedforms;
+  if (staticReleased_) state_.releaseFields([](FieldRole r) { return r == FieldRole::Static; });
 }
 
 int SeasonRun::addPhenomenon(PhenomenonSpec spec) {
@@ -230,6 +240,8 @@ void SeasonRun::addStaticFieldRefresh() {
     scheduler_.addAction(day, [this, day](double) {
       cfg_.updateStaticFields(day, state_);
       backend_.uploadStaticFields(state_);
+      staticDay_ = day;
+      releaseHostCopies();
       bedformWindiest_ = -1.0;  // the wind changed: the bedforms scan it again
       maxTemperatureBase_ = backend_.maxTemperatureBaseC();
     });
@@ -239,8 +251,9 @@ void SeasonRun::addFrames() {
   for (double day : cfg_.frameDays) {
     if (!frameDayInSeason(day, cfg_.days) || !onFrame_) continue;
     scheduler_.addAction(day, [this](double now) {
-      SnowState frame = state_;
+      SnowState frame = state_;  // the host's copies were released: terrain and host-only fields
       if (noSnow_) frame.validCell = terrainValid_;
+      frame.restoreFields(downloadedWithState);
       backend_.download(frame);
       if (cfg_.skiTracks) cfg_.skiTracks->fade(frame);
       onFrame_(now, frame);
@@ -264,7 +277,9 @@ void SeasonRun::runEvents() {
 
 // The final state (with the terrain's own valid cells and faded ski tracks) and the report.
 void SeasonRun::finish() {
+  state_.restoreFields(downloadedWithState);
   backend_.download(state_);
+  if (staticReleased_) cfg_.updateStaticFields(staticDay_, state_);  // the last day's, as they were
   if (noSnow_) state_.validCell = std::move(terrainValid_);
   if (cfg_.skiTracks) cfg_.skiTracks->fade(state_);
   report_.final = backend_.totals();

@@ -106,7 +106,8 @@ struct SeasonReport {
   double massBalanceRelativeError() const;
 };
 
-using FrameCallback = std::function<void(double day, const SnowState& state)>;
+// The frame's state is the callee's: it may move from it (the frame writer keeps it while it writes).
+using FrameCallback = std::function<void(double day, SnowState& state)>;
 using ProgressCallback = std::function<void(double fraction)>;
 
 // Runs the season on `backend`, starting from `state` (uploaded here), and leaves the final

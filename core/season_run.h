@@ -36,6 +36,7 @@ class SeasonRun {
   using ContinuousBody = std::function<void(int slot, double day, double dt)>;
 
   void leaveNoSnowCells();
+  void releaseHostCopies();
   int addPhenomenon(PhenomenonSpec spec);
   template <class Body>
   void timed(int slot, Body&& body);
@@ -79,6 +80,8 @@ class SeasonRun {
   std::vector<double> lastStep_;           // by slot: the day of its previous step
   std::vector<std::function<void(double day)>> catchUp_;  // continuous phenomena, run at the end
   float maxTemperatureBase_ = 0.f;
+  bool staticReleased_ = false;  // the host's static fields freed (refilled from day staticDay_ at the end)
+  int staticDay_ = 0;
   // No-snow cells: the terrain's own valid cells, given back to the frames and the final state.
   bool noSnow_ = false;
   Grid<uint8_t> terrainValid_;

@@ -197,12 +197,19 @@ SkiRun::SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& 
   // same bytes, tested).
   if (!backend.routeMapOnDevice(route_)) route_ = snow::routeMap(state.bedrockM, state.validCell, state.spec);
   backend.uploadRouteMap(route_);
-  cumulative_.resize(route_.size());
-  double sum = 0.0;
   // The scene's skier_spawn multiplier (art direction) scales where automatic skiers start.
-  const bool spawn = state.skierSpawnFactor.size() == route_.size();
-  for (size_t i = 0; i < route_.size(); ++i)
-    cumulative_[i] = (sum += route_.values()[i] * (spawn ? std::max(0.f, state.skierSpawnFactor.values()[i]) : 1.f));
+  if (state.skierSpawnFactor.size() == route_.size()) spawn_ = &state.skierSpawnFactor;
+  rowStartWeights_.assign(static_cast<size_t>(spec_.height) + 1, 0.0);
+  double sum = 0.0;
+  for (int y = 0; y < spec_.height; ++y) {
+    rowStartWeights_[static_cast<size_t>(y)] = sum;
+    for (int x = 0; x < spec_.width; ++x) addStartWeight(static_cast<size_t>(y) * spec_.width + x, sum);
+  }
+  rowStartWeights_[static_cast<size_t>(spec_.height)] = sum;
+}
+
+void SkiRun::addStartWeight(size_t i, double& sum) const {
+  sum += route_.values()[i] * (spawn_ ? std::max(0.f, spawn_->values()[i]) : 1.f);
 }
 
 long long pickByCumulativeWeight(const std::vector<double>& cumulative, double draw) {
@@ -212,10 +219,23 @@ long long pickByCumulativeWeight(const std::vector<double>& cumulative, double d
   return std::min(static_cast<long long>(cumulative.size()) - 1, static_cast<long long>(at));
 }
 
+// As pickByCumulativeWeight over the running totals, which are summed again within the row the
+// target falls in (the same doubles in the same order) instead of being held for every cell.
 bool SkiRun::pickStart(double draw, int& x, int& y) const {
-  const long long picked = pickByCumulativeWeight(cumulative_, draw);
-  if (picked < 0) return false;
-  const size_t i = static_cast<size_t>(picked);
+  const double total = rowStartWeights_.empty() ? 0.0 : rowStartWeights_.back();
+  if (!(total > 0.0)) return false;
+  const double target = draw * total;
+  size_t i = spec_.cellCount() - 1;
+  const auto above = std::upper_bound(rowStartWeights_.begin(), rowStartWeights_.end() - 1, target);
+  bool found = false;
+  for (int r = std::max(0, static_cast<int>(above - rowStartWeights_.begin()) - 1); r < spec_.height && !found; ++r) {
+    double sum = rowStartWeights_[static_cast<size_t>(r)];
+    for (int c = 0; c < spec_.width && !found; ++c) {
+      const size_t j = static_cast<size_t>(r) * spec_.width + c;
+      addStartWeight(j, sum);
+      if (sum > target) i = j, found = true;
+    }
+  }
   x = static_cast<int>(i % spec_.width);
   y = static_cast<int>(i / spec_.width);
   return true;

@@ -141,7 +141,11 @@ class SkiRun {
   const Grid<float>& bedrock_;
   const Grid<uint8_t>& valid_;
   Grid<float> route_;
-  std::vector<double> cumulative_;  // route-map weights, for pickStart
+  const Grid<float>* spawn_ = nullptr;  // the scene's skier_spawn multiplier, where it paints one
+  // Running totals of the start weights (route map x spawn) at each row's start, for pickStart
+  // (one double a row, not a cell).
+  std::vector<double> rowStartWeights_;
+  void addStartWeight(size_t i, double& sum) const;
   SkiTracks* tracks_;
 };
 

@@ -41,6 +41,32 @@ struct SnowState {
     SNOW_STATE_FIELDS(SNOW_ALLOCATE)
 #undef SNOW_ALLOCATE
   }
+  // Frees the grids of the fields whose role `drop(role)` accepts (the season's host state while a
+  // backend holds them); restoreFields gives them back their size, zeroed, for a download to fill.
+  template <class Pick>
+  void releaseFields(Pick drop) {
+#define SNOW_RELEASE(member, view, Element, role, access, fill) \
+  if (drop(FieldRole::role)) member = Grid<Element>();
+    SNOW_STATE_FIELDS(SNOW_RELEASE)
+#undef SNOW_RELEASE
+  }
+  template <class Pick>
+  void restoreFields(Pick pick) {
+#define SNOW_RESTORE(member, view, Element, role, access, fill) \
+  if (pick(FieldRole::role) && member.size() != spec.cellCount()) member.resize(spec.width, spec.height);
+    SNOW_STATE_FIELDS(SNOW_RESTORE)
+#undef SNOW_RESTORE
+  }
+  // Bytes the grids hold now.
+  template <class Pick>
+  size_t bytes(Pick pick) const {
+    size_t b = 0;
+#define SNOW_BYTES(member, view, Element, role, access, fill) \
+  if (pick(FieldRole::role)) b += member.size() * sizeof(Element);
+    SNOW_STATE_FIELDS(SNOW_BYTES)
+#undef SNOW_BYTES
+    return b;
+  }
   Grid<float>& layer(SnowLayer l) {
     switch (l) {
       case SnowLayer::Compacted: return compactedM;
@@ -58,6 +84,23 @@ struct SnowState {
     for (int y = 0; y < spec.height; ++y)
       for (int x = 0; x < spec.width; ++x) d(x, y) = depthM(x, y);
     return d;
+  }
+};
+
+// The four snow layers of a box of the grid (x0, y0: its north-west cell; the whole grid when the
+// box is), and on request the current avalanche's peak fields: what the host's avalanche runner
+// reads back from a backend, in place of whole copies of the state.
+struct SnowBox {
+  int x0 = 0, y0 = 0, width = 0, height = 0;
+  Grid<float> compacted, stable, unstable, powder;
+  Grid<float> peakThickness, peakSpeed;  // empty unless asked for
+  size_t index(int x, int y) const { return static_cast<size_t>(y - y0) * width + (x - x0); }
+  // C + S + U + P in float, as SnowState::depthM adds them.
+  float depth(size_t i) const {
+    return compacted.values()[i] + stable.values()[i] + unstable.values()[i] + powder.values()[i];
+  }
+  size_t bytes() const {
+    return (compacted.size() + stable.size() + unstable.size() + powder.size() + peakThickness.size() + peakSpeed.size()) * sizeof(float);
   }
 };
 

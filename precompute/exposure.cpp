@@ -208,12 +208,23 @@ Grid<float> Exposure::totalAt(double seasonDay) const {
   const Bracket br = bracketOf(days.size(), seasonDay, [&](size_t i) { return days[i].seasonDay; });
   const size_t a = br.first, b = br.second;
   const double t = br.weight;
+  auto at = [&](size_t d, size_t i) -> double {
+    return folded ? days[d].sunHours.values()[i] : days[d].sunHours.values()[i] + days[d].indirectHours.values()[i];
+  };
   for (size_t i = 0; i < total.size(); ++i) {
-    const double ea = days[a].sunHours.values()[i] + days[a].indirectHours.values()[i];
-    const double eb = days[b].sunHours.values()[i] + days[b].indirectHours.values()[i];
+    const double ea = at(a, i), eb = at(b, i);
     total.values()[i] += static_cast<float>(ea + (eb - ea) * t);
   }
   return total;
+}
+
+void Exposure::foldIndirect() {
+  if (folded) return;
+  for (DailyExposure& d : days) {
+    for (size_t i = 0; i < d.sunHours.size(); ++i) d.sunHours.values()[i] = d.sunHours.values()[i] + d.indirectHours.values()[i];
+    d.indirectHours = Grid<float>();
+  }
+  folded = true;
 }
 
 std::vector<DailyExposure> exposureSampleDays(const ExposureSettings& s) {
@@ -235,27 +246,37 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
   Exposure e;
   auto t0 = WallClock::now();
-  std::vector<Grid<float>> shadowHorizons;
   if (s.horizonSweep) {
-    const auto skyHorizons = computeHorizonsBySweep(heights, valid, spec, s.quality.azimuths);
-    shadowHorizons = computeHorizonsBySweep(heights, valid, spec, 4 * s.quality.azimuths);
+    // The sky's horizons are freed before the shadows' four times as many are swept, and those
+    // one azimuth after another (directSunForDaysBySweep): never all held at once.
+    const std::vector<Grid<float>> skyHorizons = computeHorizonsBySweep(heights, valid, spec, s.quality.azimuths);
     e.timings.horizonSeconds = elapsedSeconds(t0);
     t0 = WallClock::now();
     e.skyHours = skyFromHorizons(skyHorizons, valid, p.skyAmbientWeightHours);
+    e.timings.skySeconds = elapsedSeconds(t0);
   } else {
     e.skyHours = computeSkyExposure(*scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
                                     &e.timings.skyRays);
+    e.timings.skySeconds = elapsedSeconds(t0);
   }
-  e.timings.skySeconds = elapsedSeconds(t0);
   const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
-  for (DailyExposure day : exposureSampleDays(s)) {
+  if (s.horizonSweep) {
     t0 = WallClock::now();
-    day.sunHours = s.horizonSweep ? directSunFromHorizons(shadowHorizons, heights, valid, spec, s.latitudeDeg, day.dayOfYear,
-                                                          s.quality.hourStep, p.directSunWeightHours)
-                                  : computeDirectSun(*scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
-                                                     p.directSunWeightHours, &e.timings.sunRays);
-    e.timings.sunSeconds += elapsedSeconds(t0);
-    e.days.push_back(std::move(day));
+    e.days = exposureSampleDays(s);
+    std::vector<int> doys;
+    for (const DailyExposure& day : e.days) doys.push_back(day.dayOfYear);
+    std::vector<Grid<float>> suns = directSunForDaysBySweep(heights, valid, spec, 4 * s.quality.azimuths, s.latitudeDeg, doys,
+                                                            s.quality.hourStep, p.directSunWeightHours);
+    for (size_t d = 0; d < e.days.size(); ++d) e.days[d].sunHours = std::move(suns[d]);
+    e.timings.sunSeconds = elapsedSeconds(t0);  // the shadows' sweeps included
+  } else {
+    for (DailyExposure day : exposureSampleDays(s)) {
+      t0 = WallClock::now();
+      day.sunHours = computeDirectSun(*scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
+                                      p.directSunWeightHours, &e.timings.sunRays);
+      e.timings.sunSeconds += elapsedSeconds(t0);
+      e.days.push_back(std::move(day));
+    }
   }
   t0 = WallClock::now();
   std::vector<const Grid<float>*> suns;

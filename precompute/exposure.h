@@ -47,6 +47,10 @@ struct Exposure {
   ExposureTimings timings;
   // I on a season day: I_sky + the linear interpolation of I_sun + I_ind between sample days.
   Grid<float> totalAt(double seasonDay) const;
+  // For the season, which reads I_sun + I_ind only: each sample day's sunHours becomes that sum
+  // (in float, as totalAt adds them) and indirectHours is freed; totalAt gives the same bytes.
+  void foldIndirect();
+  bool folded = false;
 };
 
 // Unit surface normals (x east, y north, z up) from central differences that skip NODATA.

@@ -131,4 +131,76 @@ Grid<float> directSunFromHorizons(const std::vector<Grid<float>>& horizons, cons
   return sun;
 }
 
+std::vector<Grid<float>> directSunForDaysBySweep(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, int n,
+                                                 double latitudeDeg, const std::vector<int>& daysOfYear, double hourStep, double kSun) {
+  const int w = spec.width, h = spec.height;
+  const size_t cells = spec.cellCount(), words = (cells + 63) / 64;
+  // Every sun position above the horizon, with its two azimuths and a bit a cell: lit or not.
+  struct Position {
+    size_t day;
+    SunPosition s;
+    int k0, k1;
+    float t;
+    std::vector<uint64_t> lit;
+  };
+  std::vector<Position> positions;
+  for (size_t d = 0; d < daysOfYear.size(); ++d)
+    for (double hour = hourStep / 2; hour < 24.0; hour += hourStep) {
+      const SunPosition s = sunPosition(latitudeDeg, daysOfYear[d], hour);
+      if (s.elevationDeg <= 0.0) continue;
+      const double u = s.azimuthDeg / 360.0 * n - 0.5;
+      const int k0 = ((static_cast<int>(std::floor(u)) % n) + n) % n;
+      positions.push_back({d, s, k0, (k0 + 1) % n, static_cast<float>(u - std::floor(u)), std::vector<uint64_t>(words, 0)});
+    }
+  // The shadow test of the positions between azimuths k0 and k0 + 1 once both grids are swept.
+  auto test = [&](int k0, const Grid<float>& a, const Grid<float>& b) {
+    for (Position& p : positions) {
+      if (p.k0 != k0) continue;
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, words, 256), [&](const tbb::blocked_range<size_t>& ws) {
+        for (size_t wd = ws.begin(); wd < ws.end(); ++wd) {
+          uint64_t bits = 0;
+          for (size_t i = wd * 64; i < std::min(cells, wd * 64 + 64); ++i) {
+            const float horizon = a.values()[i] * (1.f - p.t) + b.values()[i] * p.t;
+            if (p.s.elevationDeg > horizon) bits |= uint64_t(1) << (i - wd * 64);
+          }
+          p.lit[wd] = bits;
+        }
+      });
+    }
+  };
+  Grid<float> first(w, h, 0.f), previous(w, h, 0.f), current(w, h, 0.f);
+  auto sweep = [&](int k, Grid<float>& out) {
+    out.fill(0.f);
+    sweepAzimuth(heights, spec, (k + 0.5) * 2.0 * kPi / n, out);
+  };
+  sweep(0, first);
+  previous = first;
+  for (int k = 1; k < n; ++k) {
+    sweep(k, current);
+    test(k - 1, previous, current);
+    std::swap(previous, current);
+  }
+  test(n - 1, previous, first);
+  previous = current = first = Grid<float>();
+  // Each day's sum, hour after hour.
+  std::vector<std::array<float, 3>> normals;
+  terrainNormals(heights, valid, spec, normals);
+  std::vector<Grid<float>> suns(daysOfYear.size(), Grid<float>(w, h, 0.f));
+  for (const Position& p : positions) {
+    Grid<float>& sun = suns[p.day];
+    tbb::parallel_for(tbb::blocked_range<int>(0, h, 16), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j)
+        for (int i = 0; i < w; ++i) {
+          if (!valid(i, j)) continue;
+          const size_t c = static_cast<size_t>(j) * w + i;
+          const auto& nv = normals[c];
+          const double cosine = nv[0] * p.s.direction[0] + nv[1] * p.s.direction[1] + nv[2] * p.s.direction[2];
+          if (cosine <= 0.0) continue;
+          if ((p.lit[c / 64] >> (c % 64)) & 1u) sun(i, j) += static_cast<float>(kSun * cosine * hourStep);
+        }
+    });
+  }
+  return suns;
+}
+
 }  // namespace snow

@@ -23,4 +23,11 @@ Grid<float> skyFromHorizons(const std::vector<Grid<float>>& horizonsDeg, const G
 Grid<float> directSunFromHorizons(const std::vector<Grid<float>>& horizonsDeg, const Grid<float>& heights, const Grid<uint8_t>& valid,
                                   const GridSpec& spec, double latitudeDeg, int dayOfYear, double hourStep, double kSunHours);
 
+// directSunFromHorizons for each day of `daysOfYear` over `count` azimuths, the same bytes, with
+// the azimuths swept one after the other: two horizon grids (and the first) are held at a time,
+// not `count`, and each sun position's shadow test is kept as one bit a cell until the day's
+// sum, added in hour order as directSunFromHorizons adds it.
+std::vector<Grid<float>> directSunForDaysBySweep(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, int count,
+                                                 double latitudeDeg, const std::vector<int>& daysOfYear, double hourStep, double kSunHours);
+
 }  // namespace snow

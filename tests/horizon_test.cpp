@@ -95,3 +95,25 @@ TEST(HorizonSweep, AgreesWithEmbreeOnRealAndBuiltinTerrain) {
     EXPECT_LT(a.sunRelL1, 0.025) << name;
   }
 }
+
+// The shadows swept one azimuth at a time (two grids held, a bit a sun position) give the bytes of
+// every azimuth held at once, for several days, with NODATA cells.
+TEST(HorizonSweep, SunForDaysSweptOneAzimuthAtATimeIsTheSameBytesAsAllHorizonsHeld) {
+  DefaultTerrainOptions o;
+  o.size = 96;
+  o.cellSizeM = 30.0;
+  Terrain t = makeBuiltinTerrain(o);
+  for (int j = 10; j < 20; ++j)
+    for (int i = 40; i < 60; ++i) t.valid(i, j) = 0;
+  const std::vector<int> days{335, 355, 20, 50};
+  const auto horizons = computeHorizonsBySweep(t.heightsM, t.valid, t.info.spec, 32);
+  const std::vector<Grid<float>> swept = directSunForDaysBySweep(t.heightsM, t.valid, t.info.spec, 32, 46.5, days, 1.0, 0.9);
+  ASSERT_EQ(swept.size(), days.size());
+  double lit = 0;
+  for (size_t d = 0; d < days.size(); ++d) {
+    const Grid<float> held = directSunFromHorizons(horizons, t.heightsM, t.valid, t.info.spec, 46.5, days[d], 1.0, 0.9);
+    EXPECT_EQ(swept[d].values(), held.values()) << "day of year " << days[d];
+    for (float v : held.values()) lit += v;
+  }
+  EXPECT_GT(lit, 0.0);  // the sun shone: the comparison is not of zeros
+}

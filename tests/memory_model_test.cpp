@@ -168,3 +168,40 @@ TEST(MemoryModel, PeakIsTheLargestPhasePlusTheLibraries) {
   const snow::MemoryPrediction q = snow::predictGridBake(scene, spec, 0);
   EXPECT_NEAR(q.peakBytes() - q.libraryBytes, 4.0 * (p.peakBytes() - p.libraryBytes), 1e-6 * q.peakBytes());
 }
+
+// `bake --verbose` prints the breakdown by group against the measured peak; the manifest holds
+// the same on its one "memory" line (valid JSON where it sits), the peak above the libraries.
+TEST(MemoryModel, VerboseBakePrintsTheBreakdownByGroupAndTheManifestHoldsItOnOneLine) {
+  const fs::path dir = workDir();
+  const Outcome r = bake(dir, "preset:default --set terrain.size=96 --set season.days=4 --set 'outputs.frames_days=[2]' --verbose");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("memory: measured peak "), std::string::npos) << r.err;
+  for (const auto& g : snow::memoryGroups()) EXPECT_NE(r.err.find("\n  "s + g.name + " "), std::string::npos) << g.name << "\n" << r.err;
+  EXPECT_NE(r.err.find("measured above the libraries: "), std::string::npos) << r.err;
+  const std::string manifest = slurp(dir / "out" / "manifest.json");
+  std::istringstream lines(manifest);
+  int memoryLines = 0;
+  double peakMiB = 0;
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("  \"memory\": {\"measured_peak_mib\": ", 0) == 0) {
+      ++memoryLines;
+      peakMiB = std::stod(line.substr(line.find(": ", 12) + 2));
+      for (const auto& g : snow::memoryGroups()) EXPECT_NE(line.find("\""s + g.name + "\": "), std::string::npos) << g.name << "\n" << line;
+      EXPECT_EQ(line.back(), ',') << line;  // a member among others: the line can be left out whole
+    }
+  EXPECT_EQ(memoryLines, 1) << manifest.substr(0, 2000);
+  EXPECT_GT(peakMiB, 100.0);  // the libraries alone are more: it is the process's peak
+}
+
+// Every owner of every phase belongs to a group of the table (the breakdown leaves none out).
+TEST(MemoryModel, EveryPredictedOwnerIsInTheBreakdownsGroupTable) {
+  snow::Scene s;
+  snow::GridSpec g;
+  g.width = g.height = 1024;
+  const snow::MemoryPrediction p = snow::predictGridBake(s, g, 0);
+  double grouped = 0;
+  for (const auto& [group, bytes] : p.peakByGroup()) grouped += bytes;
+  EXPECT_NEAR(grouped, p.peakPhase().bytes(), 1.0);
+  for (const auto& phase : p.phases)
+    for (const auto& o : phase.owners) EXPECT_STRNE(snow::memoryGroupName(o.group), "?") << o.name;
+}

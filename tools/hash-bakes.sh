@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Bakes six scenes that cover every mode and most outputs and prints one SHA-256 a file, so a
 # refactoring can show it keeps the bytes: run it before and after, then diff the two lists.
-# Manifests and resolved scenes name the work and source folders: those are hashed as WORK and ROOT.
+# Manifests and resolved scenes name the work and source folders: those are hashed as WORK and ROOT;
+# a manifest's "memory" line (its measured peak varies between runs) is left out.
 #   bash tools/hash-bakes.sh [SNOWBAKE_BINARY] [WORK_DIR] > hashes.txt
 # The scenes: the demo (preset:default); presets/art_direction.toml; presets/bedforms.toml;
 # occlusion mode on the builtin range; mesh mode on a block on the ground; a real DEM from ../shared/data with every
@@ -117,11 +118,12 @@ else
   echo "hash-bakes: $data absent: the real-DEM bake is skipped" >&2
 fi
 # Manifests name the scene and input files by path: hashed with the work folder and the checkout
-# written as WORK and ROOT, so two checkouts (or two work folders) compare.
+# written as WORK and ROOT, so two checkouts (or two work folders) compare; their "memory" line
+# (the measured peak, which varies from run to run) is left out.
 cd "$work"
 find . -mindepth 2 -type f | LC_ALL=C sort | while read -r f; do
   case "$f" in
-    */manifest.json | */scene.resolved.toml) printf '%s  %s\n' "$(sed -e "s|$work|WORK|g" -e "s|$root|ROOT|g" "$f" | sha256sum | cut -d' ' -f1)" "$f" ;;
+    */manifest.json | */scene.resolved.toml) printf '%s  %s\n' "$(sed -e "s|$work|WORK|g" -e "s|$root|ROOT|g" -e '/^  "memory": /d' "$f" | sha256sum | cut -d' ' -f1)" "$f" ;;
     *) sha256sum "$f" ;;
   esac
 done

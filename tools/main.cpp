@@ -55,6 +55,7 @@ struct BakeCommand {
   bool quiet = false;
   std::string cacheDir;
   bool noCache = false;
+  bool verbose = false;
   std::string progress = "human", logFile;
   bool json = false;  // plan --json
 };
@@ -107,6 +108,7 @@ void addBakeOptions(BakeCommand& c) {
   c.cmd->add_flag("--quiet", c.quiet, "No progress bar");
   c.cmd->add_option("--cache-dir", c.cacheDir, "Precompute cache folder (default $XDG_CACHE_HOME/snowbake or ~/.cache/snowbake)");
   c.cmd->add_flag("--no-cache", c.noCache, "Neither read nor write the precompute cache");
+  c.cmd->add_flag("--verbose", c.verbose, "Log where the memory went: the memory model's owners by group against the measured peak (docs/memory.md)");
   c.cmd->add_option("--progress", c.progress, "human (a bar on stderr) or json (one JSON object a line on stderr, docs/command-line.md)")
       ->check(CLI::IsMember({"human", "json"}))
       ->capture_default_str();
@@ -160,6 +162,8 @@ void addBenchCommand(CLI::App& app, BenchCommand& c) {
   c.cmd = app.add_subcommand("bench", "The benchmark suite: error against time per stage, scaling, machine limit, CPU against CUDA.");
   c.cmd->add_option("--sizes", c.sizes, "Comma-separated grid sizes of the scaling stage (default 256,512,1024,2048,4096)");
   c.cmd->add_option("--days", o.days, "Season length in days")->capture_default_str();
+  c.cmd->add_option("--scaling-budget-s", o.scalingBudgetS, "Scaling stage: sizes predicted to take longer than this are skipped (8192 with --sizes and about 3600)")
+      ->capture_default_str();
   c.cmd->add_option("--backend", o.backend, "cpu, cuda or auto")->check(CLI::IsMember({"cpu", "cuda", "auto"}))
       ->capture_default_str();
   c.cmd->add_option("--threads", o.threads, "CPU threads, 0 = all cores");
@@ -203,6 +207,7 @@ BakeOptions bakeOptions(const BakeCommand& c, const std::vector<std::string>& ar
   bake.progress = !c.quiet;
   if (!c.cacheDir.empty()) bake.cacheDir = c.cacheDir;
   bake.useCache = !c.noCache;
+  bake.verbose = c.verbose;
   return bake;
 }
 
