@@ -10,11 +10,13 @@
 #   frames as an image sequence on the timeline.
 import importlib
 import json
-import math
 import os
 import sys
 
 import bpy
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_tile_seams import tile_seams  # noqa: E402
 
 args = sys.argv[sys.argv.index("--") + 1:]
 addon, render_bake, tiled_bake = args[0], args[1], args[2]
@@ -117,18 +119,7 @@ for path, objs in made["surface_files"].items():
 tm = json.load(open(os.path.join(tiled_bake, "manifest.json")))
 size_m = 640.0  # the test's mesh_tile_size_m
 top = tm["terrain"]["height"] * tm["terrain"]["cell_size_y_m"]
-border, worst = 0, 0.0
-for (c, r), verts in tiles.items():
-    for (dc, dr, axis, value) in ((1, 0, 0, (c + 1) * size_m), (0, 1, 1, top - (r + 1) * size_m)):
-        other = tiles.get((c + dc, r + dr))
-        if other is None:
-            continue
-        mine = [v for v in verts if abs(v[axis] - value) < 1e-3]
-        theirs = [v for v in other if abs(v[axis] - value) < 1e-3]
-        for v in mine + theirs:
-            pool = theirs if v in mine else mine
-            worst = max(worst, min(math.dist(v, u) for u in pool))
-        border += len(mine)
+border, worst = tile_seams(tiles, size_m, top)
 frames = made["frames"]
 result["tiles"] = {"count": len(tiles), "border_vertices": border, "max_gap_m": worst}
 result["frames"] = {"source": frames[0].source if frames else "", "first_day": frames[1] if frames else -1,

@@ -18,6 +18,9 @@ import sys
 
 import bpy
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_tile_seams import tile_seams  # noqa: E402
+
 out = sys.argv[sys.argv.index("--") + 1]
 manifest = json.load(open(os.path.join(out, "manifest.json")))
 grid = manifest["terrain"]
@@ -161,18 +164,7 @@ if len(sys.argv) > sys.argv.index("--") + 2:
     manifest_tiled = json.load(open(os.path.join(tiled, "manifest.json")))
     size_m = 640.0  # the test's mesh_tile_size_m
     top = manifest_tiled["terrain"]["height"] * manifest_tiled["terrain"]["cell_size_y_m"]
-    border_vertices, worst = 0, 0.0
-    for (c, r), verts in tiles.items():
-        for (dc, dr, axis, value) in ((1, 0, 0, (c + 1) * size_m), (0, 1, 1, top - (r + 1) * size_m)):
-            other = tiles.get((c + dc, r + dr))
-            if other is None:
-                continue
-            mine = [v for v in verts if abs(v[axis] - value) < 1e-3]
-            theirs = [v for v in other if abs(v[axis] - value) < 1e-3]
-            for v in mine + theirs:
-                pool = theirs if v in mine else mine
-                worst = max(worst, min(math.dist(v, u) for u in pool))
-            border_vertices += len(mine)
+    border_vertices, worst = tile_seams(tiles, size_m, top)
     result["tiles"] = {"count": len(tiles), "border_vertices": border_vertices, "max_gap_m": worst}
 
 with open(os.path.join(out, "blender_check.json"), "w") as f:
