@@ -34,6 +34,7 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
   else
     log << "  sun exposure (Embree rays): direct " << fixed(t.sunSeconds, 2) << " s (" << t.sunRays << " rays), sky "
         << fixed(t.skySeconds, 2) << " s (" << t.skyRays << " rays), indirect " << fixed(t.indirectSeconds, 2) << " s\n";
+  for (const std::string& term : t.skipped) log << "  sun exposure: " << term << ": skipped\n";
   std::vector<const Grid<float>*> out{&e.skyHours};
   for (const auto& d : e.days) out.push_back(&d.sunHours), out.push_back(&d.indirectHours);
   cache.store("exposure", key, out);

@@ -241,49 +241,59 @@ std::vector<DailyExposure> exposureSampleDays(const ExposureSettings& s) {
   return days;
 }
 
+// A term whose weight is zero is all zeros (each is its weight times a non-negative sum), so it is
+// not traced: the same bytes as computing it, without its rays.
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& p, const ExposureSettings& s) {
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
   Exposure e;
+  const Grid<float> zeros(spec.width, spec.height, 0.f);
   auto t0 = WallClock::now();
-  if (s.horizonSweep) {
+  if (p.skyAmbientWeightHours == 0) {
+    e.skyHours = zeros;
+    e.timings.skipped.push_back("sky: sky_ambient_weight_hours = 0");
+  } else if (s.horizonSweep) {
     // The sky's horizons are freed before the shadows' four times as many are swept, and those
     // one azimuth after another (directSunForDaysBySweep): never all held at once.
     const std::vector<Grid<float>> skyHorizons = computeHorizonsBySweep(heights, valid, spec, s.quality.azimuths);
     e.timings.horizonSeconds = elapsedSeconds(t0);
     t0 = WallClock::now();
     e.skyHours = skyFromHorizons(skyHorizons, valid, p.skyAmbientWeightHours);
-    e.timings.skySeconds = elapsedSeconds(t0);
   } else {
     e.skyHours = computeSkyExposure(*scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
                                     &e.timings.skyRays);
-    e.timings.skySeconds = elapsedSeconds(t0);
   }
+  e.timings.skySeconds = elapsedSeconds(t0);
   const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
-  if (s.horizonSweep) {
-    t0 = WallClock::now();
-    e.days = exposureSampleDays(s);
+  t0 = WallClock::now();
+  e.days = exposureSampleDays(s);
+  if (p.directSunWeightHours == 0) {
+    for (DailyExposure& day : e.days) day.sunHours = zeros;
+    e.timings.skipped.push_back("direct sun: direct_sun_weight_hours = 0");
+  } else if (s.horizonSweep) {
     std::vector<int> doys;
     for (const DailyExposure& day : e.days) doys.push_back(day.dayOfYear);
     std::vector<Grid<float>> suns = directSunForDaysBySweep(heights, valid, spec, 4 * s.quality.azimuths, s.latitudeDeg, doys,
                                                             s.quality.hourStep, p.directSunWeightHours);
     for (size_t d = 0; d < e.days.size(); ++d) e.days[d].sunHours = std::move(suns[d]);
-    e.timings.sunSeconds = elapsedSeconds(t0);  // the shadows' sweeps included
   } else {
-    for (DailyExposure day : exposureSampleDays(s)) {
-      t0 = WallClock::now();
+    for (DailyExposure& day : e.days)
       day.sunHours = computeDirectSun(*scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
                                       p.directSunWeightHours, &e.timings.sunRays);
-      e.timings.sunSeconds += elapsedSeconds(t0);
-      e.days.push_back(std::move(day));
-    }
   }
+  e.timings.sunSeconds = elapsedSeconds(t0);  // the shadows' sweeps included
   t0 = WallClock::now();
-  std::vector<const Grid<float>*> suns;
-  for (const DailyExposure& day : e.days) suns.push_back(&day.sunHours);
-  std::vector<Grid<float>> indirect = computeIndirectSunForDays(suns, heights, valid, spec, s.quality.indirectDirections,
-                                                                s.quality.indirectRings, s.quality.indirectRadiusM, kIndOverKSun);
-  for (size_t k = 0; k < e.days.size(); ++k) e.days[k].indirectHours = std::move(indirect[k]);
+  if (kIndOverKSun == 0) {
+    for (DailyExposure& day : e.days) day.indirectHours = zeros;
+    e.timings.skipped.push_back(p.directSunWeightHours == 0 ? "indirect sun: direct_sun_weight_hours = 0"
+                                                            : "indirect sun: indirect_sun_weight_hours = 0");
+  } else {
+    std::vector<const Grid<float>*> suns;
+    for (const DailyExposure& day : e.days) suns.push_back(&day.sunHours);
+    std::vector<Grid<float>> indirect = computeIndirectSunForDays(suns, heights, valid, spec, s.quality.indirectDirections,
+                                                                  s.quality.indirectRings, s.quality.indirectRadiusM, kIndOverKSun);
+    for (size_t k = 0; k < e.days.size(); ++k) e.days[k].indirectHours = std::move(indirect[k]);
+  }
   e.timings.indirectSeconds = elapsedSeconds(t0);
   return e;
 }

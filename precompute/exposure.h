@@ -39,6 +39,7 @@ struct ExposureTimings {
   double sunSeconds = 0, skySeconds = 0, indirectSeconds = 0;
   unsigned long long sunRays = 0, skyRays = 0;
   double horizonSeconds = 0;  // the fast path's sweeps (counted in neither sun nor sky)
+  std::vector<std::string> skipped;  // the terms whose weight is zero, not computed ("sky: sky_ambient_weight_hours = 0")
 };
 
 struct Exposure {

@@ -1,10 +1,13 @@
 // Solar geometry and sun exposure against analytic cases.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "core/util.h"
 #include "precompute/exposure.h"
+#include "precompute/horizon.h"
 #include "precompute/solar.h"
 
 using namespace snow;
@@ -230,4 +233,48 @@ TEST(Exposure, IndirectComesFromFacingSlopesAndNotFromBehind) {
   }();
   const Grid<float> behind = computeIndirectSun(westOnly, r.heights, r.valid, r.spec, 32, 16, 200.0, 1.0);
   EXPECT_EQ(behind(50, 10), 0.f);  // the lit west slope is behind the east slope's tangent plane
+}
+
+// A term whose weight is zero is not computed (no sky rays when k_sky = 0), and the zeros put in
+// its place are the bytes computing it with that weight gives, on both paths.
+TEST(Exposure, ATermOfZeroWeightIsSkippedAndIsTheBytesComputingItWouldGive) {
+  const Field f = makeField(24, 20, 10.0, [](double x, double y) { return 900.0 + 80.0 * std::sin(x / 60.0) * std::cos(y / 45.0); });
+  const RayScene scene(f.heights, f.spec);
+  auto same = [](const Grid<float>& a, const Grid<float>& b) {
+    return a.size() == b.size() && std::equal(a.values().begin(), a.values().end(), b.values().begin(),
+                                              [](float u, float v) { return std::memcmp(&u, &v, sizeof u) == 0; });
+  };
+  for (bool sweep : {true, false}) {
+    ExposureSettings s;
+    s.latitudeDeg = 46.5;
+    s.startDayOfYear = 335;
+    s.seasonDays = 60;
+    s.horizonSweep = sweep;
+    ModelParameters noSky, noSun;
+    noSky.skyAmbientWeightHours = 0.0;
+    noSun.directSunWeightHours = 0.0;
+    const Exposure a = computeExposure(&scene, f.heights, f.valid, f.spec, noSky, s);
+    const Exposure b = computeExposure(&scene, f.heights, f.valid, f.spec, noSun, s);
+    const Exposure full = computeExposure(&scene, f.heights, f.valid, f.spec, ModelParameters{}, s);
+    ASSERT_EQ(a.timings.skipped, std::vector<std::string>{"sky: sky_ambient_weight_hours = 0"}) << sweep;
+    ASSERT_EQ(b.timings.skipped.size(), 2u) << sweep;  // the direct sun, and the indirect it scales
+    EXPECT_TRUE(full.timings.skipped.empty());
+    EXPECT_EQ(a.timings.skyRays, 0u);
+    if (!sweep) EXPECT_EQ(b.timings.sunRays, 0u);
+    const Grid<float> sky0 = sweep ? skyFromHorizons(computeHorizonsBySweep(f.heights, f.valid, f.spec, s.quality.azimuths), f.valid, 0.0)
+                                   : computeSkyExposure(scene, f.heights, f.valid, f.spec, s.quality.azimuths, s.quality.bisections, 0.0);
+    EXPECT_TRUE(same(a.skyHours, sky0)) << sweep;
+    EXPECT_TRUE(same(b.skyHours, full.skyHours)) << sweep;
+    ASSERT_EQ(a.days.size(), full.days.size());
+    ASSERT_EQ(b.days.size(), full.days.size());
+    for (size_t d = 0; d < full.days.size(); ++d) {
+      EXPECT_TRUE(same(a.days[d].sunHours, full.days[d].sunHours)) << sweep << " day " << d;  // only the sky was left out
+      EXPECT_TRUE(same(a.days[d].indirectHours, full.days[d].indirectHours)) << sweep << " day " << d;
+      const Grid<float> sun0 = computeDirectSun(scene, f.heights, f.valid, f.spec, s.latitudeDeg, full.days[d].dayOfYear, s.quality.hourStep, 0.0);
+      EXPECT_TRUE(same(b.days[d].sunHours, sun0)) << sweep << " day " << d;
+      const Grid<float> ind0 = computeIndirectSun(sun0, f.heights, f.valid, f.spec, s.quality.indirectDirections, s.quality.indirectRings,
+                                                  s.quality.indirectRadiusM, 0.0);
+      EXPECT_TRUE(same(b.days[d].indirectHours, ind0)) << sweep << " day " << d;
+    }
+  }
 }
