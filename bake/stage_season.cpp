@@ -23,13 +23,13 @@ SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int 
         throwIfStopRequested();
         frames.write(day, s);
         progress().event("season", "frame", {{"day", jsonNumber(day)}});
+      },
+      [&](const AvalancheRecord& a) {  // as each comes to rest
+        progress().event("season", "avalanche", {{"day", jsonNumber(a.day)}, {"released", a.released ? "true" : "false"},
+                                                 {"released_m3", jsonNumber(a.releasedM3)}, {"simulated_s", jsonNumber(a.simulatedS)}});
       });
   frames.join();
   progress().stage("season", 1.0);
-  // From the season's records once it ends (the season core reports no events of its own).
-  for (const AvalancheRecord& a : report.avalanches)
-    progress().event("season", "avalanche", {{"day", jsonNumber(a.day)}, {"released", a.released ? "true" : "false"},
-                                             {"released_m3", jsonNumber(a.releasedM3)}, {"simulated_s", jsonNumber(a.simulatedS)}});
   logSeasonReport(report, scene, config, backend.name(), log);
   return report;
 }

@@ -294,8 +294,8 @@ void SeasonRun::finish() {
 }
 
 SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfig& cfg,
-                       const ProgressCallback& progress, const FrameCallback& onFrame) {
-  SeasonRun run(backend, state, cfg, progress, onFrame);
+                       const ProgressCallback& progress, const FrameCallback& onFrame, const AvalancheCallback& onAvalanche) {
+  SeasonRun run(backend, state, cfg, progress, onFrame, onAvalanche);
   return run.run();
 }
 

@@ -109,13 +109,16 @@ struct SeasonReport {
 // The frame's state is the callee's: it may move from it (the frame writer keeps it while it writes).
 using FrameCallback = std::function<void(double day, SnowState& state)>;
 using ProgressCallback = std::function<void(double fraction)>;
+// Each avalanche's record when it comes to rest (or fails to release), while the season runs.
+using AvalancheCallback = std::function<void(const AvalancheRecord& avalanche)>;
 
 // Runs the season on `backend`, starting from `state` (uploaded here), and leaves the final
 // layers in `state`. Cells where state.noSnow is set are outside the snow domain for the whole
 // season (their snow is removed at the start; no transport enters or leaves them); state and
 // frames keep the terrain's own validCell. Frames are downloaded into a copy of `state` at each frame day.
 SeasonReport runSeason(SnowBackend& backend, SnowState& state, const SeasonConfig& config,
-                       const ProgressCallback& progress = {}, const FrameCallback& onFrame = {});
+                       const ProgressCallback& progress = {}, const FrameCallback& onFrame = {},
+                       const AvalancheCallback& onAvalanche = {});
 
 // k_t * A + k_i * I: the temperature less the sea-level T0 (paper §4.1).
 inline float temperatureBaseC(const ModelParameters& p, float altitudeM, float exposureHours) {

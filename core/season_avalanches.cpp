@@ -20,7 +20,7 @@ void SeasonRun::startAvalanche(int slot, const EventContext& e) {
       const UserAvalanche u = pendingAvalanches_.front();
       pendingAvalanches_.pop_front();
       releaseUser(u, e.day, t0);
-      if (!avalanche_->active()) report_.avalanches.push_back(avalanche_->record());
+      if (!avalanche_->active()) recordAvalanche(avalanche_->record());
       if (retry) scheduleWaitingRelease(e.day);
     } else {
       trySpontaneousRelease(e, retry);
@@ -54,16 +54,21 @@ void SeasonRun::scheduleWaitingRelease(double day) {
   });
 }
 
+void SeasonRun::recordAvalanche(AvalancheRecord record) {
+  report_.avalanches.push_back(std::move(record));
+  if (onAvalanche_) onAvalanche_(report_.avalanches.back());
+}
+
 // An avalanche's stop: it settles, then the user releases that came while it ran, one after the
 // other.
 void SeasonRun::stopAvalanche(int slot) {
-  if (avalanche_->active()) timed(slot, [&] { report_.avalanches.push_back(avalanche_->settle()); });
+  if (avalanche_->active()) timed(slot, [&] { recordAvalanche(avalanche_->settle()); });
   while (!pendingAvalanches_.empty()) {
     const UserAvalanche u = pendingAvalanches_.front();
     pendingAvalanches_.pop_front();
     timed(slot, [&] {
       releaseUser(u, u.day, cfg_.weather.at(u.day).seaLevelTemperatureC);
-      report_.avalanches.push_back(avalanche_->runToRest());
+      recordAvalanche(avalanche_->runToRest());
     });
   }
 }

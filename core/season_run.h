@@ -23,9 +23,9 @@ namespace snow {
 class SeasonRun {
  public:
   SeasonRun(SnowBackend& backend, SnowState& state, const SeasonConfig& cfg, const ProgressCallback& progress,
-            const FrameCallback& onFrame)
+            const FrameCallback& onFrame, const AvalancheCallback& onAvalanche)
       : backend_(backend), state_(state), cfg_(cfg), p_(cfg.params), progress_(progress), onFrame_(onFrame),
-        scheduler_(cfg.seed) {}
+        onAvalanche_(onAvalanche), scheduler_(cfg.seed) {}
   SeasonRun(const SeasonRun&) = delete;
   SeasonRun& operator=(const SeasonRun&) = delete;
 
@@ -54,6 +54,7 @@ class SeasonRun {
   void releaseUser(const UserAvalanche& u, double day, double seaLevelTemperatureC);
   void startAvalanche(int slot, const EventContext& e);
   void stopAvalanche(int slot);
+  void recordAvalanche(AvalancheRecord record);  // into the report, and to onAvalanche_ at once
   void trySpontaneousRelease(const EventContext& e, bool retry);
   void scheduleWaitingRelease(double day);
   void addAvalanches();
@@ -74,6 +75,7 @@ class SeasonRun {
   const ModelParameters& p_;
   const ProgressCallback& progress_;
   const FrameCallback& onFrame_;
+  const AvalancheCallback& onAvalanche_;
   SeasonReport report_;
   PoissonScheduler scheduler_;
   std::vector<PhenomenonReport> reports_;  // by scheduler slot

@@ -46,7 +46,7 @@ JsonBake bakeWithJsonProgress(const std::string& args) {
 
 }  // namespace
 
-TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileEventsLiveAndTheFinalFileCountIsTheManifests) {
+TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileAndAvalancheEventsLiveAndTheFinalFileCountIsTheManifests) {
   const JsonBake b = bakeWithJsonProgress("preset:default --backend cpu --no-cache --set terrain.size=96 --set terrain.cell_size_m=20 "
                                           "--set season.days=40 --set outputs.frames_days=[20]");
   ASSERT_EQ(b.status, 0) << slurp(b.dir / "log.txt");
@@ -79,15 +79,23 @@ TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileEventsLiveAndThe
   const json manifest = json::parse(slurp(b.dir / "o" / "manifest.json"));
   EXPECT_EQ(done["files"].get<size_t>(), manifest["files"].size());
   EXPECT_EQ(events["season/file"] + events["outputs/file"], static_cast<int>(manifest["files"].size()) + 1) << "every file and the manifest";
-  // Live: the frame's files are reported while the season still runs, before its fraction 1.
-  size_t firstFrameFile = b.lines.size(), seasonEnd = b.lines.size();
+  // Live: avalanches are reported by the season as they stop, before its last day's fraction 1;
+  // the frame's files by the frame writer beside the season (its own thread, so only before the
+  // outputs stage begins: the season's last day may come before the writer's files).
+  const size_t none = b.lines.size();
+  size_t firstFrameFile = none, firstAvalanche = none, seasonEnd = none, outputsStart = none;
   for (size_t i = 0; i < b.lines.size(); ++i) {
     const json& l = b.lines[i];
-    if (l["type"] == "event" && l["stage"] == "season" && l["event"] == "file" && firstFrameFile == b.lines.size()) firstFrameFile = i;
-    if (l["type"] == "progress" && l["stage"] == "season" && l["fraction"] == 1.0 && seasonEnd == b.lines.size()) seasonEnd = i;
+    const bool season = l["stage"] == "season", event = l["type"] == "event";
+    if (event && season && l["event"] == "file" && firstFrameFile == none) firstFrameFile = i;
+    if (event && season && l["event"] == "avalanche" && firstAvalanche == none) firstAvalanche = i;
+    if (l["type"] == "progress" && season && l["fraction"] == 1.0 && seasonEnd == none) seasonEnd = i;
+    if (l["type"] == "progress" && l["stage"] == "outputs" && outputsStart == none) outputsStart = i;
   }
   EXPECT_GT(events["season/file"], 5);
-  EXPECT_LT(firstFrameFile, seasonEnd) << "a frame's file event came after the season ended";
+  EXPECT_LT(firstFrameFile, outputsStart) << "a frame's file event came after the season";
+  ASSERT_GT(events["season/avalanche"], 0) << "this season's storms release avalanches";
+  EXPECT_LT(firstAvalanche, seasonEnd) << "avalanche events came after the season ended";
   EXPECT_LT(done["mass_balance_relative_error"].get<double>(), 1e-5);
   EXPECT_NE(slurp(b.dir / "log.txt").find("season:"), std::string::npos) << "the human log goes to --log-file";
   fs::remove_all(b.dir);
