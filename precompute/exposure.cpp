@@ -247,10 +247,10 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
                          const ModelParameters& p, const ExposureSettings& s) {
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
   Exposure e;
-  const Grid<float> zeros(spec.width, spec.height, 0.f);
+  const auto zeros = [&] { return Grid<float>(spec.width, spec.height, 0.f); };  // made only for a skipped term
   auto t0 = WallClock::now();
   if (p.skyAmbientWeightHours == 0) {
-    e.skyHours = zeros;
+    e.skyHours = zeros();
     e.timings.skipped.push_back("sky: sky_ambient_weight_hours = 0");
   } else if (s.horizonSweep) {
     // The sky's horizons are freed before the shadows' four times as many are swept, and those
@@ -268,7 +268,7 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
   t0 = WallClock::now();
   e.days = exposureSampleDays(s);
   if (p.directSunWeightHours == 0) {
-    for (DailyExposure& day : e.days) day.sunHours = zeros;
+    for (DailyExposure& day : e.days) day.sunHours = zeros();
     e.timings.skipped.push_back("direct sun: direct_sun_weight_hours = 0");
   } else if (s.horizonSweep) {
     std::vector<int> doys;
@@ -284,7 +284,7 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
   e.timings.sunSeconds = elapsedSeconds(t0);  // the shadows' sweeps included
   t0 = WallClock::now();
   if (kIndOverKSun == 0) {
-    for (DailyExposure& day : e.days) day.indirectHours = zeros;
+    for (DailyExposure& day : e.days) day.indirectHours = zeros();
     e.timings.skipped.push_back(p.directSunWeightHours == 0 ? "indirect sun: direct_sun_weight_hours = 0"
                                                             : "indirect sun: indirect_sun_weight_hours = 0");
   } else {
