@@ -4,16 +4,14 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <ostream>
-#include <random>
-#include <stdexcept>
 
+#include "core/atomic_file.h"
 #include "core/hash.h"
 
 namespace snow {
@@ -54,60 +52,18 @@ std::string readHeader(std::ifstream& in, EntryHeader& h, uint64_t fileBytes) {
   return headerProblem(h, fileBytes);
 }
 
-void writeAll(int fd, const void* data, size_t n, const std::string& path) {
-  const char* p = static_cast<const char*>(data);
-  while (n > 0) {
-    const ssize_t w = ::write(fd, p, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
-    p += w;
-    n -= static_cast<size_t>(w);
-  }
-}
-
-// Unique among every process on every host sharing the folder: host, process and 64 random bits.
-std::string temporaryEntryPath(const fs::path& finalPath) {
-  char host[256] = "host";
-  ::gethostname(host, sizeof host - 1);
-  host[sizeof host - 1] = '\0';
-  std::random_device rd;
-  const uint64_t nonce = (static_cast<uint64_t>(rd()) << 32) ^ rd();
-  char suffix[32];
-  std::snprintf(suffix, sizeof suffix, "%016llx", static_cast<unsigned long long>(nonce));
-  std::string name = "." + finalPath.filename().string() + ".tmp-" + host + "-" + std::to_string(::getpid()) + "-" + suffix;
-  return (finalPath.parent_path() / name).string();
-}
-
-void fsyncFolder(const fs::path& folder) {
-  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;  // some shared file systems refuse to open folders: the rename still stands
-  ::fsync(fd);
-  ::close(fd);
-}
-
-// The entry is complete on disk under its temporary name before the rename makes it visible, and
-// the rename reaches the disk before store() returns: a crash or a concurrent writer of the same
-// key leaves the old entry or a new whole one, never a torn one.
-void writeEntryDurably(const fs::path& finalPath, const EntryHeader& header, const std::vector<const Grid<float>*>& grids) {
-  const std::string temp = temporaryEntryPath(finalPath);
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error("cannot create " + temp + ": " + std::strerror(errno));
-  try {
-    writeAll(fd, &header, sizeof header, temp);
-    for (const Grid<float>* g : grids) writeAll(fd, g->data(), g->size() * sizeof(float), temp);
-    if (::fsync(fd) != 0) throw std::runtime_error("cannot fsync " + temp + ": " + std::strerror(errno));
-    if (::close(fd) != 0) throw std::runtime_error("cannot close " + temp + ": " + std::strerror(errno));
-  } catch (...) {
-    ::close(fd);
-    ::unlink(temp.c_str());
-    throw;
-  }
-  if (::rename(temp.c_str(), finalPath.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    ::unlink(temp.c_str());
-    throw std::runtime_error("cannot rename " + temp + ": " + why);
-  }
-  fsyncFolder(finalPath.parent_path());
+// The entry is complete on disk under its unique temporary name before the rename makes it
+// visible, and the rename reaches the disk before store() returns: a crash or a concurrent writer
+// of the same key, on any node sharing the folder, leaves the old entry or a new whole one.
+void writeEntryDurably(const std::string& finalPath, const EntryHeader& header, const std::vector<const Grid<float>*>& grids) {
+  writeStreamAtomically(
+      finalPath,
+      [&](std::ostream& out) {
+        out.write(reinterpret_cast<const char*>(&header), sizeof header);
+        for (const Grid<float>* g : grids)
+          out.write(reinterpret_cast<const char*>(g->data()), static_cast<std::streamsize>(g->size() * sizeof(float)));
+      },
+      Durability::Durable);
 }
 
 uint64_t fileSize(const std::string& path) {

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <regex>
 
+#include "core/atomic_file.h"
 #include "core/errors.h"
 #include "precompute/cache.h"
 
@@ -30,9 +31,10 @@ double ageDays(const std::string& path, std::chrono::system_clock::time_point no
   return (nowSeconds - mtime) / 86400.0;
 }
 
+// An entry's temporary (core/atomic_file's name for it): ".<stage>-<key>.tmp-<host>-<pid>-<nonce>.bin".
 bool isTemporaryEntryName(const std::string& name) {
-  static const std::regex temporary(R"(\.[a-z]+-[0-9a-f]{16}\.bin\.tmp-.+)");
-  return std::regex_match(name, temporary);
+  static const std::regex entryStem(R"(\.[a-z]+-[0-9a-f]{16}\.tmp-.+\.bin)");
+  return isTemporaryFileName(name) && std::regex_match(name, entryStem);
 }
 
 void checkOptions(const CachePruneOptions& o) {

@@ -272,8 +272,8 @@ TEST(CachePrune, RemovesEntriesUnusedForLongerThanTheAgeThenTheLeastRecentlyUsed
       {"exposure-00000000000000a1.bin", {1000, 40.0}}, {"wind-00000000000000a2.bin", {2000, 10.0}},
       {"wind-00000000000000a3.bin", {3000, 5.0}},      {"exposure-00000000000000a4.bin", {4000, 1.0}},
       {"notes.txt", {500, 100.0}},                     // not an entry: never touched
-      {".wind-00000000000000a5.bin.tmp-vm-12-ff", {600, 2.0}},  // a killed writer's: stale, removed
-      {".wind-00000000000000a6.bin.tmp-vm-13-ff", {700, 0.01}}};  // a live writer's: kept
+      {".wind-00000000000000a5.tmp-vm-12-4242-00000000000000ff.bin", {600, 2.0}},  // a killed writer's: stale, removed
+      {".wind-00000000000000a6.tmp-vm-13-4343-00000000000000ff.bin", {700, 0.01}}};  // a live writer's: kept
   for (const auto& [name, f] : files) {
     writeBytes(dir / name, f.first);
     setAgeDays(dir / name, f.second);
@@ -281,7 +281,7 @@ TEST(CachePrune, RemovesEntriesUnusedForLongerThanTheAgeThenTheLeastRecentlyUsed
   const auto now = std::chrono::system_clock::now();
   snow::CachePruneOptions o{dir.string(), 30.0, 7000e-9, true};  // 30 days, 7000 bytes, dry run
   snow::CachePruneReport r = snow::pruneCache(o, now);
-  const std::vector<std::string> expected = {(dir / ".wind-00000000000000a5.bin.tmp-vm-12-ff").string(),
+  const std::vector<std::string> expected = {(dir / ".wind-00000000000000a5.tmp-vm-12-4242-00000000000000ff.bin").string(),
                                              (dir / "exposure-00000000000000a1.bin").string(), (dir / "wind-00000000000000a2.bin").string()};
   EXPECT_EQ(r.removed, expected);
   EXPECT_EQ(r.removedBytes, 600u + 1000u + 2000u);
@@ -294,7 +294,7 @@ TEST(CachePrune, RemovesEntriesUnusedForLongerThanTheAgeThenTheLeastRecentlyUsed
   std::vector<std::string> left;
   for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
   std::sort(left.begin(), left.end());
-  EXPECT_EQ(left, (std::vector<std::string>{".wind-00000000000000a6.bin.tmp-vm-13-ff", "exposure-00000000000000a4.bin", "notes.txt",
+  EXPECT_EQ(left, (std::vector<std::string>{".wind-00000000000000a6.tmp-vm-13-4343-00000000000000ff.bin", "exposure-00000000000000a4.bin", "notes.txt",
                                             "wind-00000000000000a3.bin"}));
   // Size alone: the least recently used go first.
   r = snow::pruneCache({dir.string(), std::nullopt, 4000e-9, false}, now);

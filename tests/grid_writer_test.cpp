@@ -114,6 +114,40 @@ TEST(AtomicFile, FailedWriteLeavesTheOldFileAndNoTemporary) {
   fs::remove_all(dir);
 }
 
+
+// Two writers of one file (tasks, processes or farm nodes) never share a temporary: each call
+// names its own, keeping the extension the writers choose the format by.
+TEST(AtomicFile, EveryCallHasItsOwnTemporaryNameWithTheFinalExtension) {
+  const std::string a = temporaryPathFor("/out/snow_depth.exr"), b = temporaryPathFor("/out/snow_depth.exr");
+  EXPECT_NE(a, b);
+  for (const std::string& t : {a, b}) {
+    const fs::path p(t);
+    EXPECT_EQ(p.parent_path(), fs::path("/out"));
+    EXPECT_EQ(p.extension(), ".exr");
+    EXPECT_EQ(p.filename().string().rfind(".snow_depth.tmp-", 0), 0u) << t;
+    EXPECT_TRUE(isTemporaryFileName(p.filename().string())) << t;
+  }
+  EXPECT_FALSE(isTemporaryFileName("snow_depth.exr"));
+  EXPECT_FALSE(isTemporaryFileName(".snow_depth.exr"));
+}
+
+TEST(AtomicFile, DurableWriteLeavesTheWholeFileAndNoTemporary) {
+  const fs::path dir = tempDir();
+  const std::string path = (dir / "entry.bin").string();
+  std::vector<std::thread> writers;
+  for (int i = 0; i < 8; ++i)  // one file from eight threads at once: one whole version wins
+    writers.emplace_back([&, i] {
+      writeStreamAtomically(path, [&](std::ostream& out) { out << std::string(100000, static_cast<char>('a' + i)); }, Durability::Durable);
+    });
+  for (std::thread& t : writers) t.join();
+  const std::string bytes = bytesOf(path);
+  ASSERT_EQ(bytes.size(), 100000u);
+  EXPECT_EQ(bytes, std::string(100000, bytes[0]));
+  size_t entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 1u);
+  fs::remove_all(dir);
+}
 // The normalised encodings and the multi-channel EXR, read back by OpenImageIO (and the raw file
 // by hand): each decodes, with the manifest's range, to the float layer within half a step of
 // its quantisation; the EXR's channels are the layers, named, bit for bit.
