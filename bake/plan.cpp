@@ -35,22 +35,19 @@ std::vector<PlannedStage> gridStages(const Scene& scene, const BakeTerrain& terr
   st.push_back({"terrain", true, ti.source + " (" + ti.format + "), " + std::to_string(ti.spec.width) + " x " + std::to_string(ti.spec.height) +
                                      " cells, " + std::to_string(ti.nodataCells) + " NODATA"});
   st.push_back({"inputs and art direction", true, "the painted rasters the scene names, if any"});
-  if (occlusion)
-    st.push_back({"sun exposure", false, "occlusion mode"});
-  else if (!scene.sunExposure)
-    st.push_back({"sun exposure", false, "precompute.sun = false"});
+  if (const StageDecision sun = sunExposureDecision(scene); !sun.runs)
+    st.push_back({"sun exposure", false, sun.why});
   else {
     const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache);
     const ExposureSettings es = exposureSettings(scene, terrain);
     const bool cached = cache.contains("exposure", exposureCacheKey(terrain.terrain.heightsM, terrain.terrain.valid, ti.spec, terrain.occluders,
                                                                     scene.params, es));
-    st.push_back({"sun exposure", true, std::string(cached ? "cached" : "computed") + " (" + es.quality.name + ", " +
-                                            (es.horizonSweep ? "horizon sweep" : "Embree") + ")"});
+    std::string why = std::string(cached ? "cached" : "computed") + " (" + es.quality.name + ", " + (es.horizonSweep ? "horizon sweep" : "Embree") + ")";
+    for (const std::string& term : exposureTermsFor(scene.params).skipped) why += "; skipped " + term;
+    st.push_back({"sun exposure", true, why});
   }
-  if (occlusion)
-    st.push_back({"wind", false, "occlusion mode"});
-  else
-    st.push_back({"wind", scene.weather.hasWind(), scene.weather.hasWind() ? "computed or from the cache, per wind state" : "no wind in the season"});
+  const StageDecision wind = windDecision(scene);
+  st.push_back({"wind", wind.runs, wind.runs ? "computed or from the cache, per wind state" : wind.why});
   if (occlusion) {
     st.push_back({"season", false, "occlusion mode"});
     st.push_back({"occlusion", true, "Foldes & Benes' static cover"});

@@ -99,32 +99,44 @@ void Precomputed::windForDay(int day, SnowState& s) const {
   s.windLoadingMps2 = std::move(f.windLoadingMps2);
 }
 
+StageDecision sunExposureDecision(const Scene& scene) {
+  if (scene.mode == SceneMode::Occlusion) return {false, "occlusion mode"};
+  if (!scene.sunExposure) return {false, "precompute.sun = false"};
+  return {};
+}
+
+StageDecision windDecision(const Scene& scene) {
+  if (scene.mode == SceneMode::Occlusion) return {false, "occlusion mode"};
+  if (!scene.weather.hasWind()) return {false, "no wind in the season"};
+  return {};
+}
+
 Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
                           std::ostream& log) {
   progress().stage("precompute", 0.0);
   Precomputed pre;
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
-  if (occlusionMode)
-    log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
-  else if (scene.sunExposure)
+  const StageDecision sun = sunExposureDecision(scene), windStage = windDecision(scene);
+  if (sun.runs)
     precomputeExposure(scene, terrain, state, cache, pre, log);
+  else if (occlusionMode)
+    log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
   else
     log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
-  if (occlusionMode || !scene.sunExposure)
-    progress().event("precompute", "exposure", {{"status", jsonText("skipped")}, {"why", jsonText(occlusionMode ? "occlusion mode" : "precompute.sun = false")}});
+  if (!sun.runs) progress().event("precompute", "exposure", {{"status", jsonText("skipped")}, {"why", jsonText(sun.why)}});
   pre.temperatureForDay(0, state, scene.params);
   const auto t0 = WallClock::now();
   const WeatherTimeline calm;
   pre.wind.emplace(state.bedrockM, state.validCell, state.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
                    WindSolverOptions{}, &log);
   const WindTimeline& wind = *pre.wind;
-  if (!occlusionMode && wind.hasWind())
+  if (windStage.runs)
     progress().event("precompute", "wind", {{"status", jsonText(wind.computedStates() ? "computed" : "cached")},
                                             {"computed", std::to_string(wind.computedStates())}, {"cached", std::to_string(wind.cachedStates())}});
   else
-    progress().event("precompute", "wind", {{"status", jsonText("skipped")}, {"why", jsonText(occlusionMode ? "occlusion mode" : "no wind in the season")}});
+    progress().event("precompute", "wind", {{"status", jsonText("skipped")}, {"why", jsonText(windStage.why)}});
   if (occlusionMode) {
-  } else if (wind.hasWind()) {
+  } else if (windStage.runs) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " (" << wind.computedStates()
         << " computed, " << wind.cachedStates() << " from the cache"
         << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(elapsedSeconds(t0), 2) << " s)\n";

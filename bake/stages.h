@@ -5,6 +5,7 @@
 #include <chrono>
 #include <memory>
 #include <optional>
+#include <string>
 #include <ostream>
 #include <vector>
 
@@ -38,6 +39,15 @@ struct BakeTerrain {
   const TerrainInfo& info() const { return terrain.info; }
 };
 BakeTerrain loadBakeTerrain(const Scene& scene, std::ostream& log);
+
+// Whether a precompute stage runs, and why not: the one decision the bake acts on and
+// `snowbake plan` reports (stage_precompute.cpp).
+struct StageDecision {
+  bool runs = true;
+  std::string why;  // when it is skipped: "occlusion mode", "precompute.sun = false", "no wind in the season"
+};
+StageDecision sunExposureDecision(const Scene& scene);
+StageDecision windDecision(const Scene& scene);
 
 // stage_precompute.cpp: sun exposure (from the cache when it can) and the wind timeline; fills
 // the state's static fields of day 0 and refreshes them on later days.

@@ -241,17 +241,29 @@ std::vector<DailyExposure> exposureSampleDays(const ExposureSettings& s) {
   return days;
 }
 
-// A term whose weight is zero is all zeros (each is its weight times a non-negative sum), so it is
-// not traced: the same bytes as computing it, without its rays.
+ExposureTerms exposureTermsFor(const ModelParameters& p) {
+  ExposureTerms t;
+  t.sky = p.skyAmbientWeightHours != 0;
+  t.direct = p.directSunWeightHours != 0;
+  t.indirect = t.direct && p.indirectSunWeightHours != 0;  // I_ind scales the direct sun's grids
+  if (!t.sky) t.skipped.push_back("sky: sky_ambient_weight_hours = 0");
+  if (!t.direct) t.skipped.push_back("direct sun: direct_sun_weight_hours = 0");
+  if (!t.indirect)
+    t.skipped.push_back(t.direct ? "indirect sun: indirect_sun_weight_hours = 0" : "indirect sun: direct_sun_weight_hours = 0");
+  return t;
+}
+
+// A skipped term's zeros are the bytes computing it gives, without its rays.
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& p, const ExposureSettings& s) {
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
   Exposure e;
+  const ExposureTerms terms = exposureTermsFor(p);
+  e.timings.skipped = terms.skipped;
   const auto zeros = [&] { return Grid<float>(spec.width, spec.height, 0.f); };  // made only for a skipped term
   auto t0 = WallClock::now();
-  if (p.skyAmbientWeightHours == 0) {
+  if (!terms.sky) {
     e.skyHours = zeros();
-    e.timings.skipped.push_back("sky: sky_ambient_weight_hours = 0");
   } else if (s.horizonSweep) {
     // The sky's horizons are freed before the shadows' four times as many are swept, and those
     // one azimuth after another (directSunForDaysBySweep): never all held at once.
@@ -267,9 +279,8 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
   const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
   t0 = WallClock::now();
   e.days = exposureSampleDays(s);
-  if (p.directSunWeightHours == 0) {
+  if (!terms.direct) {
     for (DailyExposure& day : e.days) day.sunHours = zeros();
-    e.timings.skipped.push_back("direct sun: direct_sun_weight_hours = 0");
   } else if (s.horizonSweep) {
     std::vector<int> doys;
     for (const DailyExposure& day : e.days) doys.push_back(day.dayOfYear);
@@ -283,10 +294,8 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
   }
   e.timings.sunSeconds = elapsedSeconds(t0);  // the shadows' sweeps included
   t0 = WallClock::now();
-  if (kIndOverKSun == 0) {
+  if (!terms.indirect) {
     for (DailyExposure& day : e.days) day.indirectHours = zeros();
-    e.timings.skipped.push_back(p.directSunWeightHours == 0 ? "indirect sun: direct_sun_weight_hours = 0"
-                                                            : "indirect sun: indirect_sun_weight_hours = 0");
   } else {
     std::vector<const Grid<float>*> suns;
     for (const DailyExposure& day : e.days) suns.push_back(&day.sunHours);

@@ -35,6 +35,14 @@ struct DailyExposure {
   Grid<float> indirectHours;  // I_ind
 };
 
+// Which of the three terms a bake traces: a term whose weight is zero is all zeros (each is its
+// weight times a non-negative sum) and is not computed. One decision for computeExposure and the plan.
+struct ExposureTerms {
+  bool sky = true, direct = true, indirect = true;
+  std::vector<std::string> skipped;  // why each left-out term is left out ("sky: sky_ambient_weight_hours = 0")
+};
+ExposureTerms exposureTermsFor(const ModelParameters& p);
+
 struct ExposureTimings {
   double sunSeconds = 0, skySeconds = 0, indirectSeconds = 0;
   unsigned long long sunRays = 0, skyRays = 0;

@@ -122,6 +122,24 @@ TEST(Plan, SaysWhichStagesRunAndWhyOthersAreSkippedAndListsPathsRelativeToARelat
   fs::remove_all(dir);
 }
 
+TEST(Plan, ListsTheSunTermsOfZeroWeightAsSkippedInTheExposureStage) {
+  const fs::path dir = workDir("terms");
+  std::ofstream(dir / "s.toml") << "[terrain]\nbuiltin = \"ridged\"\nsize = 32\ncell_size_m = 20.0\n"
+                                   "[season]\ndays = 2\n[precompute]\nsun = true\n"
+                                   "[parameters]\nsky_ambient_weight_hours = 0.0\n[outputs]\nlayers = [\"depth\"]\n";
+  BakeOptions o;
+  o.scene = (dir / "s.toml").string();
+  o.outDir = (dir / "o").string();
+  o.useCache = false;
+  std::map<std::string, PlannedStage> byName;
+  for (const auto& s : planBake(o).stages) byName[s.name] = s;
+  EXPECT_TRUE(byName["sun exposure"].runs);
+  const std::string& why = byName["sun exposure"].why;
+  EXPECT_NE(why.find("skipped sky: sky_ambient_weight_hours = 0"), std::string::npos) << why;
+  EXPECT_EQ(why.find("direct sun"), std::string::npos) << why;
+  fs::remove_all(dir);
+}
+
 TEST(Plan, ABadKeyIsTheBakesInputError) {
   const fs::path dir = workDir("bad");
   std::ofstream(dir / "s.toml") << kBuiltin + "[season]\ndays = -3\n";
