@@ -54,7 +54,7 @@ TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileAndAvalancheEven
   std::map<std::string, double> last;
   std::map<std::string, int> events;
   for (const json& l : b.lines) {
-    if (l["type"] == "progress") {
+    if (l.value("type", "") == "progress") {
       const std::string stage = l["stage"];
       const double f = l["fraction"];
       EXPECT_GE(f, 0.0);
@@ -62,7 +62,7 @@ TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileAndAvalancheEven
       if (last.count(stage)) EXPECT_GE(f, last[stage]) << stage;
       last[stage] = f;
       EXPECT_GE(l["elapsed_s"].get<double>(), 0.0);
-    } else if (l["type"] == "event") {
+    } else if (l.value("type", "") == "event") {
       ++events[l["stage"].get<std::string>() + "/" + l["event"].get<std::string>()];
     }
   }
@@ -86,11 +86,13 @@ TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileAndAvalancheEven
   size_t firstFrameFile = none, firstAvalanche = none, seasonEnd = none, outputsStart = none;
   for (size_t i = 0; i < b.lines.size(); ++i) {
     const json& l = b.lines[i];
-    const bool season = l["stage"] == "season", event = l["type"] == "event";
-    if (event && season && l["event"] == "file" && firstFrameFile == none) firstFrameFile = i;
-    if (event && season && l["event"] == "avalanche" && firstAvalanche == none) firstAvalanche = i;
-    if (l["type"] == "progress" && season && l["fraction"] == 1.0 && seasonEnd == none) seasonEnd = i;
-    if (l["type"] == "progress" && l["stage"] == "outputs" && outputsStart == none) outputsStart = i;
+    // value(), not operator[]: a const json's operator[] of a missing key ("done" has no stage) is undefined.
+    const std::string type = l.value("type", ""), stage = l.value("stage", ""), name = l.value("event", "");
+    const bool season = stage == "season", event = type == "event";
+    if (event && season && name == "file" && firstFrameFile == none) firstFrameFile = i;
+    if (event && season && name == "avalanche" && firstAvalanche == none) firstAvalanche = i;
+    if (type == "progress" && season && l.value("fraction", -1.0) == 1.0 && seasonEnd == none) seasonEnd = i;
+    if (type == "progress" && stage == "outputs" && outputsStart == none) outputsStart = i;
   }
   EXPECT_GT(events["season/file"], 5);
   EXPECT_LT(firstFrameFile, outputsStart) << "a frame's file event came after the season";
