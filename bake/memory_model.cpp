@@ -118,6 +118,12 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
   const bool tiled = o.tiles.convention != TileConvention::None && o.tiles.sizePx > 0;
   w.push_back({tiled ? "tile being written" : "image being written", (tiled ? static_cast<double>(o.tiles.sizePx) * o.tiles.sizePx : px) * 5.0,
                tiled ? "outputs.tiles.size_px" : "outputs.layers", W});
+  // [outputs.tiles] resize: a second set of rasters, the layer copied and resized for it with its
+  // mask, and its own layers.exr channels.
+  if (tiled && o.tiles.resizeWidth > 0) {
+    const double tilePx = static_cast<double>(o.tiles.resizeWidth) * o.tiles.resizeHeight;
+    w.push_back({"the tile set's resized layer", cells * 4.0 + tilePx * (5.0 + (o.multichannelExr ? 4.0 * layers : 0.0)), "outputs.tiles.resize", W});
+  }
   // The splat map: three weights, their mask and the RGBA pixels; the normal map: the surface,
   // its mask and the RGB pixels (one of them at a time).
   const double splat = hasLayer(s, "splat_map") ? px * (3.0 * 4.0 + 1.0 + 4.0) : 0.0;
@@ -142,6 +148,11 @@ double seasonRangeBytesPerDay(const Scene& s, double cells, double skiTextureByt
   for (const auto& name : o.layers)
     if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
       perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : outputPixels(o, cells) * 5.0;
+  // [outputs.tiles] resize: the tile set's layers wait too.
+  if (o.tiles.convention != TileConvention::None && o.tiles.resizeWidth > 0)
+    for (const auto& name : o.layers)
+      if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
+        perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : static_cast<double>(o.tiles.resizeWidth) * o.tiles.resizeHeight * 5.0;
   return perDay * encodings;
 }
 
