@@ -62,7 +62,7 @@ void OutputWriter::listFile(const std::string& path, const std::string& content,
 
 void OutputWriter::planFile(const std::string& path, const std::string& format, const std::string& content, double dataBytes,
                             bool exactBytes, const std::string& condition) const {
-  currentSink().planned.push_back({path, format, content, dataBytes, exactBytes, condition});
+  currentSink().planned.push_back({path, format, content, dataBytes, exactBytes, condition, {}});
 }
 
 void OutputWriter::writeDay(const SnowState& s, double day, const Grid<float>* skiDepth) {
@@ -171,10 +171,11 @@ void OutputWriter::writeFloatLayer(const Day& d, const RasterSet& set, const Lay
 void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   const SnowState& s = d.s;
   // The engine maps at each set's size; the previews at the grid's, cut as each set's tiles.
-  for (const RasterSet& set : sets_)
-    if (std::string(layer.name) == "splat_map") writeSplatMap(d, set, layer);
-    else if (std::string(layer.name) == "snow_normal") writeNormalMap(d, set, layer);
-  if (std::string(layer.name) == "splat_map" || std::string(layer.name) == "snow_normal") return;
+  const std::string name = layer.name;
+  if (name == "splat_map" || name == "snow_normal") {
+    for (const RasterSet& set : sets_) name == "splat_map" ? writeSplatMap(d, set, layer) : writeNormalMap(d, set, layer);
+    return;
+  }
   auto write = [&](const std::vector<uint8_t>& rgb) {
     for (const RasterSet& set : sets_) writeRgbRaster(set, baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, rgb, layer.content, layer.unit);
   };
