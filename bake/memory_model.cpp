@@ -122,7 +122,8 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
   // mask, and its own layers.exr channels.
   if (tiled && o.tiles.resizeWidth > 0) {
     const double tilePx = static_cast<double>(o.tiles.resizeWidth) * o.tiles.resizeHeight;
-    w.push_back({"the tile set's resized layer", cells * 4.0 + tilePx * (5.0 + (o.multichannelExr ? 4.0 * layers : 0.0)), "outputs.tiles.resize", W});
+    const double channels = o.multichannelExr ? 4.0 * layers : 0.0;
+    w.push_back({"the tile set's resized layer", cells * 4.0 + tilePx * (5.0 + channels), "outputs.tiles.resize", W});
   }
   // The splat map: three weights, their mask and the RGBA pixels; the normal map: the surface,
   // its mask and the RGB pixels (one of them at a time).

@@ -67,8 +67,8 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
       std::ostringstream rel;
       rel << "." << std::setw(4) << std::setfill('0') << k;
       const auto& [seconds, c] = a.maps->frames[k];
-      write(stem.str() + "/depth", rel.str(), a.maps->depthAtRelease, c, which + ": snow depth C+S+U+P at " + fixed(seconds, 2) + " s after the release (m)", "m",
-            a.day + seconds / 86400.0);
+      write(stem.str() + "/depth", rel.str(), a.maps->depthAtRelease, c,
+            which + ": snow depth C+S+U+P at " + fixed(seconds, 2) + " s after the release (m)", "m", a.day + seconds / 86400.0);
     }
   }
 }
@@ -79,7 +79,8 @@ void OutputWriter::planAvalancheMaps() {
   const std::string every = "one per released avalanche NNN: how many the season decides";
   // The maps are the grid's size (or the set's), tiled as the layers are.
   for (const RasterSet& set : sets_) {
-    const TileLayout l = tileLayout(set.tiles, set.resized() ? set.resizeWidth : src_.geo.gridWidth, set.resized() ? set.resizeHeight : src_.geo.gridHeight);
+    const TileLayout l = set.resized() ? tileLayout(set.tiles, set.resizeWidth, set.resizeHeight)
+                                       : tileLayout(set.tiles, src_.geo.gridWidth, src_.geo.gridHeight);
     for (int r = 0; r < l.rows; ++r)
       for (int c = 0; c < l.columns; ++c) {
         const std::string tile = tileSuffix(l, c, r);

@@ -144,8 +144,8 @@ Grid<float> OutputWriter::planGrid(const Day& d, const LayerInfo& layer) const {
   return Grid<float>(d.s.spec.width * f, d.s.spec.height * f);
 }
 
-void OutputWriter::writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
-                                   std::vector<Grid<float>>& channels) {
+void OutputWriter::writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid,
+                                   std::vector<std::string>& channelNames, std::vector<Grid<float>>& channels) {
   std::string content = layer.content;
   const bool ownSize = grid.width() != d.s.spec.width || grid.height() != d.s.spec.height;
   // The ski-track texture is finer than the grid: its texels per cell, listed with each file.
@@ -156,7 +156,8 @@ void OutputWriter::writeFloatLayer(const Day& d, const RasterSet& set, const Lay
   Grid<uint8_t> resizedValid;
   const Grid<uint8_t>* valid = &d.s.validCell;
   if (set.resized() && !ownSize) {
-    grid = src_.plan ? Grid<float>(set.resizeWidth, set.resizeHeight) : resampleValid(grid, d.s.validCell, set.resizeWidth, set.resizeHeight, resizedValid);
+    grid = src_.plan ? Grid<float>(set.resizeWidth, set.resizeHeight)
+                     : resampleValid(grid, d.s.validCell, set.resizeWidth, set.resizeHeight, resizedValid);
     valid = &resizedValid;
     content += ", resampled (bilinear over valid cells) to " + std::to_string(grid.width()) + " x " + std::to_string(grid.height()) + " over the same extent";
   }
@@ -177,7 +178,8 @@ void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
     return;
   }
   auto write = [&](const std::vector<uint8_t>& rgb) {
-    for (const RasterSet& set : sets_) writeRgbRaster(set, baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, rgb, layer.content, layer.unit);
+    for (const RasterSet& set : sets_)
+      writeRgbRaster(set, baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, rgb, layer.content, layer.unit);
   };
   if (src_.plan) {  // an sRGB preview of the grid's size; the snow preview also goes on the contact sheet
     write({});
@@ -223,7 +225,8 @@ void OutputWriter::writeDisplacement(const Day& d) {
   }
 }
 
-void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels) {
+void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names,
+                                     const std::vector<Grid<float>>& channels) {
   if (channels.empty()) return;
   std::string list;
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;

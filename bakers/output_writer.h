@@ -98,15 +98,16 @@ class OutputWriter {
   using BaseOf = std::function<std::string(const std::string& stem)>;
   BaseOf baseOf(const Day& d) const;
   // One raster output of raster set `set`, whole or as tiles; each file listed (output_rasters.cpp).
-  void writeFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid, const Grid<uint8_t>* valid,
-                        const std::string& layerName, const std::string& content, const std::string& unit);
-  void writeEncodedRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const std::string& encoding, const Grid<float>& grid,
-                          const Grid<uint8_t>* valid, const ValueMapping& mapping, const std::string& content, const std::string& unit,
-                          bool write);
-  void writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height, const std::vector<uint8_t>& pixels,
-                      const std::string& content, const std::string& unit, int channels = 3, const std::string& format = {});
-  void writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid, const std::string& content,
-                           const std::string& unit);
+  void writeFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+                        const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content, const std::string& unit);
+  void writeEncodedRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const std::string& encoding,
+                          const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& mapping, const std::string& content,
+                          const std::string& unit, bool write);
+  void writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height,
+                      const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels = 3,
+                      const std::string& format = {});
+  void writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+                           const std::string& content, const std::string& unit);
   // The splat map and the snow surface's normal map (output_engine_maps.cpp).
   void writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
   void writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
@@ -120,7 +121,8 @@ class OutputWriter {
                        std::vector<Grid<float>>& channels);
   void writePreview(const Day& d, const LayerInfo& layer);
   void writeDisplacement(const Day& d);
-  void writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels);
+  void writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names,
+                         const std::vector<Grid<float>>& channels);
   void writeVdb(const Day& d);
   void writeMeshes(const Day& d);
   void planMeshes(const Day& d);
