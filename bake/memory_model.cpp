@@ -118,12 +118,20 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
   const bool tiled = o.tiles.convention != TileConvention::None && o.tiles.sizePx > 0;
   w.push_back({tiled ? "tile being written" : "image being written", (tiled ? static_cast<double>(o.tiles.sizePx) * o.tiles.sizePx : px) * 5.0,
                tiled ? "outputs.tiles.size_px" : "outputs.layers", W});
+  // [outputs.tiles] resize: a second set of rasters, the layer copied and resized for it with its
+  // mask, and its own layers.exr channels.
+  const double tileSetPx = tiled && o.tiles.resizeWidth > 0 ? static_cast<double>(o.tiles.resizeWidth) * o.tiles.resizeHeight : 0.0;
+  if (tileSetPx > 0) {
+    const double channels = o.multichannelExr ? 4.0 * layers : 0.0;
+    w.push_back({"the tile set's resized layer", cells * 4.0 + tileSetPx * (5.0 + channels), "outputs.tiles.resize", W});
+  }
+  const double mapPx = std::max(px, tileSetPx);  // the engine maps and encodings at the larger set's size
   // The splat map: three weights, their mask and the RGBA pixels; the normal map: the surface,
   // its mask and the RGB pixels (one of them at a time).
-  const double splat = hasLayer(s, "splat_map") ? px * (3.0 * 4.0 + 1.0 + 4.0) : 0.0;
-  const double normal = hasLayer(s, "snow_normal") ? px * (4.0 + 1.0 + 3.0) : 0.0;
+  const double splat = hasLayer(s, "splat_map") ? mapPx * (3.0 * 4.0 + 1.0 + 4.0) : 0.0;
+  const double normal = hasLayer(s, "snow_normal") ? mapPx * (4.0 + 1.0 + 3.0) : 0.0;
   if (splat + normal > 0) w.push_back({"engine map being written", std::max(splat, normal), "outputs.layers", W});
-  if (!o.encodings.empty()) w.push_back({"encodings", cells * 2.0, "outputs.encodings", W});
+  if (!o.encodings.empty()) w.push_back({"encodings", std::max(cells, tileSetPx) * 2.0, "outputs.encodings", W});
   if (needs & kNeedsWind) w.push_back({"the day's wind", cells * 16.0, "outputs.layers", W});
   if (needs & kNeedsSun) w.push_back({"the day's sun", cells * 4.0, "outputs.layers", W});
   if (o.displacementWidth > 0)
@@ -142,6 +150,11 @@ double seasonRangeBytesPerDay(const Scene& s, double cells, double skiTextureByt
   for (const auto& name : o.layers)
     if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
       perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : outputPixels(o, cells) * 5.0;
+  // [outputs.tiles] resize: the tile set's layers wait too.
+  if (o.tiles.convention != TileConvention::None && o.tiles.resizeWidth > 0)
+    for (const auto& name : o.layers)
+      if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
+        perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : static_cast<double>(o.tiles.resizeWidth) * o.tiles.resizeHeight * 5.0;
   return perDay * encodings;
 }
 

@@ -157,7 +157,9 @@ std::string planToJson(const BakePlan& p) {
     const PlannedFile& f = p.files[i];
     o << (i ? "," : "") << "\n    {\"path\": " << jsonText(fs::relative(f.path, p.outDir).string()) << ", \"format\": " << jsonText(f.format)
       << ", \"content\": " << jsonText(f.content) << ", \"data_bytes\": " << jsonNumber(f.dataBytes)
-      << ", \"exact_bytes\": " << (f.exactBytes ? "true" : "false") << ", \"condition\": " << jsonText(f.condition) << "}";
+      << ", \"exact_bytes\": " << (f.exactBytes ? "true" : "false") << ", \"condition\": " << jsonText(f.condition);
+    if (!f.note.empty()) o << ", \"note\": " << jsonText(f.note);
+    o << "}";
   }
   o << "\n  ],\n  \"memory\": {\"peak_bytes\": " << jsonNumber(p.memory.peakBytes()) << ", \"peak_phase\": " << jsonText(p.memory.peakPhase().name)
     << ", \"library_bytes\": " << jsonNumber(p.memory.libraryBytes) << ", \"budget_bytes\": " << jsonNumber(p.budgetBytes)
@@ -182,6 +184,7 @@ void printPlan(const BakePlan& p, std::ostream& out) {
     if (f.dataBytes > 0) out << "  " << (f.exactBytes ? "" : "~") << static_cast<long long>(f.dataBytes) << " B";
     out << "  " << f.format.substr(0, f.format.find(','));
     if (!f.condition.empty()) out << "  (" << f.condition << ")";
+    if (!f.note.empty()) out << "  [" << f.note << "]";
     out << "\n";
   }
   out << "memory: " << p.memory.summary() << "; budget " << fixed(p.budgetBytes / (1024.0 * 1024.0), 0) << " MiB\n";

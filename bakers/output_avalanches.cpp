@@ -1,5 +1,6 @@
 // OutputWriter's per-avalanche maps (outputs.avalanche_maps, outputs.avalanche_frame_interval_s),
-// full-size so they line up with the layers: avalanches/NNN_<map>, avalanches/NNN/depth.FFFF.
+// the layers' size and tiles, so they line up with the layers: avalanches/NNN_<map>,
+// avalanches/NNN/depth.FFFF.
 #include <algorithm>
 #include <filesystem>
 #include <iomanip>
@@ -22,35 +23,52 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
     if (!a.maps) continue;
     std::ostringstream stem;
     stem << "avalanches/" << std::setw(3) << std::setfill('0') << number;
-    // A crop of the avalanche's box pasted into a full-size grid.
-    auto write = [&](const std::string& rel, Grid<float> full, const GridCrop& c, const std::string& content, const std::string& unit,
-                     double day) {
+    // A crop of the avalanche's box pasted into a full-size grid, then in each raster set at its
+    // size (bilinear), whole or cut into its tiles (the suffix before a motion frame's tag, as on
+    // the layers).
+    auto write = [&](const std::string& rel, const std::string& tag, Grid<float> full, const GridCrop& c, const std::string& content,
+                     const std::string& unit, double day) {
       for (int y = 0; y < c.grid.height(); ++y)
         for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
       fs::create_directories((fs::path(src_.outDir) / rel).parent_path());
-      const std::string base = (fs::path(src_.outDir) / rel).string();
-      if (scene_.outputs.format == ImageFormat::Tiff) {
-        writeGeoTiff(base + ".tif", full, src_.geo, "value");
-        const auto [lo, hi] = std::minmax_element(full.values().begin(), full.values().end());
-        listFile(base + ".tif", content, unit, floatImageFormat_, day, *lo, *hi);
-        return;
+      for (const RasterSet& set : sets_) {
+        const Grid<float> sized = set.resized() ? resampleBilinear(full, set.resizeWidth, set.resizeHeight) : Grid<float>();
+        const Grid<float>& image = set.resized() ? sized : full;
+        const TileLayout l = tileLayout(set.tiles, image.width(), image.height());
+        const std::string what = !set.resized() ? content
+                                                : content + ", resampled (bilinear) to " + std::to_string(image.width()) + " x " +
+                                                      std::to_string(image.height()) + " over the same extent";
+        for (int r = 0; r < l.rows; ++r)
+          for (int col = 0; col < l.columns; ++col) {
+            const std::string base = (fs::path(src_.outDir) / (rel + tileSuffix(l, col, r) + tag)).string();
+            const Grid<float> cut = l.tiled() ? cutTile(image, l, col, r) : Grid<float>();
+            const Grid<float>& tile = l.tiled() ? cut : image;
+            if (scene_.outputs.format == ImageFormat::Tiff) {
+              const GeoFrame geo = l.tiled() || set.resized() ? src_.geo.pixels(image.width(), image.height(), col * l.step, r * l.step) : src_.geo;
+              writeGeoTiff(base + ".tif", tile, geo, "value");
+              const auto [lo, hi] = std::minmax_element(tile.values().begin(), tile.values().end());
+              listFile(base + ".tif", what, unit, floatImageFormat_, day, *lo, *hi);
+            } else {
+              const WrittenImage img = writeFloatImage(base, "exr", tile, "value", scene_.outputs.compressionLevel);
+              listFile(img.path, what, unit, floatImageFormat_, day, img.minValue, img.maxValue);
+            }
+            if (l.tiled() || set.resized()) noteTile(l, col, r, image.width(), image.height());
+          }
       }
-      const WrittenImage img = writeFloatImage(base, "exr", full, "value", scene_.outputs.compressionLevel);
-      listFile(img.path, content, unit, floatImageFormat_, day, img.minValue, img.maxValue);
     };
     const Grid<float> zero(spec.width, spec.height, 0.f);
     const std::string which = "avalanche " + std::to_string(number) + " (day " + fixed(a.day, 2) + ")";
-    write(stem.str() + "_release", zero, a.maps->release, which + ": release zone (1 released, 0 not)", "1", a.day);
-    write(stem.str() + "_scour", zero, a.maps->scour, which + ": snow taken away, net (m)", "m", a.day);
-    write(stem.str() + "_deposit", zero, a.maps->deposit, which + ": snow left, net (m)", "m", a.day);
-    write(stem.str() + "_peak_thickness", zero, a.maps->peakThickness, which + ": peak flowing thickness (m)", "m", a.day);
-    write(stem.str() + "_peak_speed", zero, a.maps->peakSpeed, which + ": peak speed, the fastest pipe (m/s)", "m/s", a.day);
+    write(stem.str() + "_release", "", zero, a.maps->release, which + ": release zone (1 released, 0 not)", "1", a.day);
+    write(stem.str() + "_scour", "", zero, a.maps->scour, which + ": snow taken away, net (m)", "m", a.day);
+    write(stem.str() + "_deposit", "", zero, a.maps->deposit, which + ": snow left, net (m)", "m", a.day);
+    write(stem.str() + "_peak_thickness", "", zero, a.maps->peakThickness, which + ": peak flowing thickness (m)", "m", a.day);
+    write(stem.str() + "_peak_speed", "", zero, a.maps->peakSpeed, which + ": peak speed, the fastest pipe (m/s)", "m/s", a.day);
     for (size_t k = 0; k < a.maps->frames.size(); ++k) {
       std::ostringstream rel;
-      rel << stem.str() << "/depth." << std::setw(4) << std::setfill('0') << k;
+      rel << "." << std::setw(4) << std::setfill('0') << k;
       const auto& [seconds, c] = a.maps->frames[k];
-      write(rel.str(), a.maps->depthAtRelease, c, which + ": snow depth C+S+U+P at " + fixed(seconds, 2) + " s after the release (m)", "m",
-            a.day + seconds / 86400.0);
+      write(stem.str() + "/depth", rel.str(), a.maps->depthAtRelease, c,
+            which + ": snow depth C+S+U+P at " + fixed(seconds, 2) + " s after the release (m)", "m", a.day + seconds / 86400.0);
     }
   }
 }
@@ -59,11 +77,21 @@ void OutputWriter::planAvalancheMaps() {
   if (!scene_.outputs.avalancheMaps) return;
   const std::string ext = scene_.outputs.format == ImageFormat::Tiff ? ".tif" : ".exr";
   const std::string every = "one per released avalanche NNN: how many the season decides";
-  for (const char* map : {"release", "scour", "deposit", "peak_thickness", "peak_speed"})
-    planFile((fs::path(src_.outDir) / ("avalanches/NNN_" + std::string(map) + ext)).string(), floatImageFormat_, map, 0.0, false, every);
-  if (scene_.outputs.avalancheFrameIntervalS > 0)
-    planFile((fs::path(src_.outDir) / ("avalanches/NNN/depth.FFFF" + ext)).string(), floatImageFormat_, "motion frames", 0.0, false,
-             every + ", one frame per outputs.avalanche_frame_interval_s of its run");
+  // The maps are the grid's size (or the set's), tiled as the layers are.
+  for (const RasterSet& set : sets_) {
+    const TileLayout l = set.resized() ? tileLayout(set.tiles, set.resizeWidth, set.resizeHeight)
+                                       : tileLayout(set.tiles, src_.geo.gridWidth, src_.geo.gridHeight);
+    for (int r = 0; r < l.rows; ++r)
+      for (int c = 0; c < l.columns; ++c) {
+        const std::string tile = tileSuffix(l, c, r);
+        for (const char* map : {"release", "scour", "deposit", "peak_thickness", "peak_speed"})
+          planFile((fs::path(src_.outDir) / ("avalanches/NNN_" + std::string(map) + tile + ext)).string(), floatImageFormat_, map, 0.0, false,
+                   every);
+        if (scene_.outputs.avalancheFrameIntervalS > 0)
+          planFile((fs::path(src_.outDir) / ("avalanches/NNN/depth" + tile + ".FFFF" + ext)).string(), floatImageFormat_, "motion frames", 0.0,
+                   false, every + ", one frame per outputs.avalanche_frame_interval_s of its run");
+      }
+  }
 }
 
 }  // namespace snow

@@ -1,6 +1,6 @@
 // OutputWriter's engine maps: the Unity RGBA splat map (the engine weights, summing to 255 in
 // 8 bits) and the tangent-space normal map of the snow surface, both at the output size
-// (outputs.resize) and tiled like every raster.
+// (outputs.resize, or the tiles' own) and tiled like every raster.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,13 +11,13 @@
 namespace snow {
 
 namespace {
-// A grid layer at the output size: resampled over valid cells under outputs.resize.
-Grid<float> atOutputSize(const OutputRequest& out, const Grid<float>& g, const Grid<uint8_t>& valid, Grid<uint8_t>& validOut) {
-  if (out.resizeWidth <= 0) {
+// A grid layer at the raster set's size: resampled over valid cells when it has one.
+Grid<float> atOutputSize(const RasterSet& set, const Grid<float>& g, const Grid<uint8_t>& valid, Grid<uint8_t>& validOut) {
+  if (!set.resized()) {
     validOut = valid;
     return g;
   }
-  return resampleValid(g, valid, out.resizeWidth, out.resizeHeight, validOut);
+  return resampleValid(g, valid, set.resizeWidth, set.resizeHeight, validOut);
 }
 
 // Weights (summing to 1) as bytes summing to exactly 255: each floored, the rest given one by one
@@ -44,16 +44,16 @@ std::array<uint8_t, 3> bytesSummingTo255(const std::array<double, 3>& w) {
 
 constexpr const char* kSplatFormat = "PNG, 4 channels uint8, linear weights: R snow, G rock, B ground, A 0; R + G + B = 255";
 
-void OutputWriter::writeSplatMap(const Day& d, const LayerInfo& layer) {
+void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer) {
   const auto& out = scene_.outputs;
   if (src_.plan)
-    return writeRgbRaster(baseOf(d), d.day, layer.name, out.resizeWidth > 0 ? out.resizeWidth : d.s.spec.width,
-                          out.resizeWidth > 0 ? out.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 4, kSplatFormat);
+    return writeRgbRaster(set, baseOf(d), d.day, layer.name, set.resized() ? set.resizeWidth : d.s.spec.width,
+                          set.resized() ? set.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 4, kSplatFormat);
   LayerInputs in{&d.s, &scene_.params, &out};
   std::array<Grid<float>, 3> w;
   Grid<uint8_t> valid;
   const char* names[3] = {"weight_snow", "weight_rock", "weight_ground"};
-  for (int k = 0; k < 3; ++k) w[k] = atOutputSize(out, findLayer(names[k])->compute(in), d.s.validCell, valid);
+  for (int k = 0; k < 3; ++k) w[k] = atOutputSize(set, findLayer(names[k])->compute(in), d.s.validCell, valid);
   const int width = valid.width(), height = valid.height();
   std::vector<uint8_t> rgba(static_cast<size_t>(width) * height * 4, 0);
   for (size_t i = 0; i < valid.size(); ++i) {
@@ -63,17 +63,17 @@ void OutputWriter::writeSplatMap(const Day& d, const LayerInfo& layer) {
     const auto q = bytesSummingTo255(weights);
     std::copy(q.begin(), q.end(), &rgba[i * 4]);
   }
-  writeRgbRaster(baseOf(d), d.day, layer.name, width, height, rgba, layer.content, layer.unit, 4, kSplatFormat);
+  writeRgbRaster(set, baseOf(d), d.day, layer.name, width, height, rgba, layer.content, layer.unit, 4, kSplatFormat);
 }
 
-void OutputWriter::writeNormalMap(const Day& d, const LayerInfo& layer) {
+void OutputWriter::writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer) {
   const auto& out = scene_.outputs;
   const std::string format = "PNG, 3 channels uint8, linear (not sRGB): n = 2 p / 255 - 1, tangent space (u east, v north), " + out.normalMapConvention;
   if (src_.plan)
-    return writeRgbRaster(baseOf(d), d.day, layer.name, out.resizeWidth > 0 ? out.resizeWidth : d.s.spec.width,
-                          out.resizeWidth > 0 ? out.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 3, format);
+    return writeRgbRaster(set, baseOf(d), d.day, layer.name, set.resized() ? set.resizeWidth : d.s.spec.width,
+                          set.resized() ? set.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 3, format);
   Grid<uint8_t> valid;
-  const Grid<float> surface = atOutputSize(out, findLayer("surface")->compute(LayerInputs{&d.s}), d.s.validCell, valid);
+  const Grid<float> surface = atOutputSize(set, findLayer("surface")->compute(LayerInputs{&d.s}), d.s.validCell, valid);
   const int w = surface.width(), h = surface.height();
   const double dx = d.s.spec.cellSizeXM * d.s.spec.width / w, dy = d.s.spec.cellSizeYM * d.s.spec.height / h;
   const double green = out.normalMapConvention == "directx" ? -1.0 : 1.0;
@@ -91,7 +91,7 @@ void OutputWriter::writeNormalMap(const Day& d, const LayerInfo& layer) {
       uint8_t* p = &rgb[(static_cast<size_t>(y) * w + x) * 3];
       for (int k = 0; k < 3; ++k) p[k] = static_cast<uint8_t>(std::lround(127.5 + 127.5 * v[k]));
     }
-  writeRgbRaster(baseOf(d), d.day, layer.name, w, h, rgb, layer.content, layer.unit, 3, format);
+  writeRgbRaster(set, baseOf(d), d.day, layer.name, w, h, rgb, layer.content, layer.unit, 3, format);
 }
 
 }  // namespace snow

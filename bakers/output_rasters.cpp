@@ -1,4 +1,4 @@
-// OutputWriter's raster files: each raster output whole or cut into tiles ([outputs.tiles]), its
+// OutputWriter's raster files: each raster output whole or cut into tiles (its RasterSet), its
 // 16- and 8-bit encodings mapped by [outputs.ranges] ("season" ranges written after the last
 // day), and every file's mapping and tile listed in the manifest.
 #include <filesystem>
@@ -27,11 +27,11 @@ void OutputWriter::noteTile(const TileLayout& l, int column, int row, int imageW
   f.tileOriginX = g.originX, f.tileOriginY = g.originY, f.pixelSizeX = g.cellX, f.pixelSizeY = g.cellY;
 }
 
-void OutputWriter::writeFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
                                     const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content,
                                     const std::string& unit) {
   const auto& out = scene_.outputs;
-  const TileLayout l = tileLayout(out.tiles, grid.width(), grid.height());
+  const TileLayout l = tileLayout(set.tiles, grid.width(), grid.height());
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   Grid<float> cut;
   Grid<uint8_t> cutValid;
@@ -58,11 +58,11 @@ void OutputWriter::writeFloatRaster(const BaseOf& base, double day, const std::s
     }
 }
 
-void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std::string& stem, const std::string& encoding,
+void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const std::string& encoding,
                                       const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& m,
                                       const std::string& content, const std::string& unit, bool write) {
   const auto& out = scene_.outputs;
-  const TileLayout l = tileLayout(out.tiles, grid.width(), grid.height());
+  const TileLayout l = tileLayout(set.tiles, grid.width(), grid.height());
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   // Quantised once for every tile: a pixel depends on its cell alone, so cutting the pixels
   // gives each tile's bytes.
@@ -89,10 +89,10 @@ void OutputWriter::writeEncodedRaster(const BaseOf& base, double day, const std:
     }
 }
 
-void OutputWriter::writeRgbRaster(const BaseOf& base, double day, const std::string& stem, int width, int height,
+void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height,
                                   const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels,
                                   const std::string& format) {
-  const TileLayout l = tileLayout(scene_.outputs.tiles, width, height);
+  const TileLayout l = tileLayout(set.tiles, width, height);
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".png";
@@ -107,9 +107,9 @@ void OutputWriter::writeRgbRaster(const BaseOf& base, double day, const std::str
     }
 }
 
-void OutputWriter::writeRawFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
                                        const std::string& content, const std::string& unit) {
-  const TileLayout l = tileLayout(scene_.outputs.tiles, grid.width(), grid.height());
+  const TileLayout l = tileLayout(set.tiles, grid.width(), grid.height());
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
@@ -129,7 +129,7 @@ void OutputWriter::writeRawFloatRaster(const BaseOf& base, double day, const std
     }
 }
 
-void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid,
+void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid,
                                   const std::string& content) {
   const auto& out = scene_.outputs;
   if (out.encodings.empty()) return;
@@ -147,14 +147,14 @@ void OutputWriter::writeEncodings(const Day& d, const LayerInfo& layer, const Gr
   const bool now = range.mode != RangeMode::Season || src_.plan;  // plan: listed once, on the day
   for (const std::string& encoding : out.encodings) {
     if (encoding == "r32") {  // floats as they are: no range
-      writeRawFloatRaster(baseOf(d), d.day, layer.name, grid, content, layer.unit);
+      writeRawFloatRaster(set, baseOf(d), d.day, layer.name, grid, content, layer.unit);
       continue;
     }
-    writeEncodedRaster(baseOf(d), d.day, layer.name, encoding, grid, valid, m, content, layer.unit, now);
+    writeEncodedRaster(set, baseOf(d), d.day, layer.name, encoding, grid, valid, m, content, layer.unit, now);
     if (now) continue;
     const std::lock_guard lock(seasonMutex_);
     const bool masked = valid->width() == grid.width() && valid->height() == grid.height();
-    seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid, masked ? *valid : Grid<uint8_t>()});
+    seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid, masked ? *valid : Grid<uint8_t>(), set});
   }
 }
 
@@ -168,7 +168,7 @@ void OutputWriter::writeSeasonEncodings() {
         return (fs::path(outDir) / (e.frame ? "frames" : "") / (stem + e.dayTag)).string();
       };
       const ValueMapping m = seasonRanges_[e.layer].mapping(RangeMode::Season);
-      writeEncodedRaster(base, e.day, e.layer, e.encoding, e.grid, e.valid.empty() ? nullptr : &e.valid, m, e.content, e.unit, true);
+      writeEncodedRaster(e.set, base, e.day, e.layer, e.encoding, e.grid, e.valid.empty() ? nullptr : &e.valid, m, e.content, e.unit, true);
     }
   }
   // The entries listed on the day, in the manifest's order, take the season's mapping.

@@ -21,6 +21,7 @@ struct PlannedFile {
   double dataBytes = 0;   // pixel or sample bytes, uncompressed (0: not known before the bake: meshes, VDB, text)
   bool exactBytes = false;  // the file is exactly dataBytes long (r16, r32: no header, no compression)
   std::string condition;  // empty: always written; else when it is left out (it depends on the season's snow)
+  std::string note;       // printed beside the file: why it stays whole under [outputs.tiles]
 };
 
 struct OutputSink {

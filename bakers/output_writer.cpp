@@ -36,6 +36,7 @@ std::string OutputWriter::Day::base(const std::string& stem, const std::string& 
 
 OutputWriter::OutputWriter(OutputSources sources, std::ostream& log) : src_(std::move(sources)), scene_(*src_.scene), log_(log) {
   exrCompression_ = exrCompressionName(scene_.outputs.compressionLevel);
+  sets_ = rasterSets(scene_.outputs);
   floatImageFormat_ = scene_.outputs.format == ImageFormat::Exr ? "OpenEXR, 1 channel float32 (" + exrCompression_ + "), linear"
                                                                 : "GeoTIFF (GDAL), 1 band float32 (deflate, floating-point predictor), linear, the terrain's coordinate system and the file's geotransform";
 }
@@ -61,7 +62,7 @@ void OutputWriter::listFile(const std::string& path, const std::string& content,
 
 void OutputWriter::planFile(const std::string& path, const std::string& format, const std::string& content, double dataBytes,
                             bool exactBytes, const std::string& condition) const {
-  currentSink().planned.push_back({path, format, content, dataBytes, exactBytes, condition});
+  currentSink().planned.push_back({path, format, content, dataBytes, exactBytes, condition, {}});
 }
 
 void OutputWriter::writeDay(const SnowState& s, double day, const Grid<float>* skiDepth) {
@@ -117,21 +118,24 @@ void OutputWriter::writeLayers(const Day& d) {
   in.skiDepth = d.skiDepth;
   in.routeMap = src_.routeMap;
   in.occlusion = src_.occlusion;
-  std::vector<std::string> channelNames;
-  std::vector<Grid<float>> channels;
+  // Each raster set's channels of layers.exr (one set, or the whole files and the tiles at their size).
+  std::vector<std::vector<std::string>> channelNames(sets_.size());
+  std::vector<std::vector<Grid<float>>> channels(sets_.size());
   for (const auto& name : src_.layers) {
     throwIfStopRequested();  // Ctrl-C between two layers' files, never within one
     if (d.frame && name == "valid_mask") continue;
     const LayerInfo& layer = *findLayer(name);
-    if (layer.kind == LayerKind::Preview)
+    if (layer.kind == LayerKind::Preview) {
       writePreview(d, layer);
-    else if (src_.plan)  // a grid of the layer's size, its values never read
-      writeFloatLayer(d, layer, planGrid(d, layer), channelNames, channels);
-    else
-      writeFloatLayer(d, layer, layer.compute(in), channelNames, channels);
+      continue;
+    }
+    // Plan: a grid of the layer's size, its values never read.
+    Grid<float> grid = src_.plan ? planGrid(d, layer) : layer.compute(in);
+    for (size_t k = 0; k < sets_.size(); ++k)  // the last set takes the grid itself
+      writeFloatLayer(d, sets_[k], layer, k + 1 == sets_.size() ? std::move(grid) : Grid<float>(grid), channelNames[k], channels[k]);
   }
   writeDisplacement(d);
-  writeMultiChannel(d, channelNames, channels);
+  for (size_t k = 0; k < sets_.size(); ++k) writeMultiChannel(d, sets_[k], channelNames[k], channels[k]);
 }
 
 Grid<float> OutputWriter::planGrid(const Day& d, const LayerInfo& layer) const {
@@ -140,24 +144,25 @@ Grid<float> OutputWriter::planGrid(const Day& d, const LayerInfo& layer) const {
   return Grid<float>(d.s.spec.width * f, d.s.spec.height * f);
 }
 
-void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
-                                   std::vector<Grid<float>>& channels) {
+void OutputWriter::writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid,
+                                   std::vector<std::string>& channelNames, std::vector<Grid<float>>& channels) {
   std::string content = layer.content;
   const bool ownSize = grid.width() != d.s.spec.width || grid.height() != d.s.spec.height;
   // The ski-track texture is finer than the grid: its texels per cell, listed with each file.
   if (layer.needs & kNeedsSkiTracks)
     content += " (" + std::to_string(src_.skiTrackFactor) + " x " + std::to_string(src_.skiTrackFactor) + " texels per cell)";
-  // outputs.resize: the grid's layers at the requested size, over valid cells (finer textures keep theirs).
-  const auto& out = scene_.outputs;
+  // The set's size (outputs.resize or the tiles' own): the grid's layers at the requested size, over
+  // valid cells (finer textures keep theirs).
   Grid<uint8_t> resizedValid;
   const Grid<uint8_t>* valid = &d.s.validCell;
-  if (out.resizeWidth > 0 && !ownSize) {
-    grid = src_.plan ? Grid<float>(out.resizeWidth, out.resizeHeight) : resampleValid(grid, d.s.validCell, out.resizeWidth, out.resizeHeight, resizedValid);
+  if (set.resized() && !ownSize) {
+    grid = src_.plan ? Grid<float>(set.resizeWidth, set.resizeHeight)
+                     : resampleValid(grid, d.s.validCell, set.resizeWidth, set.resizeHeight, resizedValid);
     valid = &resizedValid;
     content += ", resampled (bilinear over valid cells) to " + std::to_string(grid.width()) + " x " + std::to_string(grid.height()) + " over the same extent";
   }
-  writeFloatRaster(baseOf(d), d.day, layer.name, grid, valid, layer.name, content, layer.unit);
-  writeEncodings(d, layer, grid, valid, content);
+  writeFloatRaster(set, baseOf(d), d.day, layer.name, grid, valid, layer.name, content, layer.unit);
+  writeEncodings(d, set, layer, grid, valid, content);
   if (scene_.outputs.multichannelExr && !ownSize) {
     channelNames.push_back(layer.name);
     channels.push_back(std::move(grid));
@@ -166,18 +171,24 @@ void OutputWriter::writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<fl
 
 void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   const SnowState& s = d.s;
-  if (std::string(layer.name) == "splat_map") return writeSplatMap(d, layer);
-  if (std::string(layer.name) == "snow_normal") return writeNormalMap(d, layer);
+  // The engine maps at each set's size; the previews at the grid's, cut as each set's tiles.
+  const std::string name = layer.name;
+  if (name == "splat_map" || name == "snow_normal") {
+    for (const RasterSet& set : sets_) name == "splat_map" ? writeSplatMap(d, set, layer) : writeNormalMap(d, set, layer);
+    return;
+  }
+  auto write = [&](const std::vector<uint8_t>& rgb) {
+    for (const RasterSet& set : sets_)
+      writeRgbRaster(set, baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, rgb, layer.content, layer.unit);
+  };
   if (src_.plan) {  // an sRGB preview of the grid's size; the snow preview also goes on the contact sheet
-    writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, {}, layer.content, layer.unit);
+    write({});
     if (std::string(layer.name) != "avalanche_preview") previews_.emplace_back();
     return;
   }
   if (std::string(layer.name) == "avalanche_preview") {
     const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
-    writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height,
-                   avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM),
-                   layer.content, layer.unit);
+    write(avalanchePreviewRgb(surface, s.validCell, s.avalancheScourM, s.avalancheDepositM, s.spec.cellSizeXM, s.spec.cellSizeYM));
     return;
   }
   // The sun at solar noon of the output's day at the site, or low in the south in a polar night.
@@ -186,7 +197,7 @@ void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
   if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
   const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
-  writeRgbRaster(baseOf(d), d.day, layer.name, s.spec.width, s.spec.height, rgb, layer.content, layer.unit);
+  write(rgb);
   // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
   const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
   const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
@@ -206,26 +217,41 @@ void OutputWriter::writeDisplacement(const Day& d) {
   for (const std::string what : {"depth", "surface"}) {
     const LayerInfo& layer = *findLayer(what);
     const Grid<float> g = src_.plan ? Grid<float>(out.displacementWidth, out.displacementHeight) : resampleBilinear(layer.compute(LayerInputs{&d.s}), out.displacementWidth, out.displacementHeight);
-    writeFloatRaster(baseOf(d), d.day, "displacement_" + std::string(what), g, nullptr, what,
-                     std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                         " over the same extent",
-                     "m");
+    for (const RasterSet& set : sets_)  // their own size in every set, cut as its tiles
+      writeFloatRaster(set, baseOf(d), d.day, "displacement_" + std::string(what), g, nullptr, what,
+                       std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                           " over the same extent",
+                       "m");
   }
 }
 
-void OutputWriter::writeMultiChannel(const Day& d, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels) {
+void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names,
+                                     const std::vector<Grid<float>>& channels) {
   if (channels.empty()) return;
-  const std::string path = d.base("layers", src_.outDir) + ".exr";
   std::string list;
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
   const std::string content = "all layers as named channels: " + list;
   const std::string format = "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression_ + "), linear";
-  if (src_.plan)
-    return planFile(path, format, content, 4.0 * channels[0].width() * channels[0].height() * static_cast<double>(channels.size()));
-  std::vector<const Grid<float>*> grids;
-  for (const auto& g : channels) grids.push_back(&g);
-  writeMultiChannelExr(path, names, grids, scene_.outputs.compressionLevel);
-  listFile(path, content, "per channel, as the single-layer files", format, d.day, 0.f, 0.f);
+  // Tiled like the single-layer files: every channel cut at the same pixels.
+  const int width = channels[0].width(), height = channels[0].height();
+  const TileLayout l = tileLayout(set.tiles, width, height);
+  const BaseOf base = baseOf(d);
+  for (int r = 0; r < l.rows; ++r)
+    for (int c = 0; c < l.columns; ++c) {
+      const std::string path = base("layers" + tileSuffix(l, c, r)) + ".exr";
+      if (src_.plan) {
+        planFile(path, format, content, 4.0 * l.tileWidth * l.tileHeight * static_cast<double>(channels.size()));
+        continue;
+      }
+      std::vector<Grid<float>> cut;
+      if (l.tiled())
+        for (const auto& g : channels) cut.push_back(cutTile(g, l, c, r));
+      std::vector<const Grid<float>*> grids;
+      for (const auto& g : l.tiled() ? cut : channels) grids.push_back(&g);
+      writeMultiChannelExr(path, names, grids, scene_.outputs.compressionLevel);
+      listFile(path, content, "per channel, as the single-layer files", format, d.day, 0.f, 0.f);
+      if (l.tiled()) noteTile(l, c, r, width, height);
+    }
 }
 
 void OutputWriter::writeVdb(const Day& d) {
@@ -249,11 +275,19 @@ void OutputWriter::writeContactSheet() {
   const int columns = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(previews_.size()))));
   const std::vector<uint8_t> sheet = contactSheetRgb(previews_, previewWidth_, previewHeight_, columns, sw, sh);
   const std::string path = (fs::path(src_.outDir) / "contact_sheet.png").string();
-  if (src_.plan) return planFile(path, kRgbPngFormat, "contact sheet of the season: the previews of the frame days, then the season's end", 0.0);
+  // Never tiled: a mosaic of subsampled previews for people to look at, not a map of the terrain
+  // (its pixels lie on no one grid, so a tile would have no place or georeference).
+  const bool tiled = scene_.outputs.tiles.convention != TileConvention::None;
+  const std::string whole = tiled ? " (whole under [outputs.tiles]: a picture to look at, not a map)" : "";
+  if (src_.plan) {
+    planFile(path, kRgbPngFormat, "contact sheet of the season: the previews of the frame days, then the season's end" + whole, 0.0);
+    if (tiled) currentSink().planned.back().note = "not tiled: a picture of the previews, not a map";
+    return;
+  }
   writeRgbPng(path, sw, sh, sheet, scene_.outputs.compressionLevel);
   listFile(path,
            "contact sheet of the season: the previews of the frame days in order, then the season's end, " + std::to_string(columns) +
-               " to a row",
+               " to a row" + whole,
            "sRGB", kRgbPngFormat, -1.0, 0.f, 255.f);
 }
 

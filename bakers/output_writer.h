@@ -97,30 +97,32 @@ class OutputWriter {
   // outDir/frames/stem on a frame day.
   using BaseOf = std::function<std::string(const std::string& stem)>;
   BaseOf baseOf(const Day& d) const;
-  // One raster output, whole or as tiles ([outputs.tiles]); each file listed (output_rasters.cpp).
-  void writeFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid, const Grid<uint8_t>* valid,
-                        const std::string& layerName, const std::string& content, const std::string& unit);
-  void writeEncodedRaster(const BaseOf& base, double day, const std::string& stem, const std::string& encoding, const Grid<float>& grid,
-                          const Grid<uint8_t>* valid, const ValueMapping& mapping, const std::string& content, const std::string& unit,
-                          bool write);
-  void writeRgbRaster(const BaseOf& base, double day, const std::string& stem, int width, int height, const std::vector<uint8_t>& pixels,
-                      const std::string& content, const std::string& unit, int channels = 3, const std::string& format = {});
-  void writeRawFloatRaster(const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid, const std::string& content,
-                           const std::string& unit);
+  // One raster output of raster set `set`, whole or as tiles; each file listed (output_rasters.cpp).
+  void writeFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+                        const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content, const std::string& unit);
+  void writeEncodedRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const std::string& encoding,
+                          const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& mapping, const std::string& content,
+                          const std::string& unit, bool write);
+  void writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height,
+                      const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels = 3,
+                      const std::string& format = {});
+  void writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
+                           const std::string& content, const std::string& unit);
   // The splat map and the snow surface's normal map (output_engine_maps.cpp).
-  void writeSplatMap(const Day& d, const LayerInfo& layer);
-  void writeNormalMap(const Day& d, const LayerInfo& layer);
+  void writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
+  void writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
   // The tile fields of the file just listed.
   void noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const;
-  void writeEncodings(const Day& d, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content);
+  void writeEncodings(const Day& d, const RasterSet& set, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content);
   void writeLayers(const Day& d);
   // Plan mode: a grid of the size `layer` is written at (values unset).
   Grid<float> planGrid(const Day& d, const LayerInfo& layer) const;
-  void writeFloatLayer(const Day& d, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
+  void writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
                        std::vector<Grid<float>>& channels);
   void writePreview(const Day& d, const LayerInfo& layer);
   void writeDisplacement(const Day& d);
-  void writeMultiChannel(const Day& d, const std::vector<std::string>& names, const std::vector<Grid<float>>& channels);
+  void writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names,
+                         const std::vector<Grid<float>>& channels);
   void writeVdb(const Day& d);
   void writeMeshes(const Day& d);
   void planMeshes(const Day& d);
@@ -134,6 +136,7 @@ class OutputWriter {
   std::string exrCompression_;    // the EXR compression name of the scene's level
   std::string floatImageFormat_;  // the manifest's format line of every float image
   std::string occluderNotes_;
+  std::vector<RasterSet> sets_;  // rasterSets(outputs): every raster output is written in each
   // Encodings with "season" ranges, written after the last day (writeSeasonEncodings).
   struct SeasonEncoding {
     bool frame;
@@ -141,6 +144,7 @@ class OutputWriter {
     double day;
     Grid<float> grid;
     Grid<uint8_t> valid;
+    RasterSet set;
   };
   std::mutex seasonMutex_;
   std::vector<SeasonEncoding> seasonEncodings_;

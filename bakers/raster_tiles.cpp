@@ -21,6 +21,12 @@ TileLayout tileLayout(const OutputTiles& t, int width, int height) {
   return l;
 }
 
+std::vector<RasterSet> rasterSets(const OutputRequest& out) {
+  if (out.tiles.convention == TileConvention::None || out.tiles.resizeWidth <= 0)
+    return {RasterSet{out.tiles, out.resizeWidth, out.resizeHeight}};
+  return {RasterSet{OutputTiles{}, out.resizeWidth, out.resizeHeight}, RasterSet{out.tiles, out.tiles.resizeWidth, out.tiles.resizeHeight}};
+}
+
 std::string tileSuffix(const TileLayout& l, int column, int row) {
   if (!l.tiled()) return "";
   if (l.convention == TileConvention::Unity) return "_" + std::to_string(column) + "_" + std::to_string(l.rows - 1 - row);

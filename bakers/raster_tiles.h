@@ -22,6 +22,16 @@ struct TileLayout {
 };
 
 TileLayout tileLayout(const OutputTiles& tiles, int width, int height);
+
+// One set of raster files: how they are cut, and the size the grid's layers are written at.
+struct RasterSet {
+  OutputTiles tiles;                      // convention None: whole files
+  int resizeWidth = 0, resizeHeight = 0;  // 0: the grid's size
+  bool resized() const { return resizeWidth > 0; }
+};
+// The bake's sets: one, whole or tiled, at outputs.resize; with [outputs.tiles] resize two: the
+// whole files at outputs.resize and the tiles at the tile set's own size.
+std::vector<RasterSet> rasterSets(const OutputRequest& out);
 // The suffix of tile (column, row), column 0 west, row 0 north: "_x<c>_y<r>" (Unreal, grid),
 // "_<c>_<z>" with z counted from the south (Unity's terrain grid); "" untiled.
 std::string tileSuffix(const TileLayout& layout, int column, int row);

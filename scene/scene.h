@@ -32,6 +32,8 @@ struct OutputTiles {
   TileConvention convention = TileConvention::None;
   int sizePx = 0;     // pixels a side (Unreal's list, 2^n + 1 for Unity, any for grid)
   int overlapPx = 1;  // rows and columns neighbours share (Unreal and Unity: 1)
+  // resize: the tiles are cut from the layers at this size, written beside the whole files (0: none)
+  int resizeWidth = 0, resizeHeight = 0;
 };
 
 struct OutputRequest {

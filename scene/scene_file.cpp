@@ -396,6 +396,18 @@ void validateTiles(const Scene& scene, const toml::table& root, const std::strin
       fail(source, *t->get("overlap_px"), "outputs.tiles.overlap_px", std::string(enumName(tiles.convention)) + " tiles always share one row and column");
     if (tiles.overlapPx >= tiles.sizePx) fail(source, *t->get("overlap_px"), "outputs.tiles.overlap_px", "must be less than size_px");
   }
+  // Unreal's and Unity's tiled imports take whole tiles: n tiles sharing their edges cover n (size - 1) + 1 pixels.
+  if (tiles.resizeWidth > 0 && !allowed.empty()) {
+    const int step = tiles.sizePx - 1;
+    for (int side : {tiles.resizeWidth, tiles.resizeHeight})
+      if (side < tiles.sizePx || (side - 1) % step != 0) {
+        std::string sizes;
+        for (int n = 1; n <= 4; ++n) sizes += std::to_string(n * step + 1) + ", ";
+        fail(source, *t->get("resize"), "outputs.tiles.resize",
+             std::to_string(side) + " pixels is not a whole number of " + enumName(tiles.convention) + " tiles of " + std::to_string(tiles.sizePx) +
+                 " (allowed: " + sizes + "... n x " + std::to_string(step) + " + 1)");
+      }
+  }
 }
 
 // A frame's files are tagged with its day rounded to a whole day (frames/STEM.DDDD): two frame

@@ -176,6 +176,19 @@ Bind<Scene> resize() {
       },
       [](const Scene& s) { return s.outputs.resizeWidth > 0 ? show(std::vector<int>{s.outputs.resizeWidth, s.outputs.resizeHeight}) : "none"; });
 }
+Bind<Scene> tilesResize() {
+  return custom<Scene>(
+      [](Scene& s, const toml::node& n, const BindContext& c) {
+        std::vector<double> a;
+        read(n, a);
+        if (a.size() != 2 || !whole(a)) fail(c.source, n, c.path, "needs whole numbers [width, height], each at least 1");
+        s.outputs.tiles.resizeWidth = static_cast<int>(a[0]), s.outputs.tiles.resizeHeight = static_cast<int>(a[1]);
+      },
+      [](const Scene& s) {
+        const OutputTiles& t = s.outputs.tiles;
+        return t.resizeWidth > 0 ? show(std::vector<int>{t.resizeWidth, t.resizeHeight}) : "none";
+      });
+}
 Bind<Scene> bedformMask() {
   return custom<Scene>([](Scene& s, const toml::node& n, const BindContext& c) { s.bedforms.mask = rasterRef(n, c.source, s, c.path); },
                        [](const Scene& s) { return s.bedforms.mask ? s.bedforms.mask->label() : "none"; });
@@ -532,15 +545,18 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
       r.push_back({std::string("outputs.ranges.") + l.name, Kind::Any, -kInf, kInf, {}, l.unit, std::string("the ") + l.name + " layer's range", layerRange(l.name),
            std::string(l.unit) == "1" ? "[0, 1]" : "\"season\""});
   r.push_back({"outputs.tiles", Kind::Table, -kInf, kInf, {}, "",
-       "cut every raster output (layers, encodings, previews, displacement maps) into equal tiles for an engine's importer (docs/outputs.md)"});
+       "cut every raster output (layers, encodings, layers.exr, previews, engine and displacement maps, avalanche maps) into equal tiles for an engine's importer; the contact sheet stays whole, a picture rather than a map (docs/outputs.md)"});
   r.push_back({"outputs.tiles.convention", Kind::String, -kInf, kInf, {"unreal", "unity", "grid"}, "",
        "unreal: <name>_x<column>_y<row> from the north-west, sizes 127, 253, 505, 1009, 2017, 4033, 8129, one shared edge row and column; "
        "unity: <name>_<column>_<row> from the south-west (Unity's terrain grid), 2^n + 1 from 33 to 4097, one shared edge; grid: <name>_x<column>_y<row>, any size and overlap",
        at<S>(&S::outputs, &OR::tiles, &OutputTiles::convention), "required with [outputs.tiles]"});
   r.push_back({"outputs.tiles.size_px", Kind::Integer, 2, 65536, {}, "pixels", "each tile's width and height", at<S>(&S::outputs, &OR::tiles, &OutputTiles::sizePx), "required with [outputs.tiles]"});
   r.push_back({"outputs.tiles.overlap_px", Kind::Integer, 0, 65535, {}, "pixels", "grid: rows and columns neighbouring tiles share (unreal and unity share 1)", at<S>(&S::outputs, &OR::tiles, &OutputTiles::overlapPx)});
+  r.push_back({"outputs.tiles.resize", Kind::NumberArray, 1, 65536, {}, "pixels",
+       "the tile set's own size: the tiles are cut from the layers resampled to [width, height] over the same extent (as outputs.resize), and the untiled files are written too, at the grid's size (or outputs.resize); "
+       "unreal and unity: each side a whole number of tiles, n (size_px - 1) + 1", tilesResize(), "none: the tiles are cut from the outputs at their size and replace the untiled files"});
   r.push_back({"outputs.resize", Kind::NumberArray, 1, 65536, {}, "pixels",
-       "write the grid's layers, their encodings and the multi-channel EXR at [width, height] over the same extent (bilinear over valid cells; the simulation grid is untouched; previews stay at the grid's size)", resize()});
+       "write the grid's layers, their encodings, the multi-channel EXR, the splat and normal maps and the avalanche maps at [width, height] over the same extent (bilinear, the layers over valid cells; the simulation grid is untouched; previews stay at the grid's size)", resize()});
   r.push_back({"outputs.normal_map_convention", Kind::String, -kInf, kInf, {"opengl", "directx"}, "",
        "the snow_normal layer's green channel: opengl (+v, north: Blender, Unity) or directx (flipped: Unreal)", at<S>(&S::outputs, &OR::normalMapConvention)});
   r.push_back({"run", Kind::Table, -kInf, kInf, {}, "", "how the bake runs"});

@@ -1,6 +1,7 @@
-// snowbake plan: on scenes of every mode (season, occlusion, mesh), with frames, tiles, encodings,
-// GeoTIFF, resize and meshes, the files the plan lists are exactly the files the bake then
-// writes, the sizes it calls exact are, and the plan itself writes nothing.
+// snowbake plan: on scenes of every mode (season, occlusion, mesh), with frames, tiles (layers.exr
+// and the contact sheet among them), encodings, GeoTIFF, resize (also a tile set's own) and meshes,
+// the files the plan lists are exactly the files the bake then writes, the sizes it calls exact
+// are, and the plan itself writes nothing.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -52,10 +53,10 @@ std::vector<PlanCase> planCases(const fs::path& dir) {
                                       "[outputs.ranges]\ndepth = \"season\"\n"},
       {"tiles", kBuiltin + kSeason +
                     "[outputs]\nlayers = [\"depth\", \"preview\", \"splat_map\", \"snow_normal\"]\nencodings = [\"png8\", \"r16\", \"r32\"]\n"
-                    "meshes = [\"glb\", \"obj\"]\nmesh_tile_size_m = 400.0\n[outputs.tiles]\nconvention = \"grid\"\nsize_px = 24\n"},
+                    "meshes = [\"glb\", \"obj\"]\nmesh_tile_size_m = 400.0\nmultichannel_exr = true\nframes_days = [2]\n[outputs.tiles]\nconvention = \"grid\"\nsize_px = 24\n"},
       {"tiff_resize", kBuiltin + kSeason +
                           "[outputs]\nlayers = [\"depth\", \"weight_snow\", \"splat_map\"]\nformat = \"tiff\"\nencodings = [\"png16\"]\n"
-                          "resize = [40, 30]\nmeshes = [\"ply\"]\nframes_days = [3]\n[outputs.tiles]\nconvention = \"unity\"\nsize_px = 33\n"},
+                          "resize = [40, 30]\nmeshes = [\"ply\"]\nframes_days = [3]\n[outputs.tiles]\nconvention = \"unity\"\nsize_px = 33\nresize = [65, 65]\n"},
       {"occlusion", "mode = \"occlusion\"\n" + kBuiltin + "[outputs]\nlayers = [\"depth\", \"preview\"]\nencodings = [\"png8\"]\nvdb = true\n"},
       {"mesh", "mode = \"mesh\"\n[terrain]\nfile = \"" + (dir / "block.obj").string() +
                    "\"\n[mesh_snow]\ndepth_m = 0.3\nsite_spacing_m = 0.05\n[outputs]\nmeshes = [\"glb\", \"ply\"]\nvdb = true\n"},

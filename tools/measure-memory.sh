@@ -84,6 +84,10 @@ else
 fi
 [ $small = 1 ] && exit 0
 
+bake "builtin 512², the untiled files and a tile set of Unreal 505 at 1009², multi-channel EXR" preset:default --set terrain.size=512 \
+  "${season[@]}" --set 'outputs.tiles.convention="unreal"' --set outputs.tiles.size_px=505 --set 'outputs.tiles.resize=[1009,1009]' \
+  --set outputs.multichannel_exr=true
+
 bake "builtin 1024², production sun" preset:default --set terrain.size=1024 "${season[@]}" --set precompute.sun_quality=production
 bake "builtin 2048², 20 days, a frame" preset:default --set terrain.size=2048 "${season[@]}"
 bake "occlusion mode, builtin 2048²" preset:default --set terrain.size=2048 --set mode=occlusion --set 'outputs.frames_days=[]'
