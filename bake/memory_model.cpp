@@ -43,9 +43,10 @@ constexpr int kVdbGrids = 4;  // level set + density + about two layers' leaves 
 constexpr double kSiteBytes = 160.0;
 constexpr double kMeshTriangleBytes = 200.0;
 constexpr double kRecordBytes = 4096.0;
-// Measured: bytes a cell the grid's snow-surface mesh holds while it is built and written
-// (the adaptive triangulation, the mesh's arrays and the file's buffer; tools/measure-memory.sh).
-constexpr double kSurfaceMeshBytesPerCell = 100.0;
+// Measured: bytes a cell the grid's snow-surface mesh holds at its peak, while the mesh is built
+// beside the triangulation (heaptrack at 2048², 7.2 M triangles for 4.2 M cells: the triangulation
+// 174 MB, the mesh being built 290 MB; issue 29, docs/memory.md).
+constexpr double kSurfaceMeshBytesPerCell = 110.0;
 
 // Bytes a cell of the state's fields with the roles `pick` accepts, optional fields only when
 // `present` says the scene makes them.

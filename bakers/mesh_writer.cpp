@@ -305,7 +305,10 @@ void writeMesh(const std::string& path, const std::string& format, const MeshDat
   if (format != "ply" && format != "obj" && format != "glb" && format != "fbx")
     throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
-  const std::vector<std::array<float, 3>> normals = m.normals.size() == m.positions.size() ? m.normals : areaWeightedNormals(m.positions, m.triangles);
+  // The mesh's own normals are read in place, not copied (a copy is the mesh's size again).
+  std::vector<std::array<float, 3>> computed;
+  if (m.normals.size() != m.positions.size()) computed = areaWeightedNormals(m.positions, m.triangles);
+  const std::vector<std::array<float, 3>>& normals = m.normals.size() == m.positions.size() ? m.normals : computed;
   if (format == "glb") return writeChunked(path, [&](ChunkStream& out) { writeGlb(out, m, normals); });
   if (format == "obj") return writeChunked(path, [&](ChunkStream& out) { writeObj(out, m, normals); });
   if (format == "fbx") return writeChunked(path, [&](ChunkStream& out) { writeFbx(out, m, normals); });
@@ -322,11 +325,20 @@ struct GridVertices {
 
 using GridTriangle = std::array<std::array<int, 2>, 3>;
 
-GridVertices usedPoints(int width, int height, const std::vector<const GridTriangle*>& triangles) {
+// `triangles`' elements through `get` (a triangle or a pointer to one): no list of pointers to
+// every triangle is made; the points are counted before they are listed (no growth slack).
+template <class Triangles, class Get>
+GridVertices usedPoints(int width, int height, const Triangles& triangles, Get get) {
   GridVertices g;
   g.index.assign(static_cast<size_t>(width) * height, UINT32_MAX);
-  for (const GridTriangle* tri : triangles)
-    for (const auto& p : *tri) g.index[static_cast<size_t>(p[1]) * width + p[0]] = 0;
+  size_t used = 0;
+  for (const auto& t : triangles)
+    for (const auto& p : get(t)) {
+      uint32_t& i = g.index[static_cast<size_t>(p[1]) * width + p[0]];
+      used += i == UINT32_MAX;
+      i = 0;
+    }
+  g.points.reserve(used);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       uint32_t& i = g.index[static_cast<size_t>(y) * width + x];
@@ -347,19 +359,23 @@ std::array<float, 2> uvAt(const GridSpec& spec, int x, int y) {
 }  // namespace
 
 MeshData surfaceMesh(const RtinMesh& t, const Grid<float>& altitude, const GridSpec& spec) {
-  std::vector<const GridTriangle*> all;
-  all.reserve(t.triangles.size());
-  for (const auto& tri : t.triangles) all.push_back(&tri);
-  const GridVertices g = usedPoints(t.width, t.height, all);
   MeshData m;
-  for (const auto& p : g.points) {
-    m.positions.push_back(pointAt(spec, p[0], p[1], altitude(p[0], p[1])));
-    m.uvs.push_back(uvAt(spec, p[0], p[1]));
-  }
-  for (const auto& tri : t.triangles) {
-    std::array<uint32_t, 3> v;
-    for (int k = 0; k < 3; ++k) v[k] = g.index[static_cast<size_t>(tri[k][1]) * t.width + tri[k][0]];
-    m.triangles.push_back(v);
+  {
+    // The arrays sized once (the triangulation says how many), the points freed before the normals.
+    GridVertices g = usedPoints(t.width, t.height, t.triangles, [](const GridTriangle& tri) -> const GridTriangle& { return tri; });
+    m.positions.reserve(g.points.size());
+    m.uvs.reserve(g.points.size());
+    for (const auto& p : g.points) {
+      m.positions.push_back(pointAt(spec, p[0], p[1], altitude(p[0], p[1])));
+      m.uvs.push_back(uvAt(spec, p[0], p[1]));
+    }
+    g.points = {};
+    m.triangles.reserve(t.triangles.size());
+    for (const auto& tri : t.triangles) {
+      std::array<uint32_t, 3> v;
+      for (int k = 0; k < 3; ++k) v[k] = g.index[static_cast<size_t>(tri[k][1]) * t.width + tri[k][0]];
+      m.triangles.push_back(v);
+    }
   }
   m.normals = areaWeightedNormals(m.positions, m.triangles);
   return m;
@@ -385,7 +401,7 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
   MeshData m;
   if (kept.empty()) return m;
   // Top vertex per grid point used (row order), and a bottom one where the snow is deeper than 0.
-  const GridVertices g = usedPoints(w, h, kept);
+  const GridVertices g = usedPoints(w, h, kept, [](const GridTriangle* tri) -> const GridTriangle& { return *tri; });
   std::vector<uint32_t> top(g.points.size()), bottom(g.points.size());
   for (size_t k = 0; k < g.points.size(); ++k) {
     const int x = g.points[k][0], y = g.points[k][1];

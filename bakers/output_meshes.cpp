@@ -140,18 +140,20 @@ void OutputWriter::writeOccluderSnow(const Day& d) {
 }
 
 // One adaptive triangulation for every part asked (rtin.h), within the vertical error bound of
-// the surface (and of the bedrock, the body's bottom); each part written on its own task into its
-// own sink, merged in the parts' order.
+// the surface (and of the bedrock, the body's bottom); each part's mesh built on its own task,
+// then the triangulation and the surface grid freed, then each part written on its own task into
+// its own sink, merged in the parts' order (the triangulation is the mesh's size again: not held
+// while the files are written).
 void OutputWriter::writeGridMeshParts(const Day& d) {
   const SnowState& s = d.s;
   const auto& out = scene_.outputs;
   const auto& parts = out.meshParts;
   const bool body = std::find(parts.begin(), parts.end(), "body") != parts.end();
-  const Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
+  Grid<float> surface = findLayer("surface")->compute(LayerInputs{&s});
   std::vector<const Grid<float>*> fields{&surface};
   if (body) fields.push_back(&s.bedrockM);
   const auto tTri = WallClock::now();
-  const RtinMesh triangulation = buildRtin(fields, s.validCell, out.meshMaxErrorM);
+  RtinMesh triangulation = buildRtin(fields, s.validCell, out.meshMaxErrorM);
   currentSink().addSeconds("mesh triangulation (adaptive)", elapsedSeconds(tTri));
   const std::string frameNote = " (adaptive triangulation, vertical error at most " + fixed(out.meshMaxErrorM, 3) +
                                 " m at every grid point; x east, y north from the south-west corner; UVs line up with the maps)";
@@ -165,10 +167,7 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
                "m", meshFormatDescription(format), d.day, 0.f, 0.f);
     }
   };
-  auto writeSurface = [&] {
-    auto tm = WallClock::now();
-    const MeshData mesh = surfaceMesh(triangulation, surface, s.spec);
-    currentSink().addSeconds("mesh building", elapsedSeconds(tm));
+  auto writeSurface = [&](const MeshData& mesh) {
     const int tileCells = out.meshTileSizeM > 0.0 ? std::max(1, static_cast<int>(std::lround(out.meshTileSizeM / s.spec.cellSizeXM))) : 0;
     if (tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height)) return writeAll("snow_surface", mesh, "snow surface B+C+S+U+P");
     for (const MeshTile& t : cutIntoTiles(mesh, s.spec, tileCells))
@@ -176,10 +175,7 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
                "snow surface B+C+S+U+P, tile column " + std::to_string(t.column) + " (from the west), row " + std::to_string(t.row) +
                    " (from the north) of " + std::to_string(tileCells) + " x " + std::to_string(tileCells) + " cells");
   };
-  auto writeBody = [&] {
-    auto tm = WallClock::now();
-    const MeshData mesh = snowBodyMesh(triangulation, s.bedrockM, findLayer("depth")->compute(LayerInputs{&s}), s.validCell, s.spec);
-    currentSink().addSeconds("mesh building", elapsedSeconds(tm));
+  auto writeBody = [&](const MeshData& mesh) {
     if (mesh.triangles.empty()) {
       log_ << "  snow_body" << d.dayTag << ": no snow, no mesh written\n";
       return;
@@ -187,11 +183,24 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
     writeAll("snow_body", mesh, "the snow body alone, closed (top on the snow surface, bottom on the bedrock, walls at the grid's edge)");
   };
   std::vector<OutputSink> partSinks(parts.size());
+  std::vector<MeshData> meshes(parts.size());
   tbb::task_group partGroup;
   for (size_t k = 0; k < parts.size(); ++k)
     partGroup.run([&, k] {
       SinkScope scope(partSinks[k]);
-      if (parts[k] == "surface") writeSurface(); else writeBody();
+      auto tm = WallClock::now();
+      meshes[k] = parts[k] == "surface" ? surfaceMesh(triangulation, surface, s.spec)
+                                        : snowBodyMesh(triangulation, s.bedrockM, findLayer("depth")->compute(LayerInputs{&s}), s.validCell, s.spec);
+      currentSink().addSeconds("mesh building", elapsedSeconds(tm));
+    });
+  partGroup.wait();
+  triangulation = RtinMesh();
+  surface = Grid<float>();
+  for (size_t k = 0; k < parts.size(); ++k)
+    partGroup.run([&, k] {
+      SinkScope scope(partSinks[k]);
+      if (parts[k] == "surface") writeSurface(meshes[k]); else writeBody(meshes[k]);
+      meshes[k] = MeshData();  // freed once written
     });
   partGroup.wait();
   for (const OutputSink& partSink : partSinks) currentSink().merge(partSink);

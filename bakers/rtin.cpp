@@ -86,24 +86,34 @@ RtinMesh buildRtin(const std::vector<const Grid<float>*>& fields, const Grid<uin
 
   RtinMesh mesh;
   mesh.width = w, mesh.height = h, mesh.maxErrorM = maxErrorM;
-  // Emit: split while the hypotenuse midpoint's error is over the bound (explicit stack).
+  // Emit: split while the hypotenuse midpoint's error is over the bound (explicit stack). Twice:
+  // first counting the triangles, so the list is made at its size (grown by doubling it held up
+  // to twice its bytes, and three times while it moved).
   struct Tri { int ax, ay, bx, by, cx, cy; };
-  std::vector<Tri> stack{{tile, tile, 0, 0, 0, tile}, {0, 0, tile, tile, tile, 0}};
-  while (!stack.empty()) {
-    const Tri t = stack.back();
-    stack.pop_back();
-    const int mx = (t.ax + t.bx) >> 1, my = (t.ay + t.by) >> 1;
-    if (std::abs(t.ax - t.cx) + std::abs(t.ay - t.cy) > 1 && errors[static_cast<size_t>(my) * size + mx] > maxErrorM) {
-      stack.push_back({t.bx, t.by, t.cx, t.cy, mx, my});
-      stack.push_back({t.cx, t.cy, t.ax, t.ay, mx, my});
-      continue;
+  auto emit = [&](auto&& keep) {
+    std::vector<Tri> stack{{tile, tile, 0, 0, 0, tile}, {0, 0, tile, tile, tile, 0}};
+    while (!stack.empty()) {
+      const Tri t = stack.back();
+      stack.pop_back();
+      const int mx = (t.ax + t.bx) >> 1, my = (t.ay + t.by) >> 1;
+      if (std::abs(t.ax - t.cx) + std::abs(t.ay - t.cy) > 1 && errors[static_cast<size_t>(my) * size + mx] > maxErrorM) {
+        stack.push_back({t.bx, t.by, t.cx, t.cy, mx, my});
+        stack.push_back({t.cx, t.cy, t.ax, t.ay, mx, my});
+        continue;
+      }
+      if (inside(t.ax, t.ay) && inside(t.bx, t.by) && inside(t.cx, t.cy)) keep(t);
     }
-    if (!inside(t.ax, t.ay) || !inside(t.bx, t.by) || !inside(t.cx, t.cy)) continue;
+  };
+  size_t count = 0;
+  emit([&](const Tri&) { ++count; });
+  mesh.triangles.reserve(count);
+  emit([&](const Tri& t) {
     // Counter-clockwise seen from above: rows run south, so flip when (x, y) order is clockwise.
     const long cross = static_cast<long>(t.bx - t.ax) * (t.cy - t.ay) - static_cast<long>(t.cx - t.ax) * (t.by - t.ay);
     if (cross < 0) mesh.triangles.push_back({{{t.ax, t.ay}, {t.bx, t.by}, {t.cx, t.cy}}});
     else mesh.triangles.push_back({{{t.ax, t.ay}, {t.cx, t.cy}, {t.bx, t.by}}});
-  }
+  });
+  errors = std::vector<float>();  // before the sort
   // A fixed order whatever the traversal: by the first vertex, then the rest.
   std::sort(mesh.triangles.begin(), mesh.triangles.end());
   return mesh;

@@ -38,6 +38,15 @@ class SnowBackend {
   virtual void upload(const SnowState& state) = 0;
   // Copies the evolving fields (snow layers and the moving flag) out.
   virtual void download(SnowState& state) = 0;
+  // The season's first upload and last download, handing the fields it downloads over instead
+  // of copying them (the season's start and end held the state twice): uploadTaking leaves the
+  // host's grids of those fields empty; downloadGiving fills them and leaves the backend without
+  // them, so it must be uploaded again before its next step.
+  virtual void uploadTaking(SnowState& state) {
+    upload(state);
+    state.releaseFields(downloadedWithState);
+  }
+  virtual void downloadGiving(SnowState& state) { download(state); }
   // Replaces the static fields (exposure, temperature base, wind) only.
   virtual void uploadStaticFields(const SnowState& state) = 0;
 

@@ -24,17 +24,8 @@ class ExecBackend final : public SnowBackend {
 
   // The state's fields by their roles (snow_fields.h); the scratch fields made with the state
   // zeroed; the avalanche's and the bedforms' fields made again at their first step.
-  void upload(const SnowState& s) override {
-    spec_ = s.spec;
-#define SNOW_UPLOAD_WITH_STATE(member, view, Element, role, access, fill) \
-  if constexpr (uploadedWithState(FieldRole::role)) exec_.upload(member##_, s.member.values());
-    SNOW_STATE_FIELDS(SNOW_UPLOAD_WITH_STATE)
-#undef SNOW_UPLOAD_WITH_STATE
-    avalancheFieldsReady_ = false;
-    bed_.ready = false;
-    makeScratch(true);
-    uploadStaticFields(s);
-  }
+  void upload(const SnowState& s) override { uploadState(s, nullptr); }
+  void uploadTaking(SnowState& s) override { uploadState(s, &s); }
 
   // Static fields, and the art-direction ones the scene paints (empty buffers otherwise: null in
   // the kernels).
@@ -54,6 +45,21 @@ class ExecBackend final : public SnowBackend {
   if constexpr (downloadedWithState(FieldRole::role)) exec_.download(member##_, s.member.values());
     SNOW_STATE_FIELDS(SNOW_DOWNLOAD)
 #undef SNOW_DOWNLOAD
+    if (bed_.ready) {
+      s.bedformCohesion.resize(spec_.width, spec_.height, 0.f);
+      exec_.download(bed_.cohesion, s.bedformCohesion.values());
+    }
+  }
+
+  void downloadGiving(SnowState& s) override {
+#define SNOW_DOWNLOAD_GIVING(member, view, Element, role, access, fill)        \
+  if constexpr (downloadedWithState(FieldRole::role)) {                        \
+    std::vector<Element> values;                                               \
+    exec_.downloadGiving(member##_, values);                                   \
+    s.member.adopt(spec_.width, spec_.height, std::move(values));              \
+  }
+    SNOW_STATE_FIELDS(SNOW_DOWNLOAD_GIVING)
+#undef SNOW_DOWNLOAD_GIVING
     if (bed_.ready) {
       s.bedformCohesion.resize(spec_.width, spec_.height, 0.f);
       exec_.download(bed_.cohesion, s.bedformCohesion.values());
@@ -169,6 +175,27 @@ class ExecBackend final : public SnowBackend {
   Exec& exec() { return exec_; }
 
  private:
+  // The state's fields by their roles; with `taking` (the same state), the fields the season
+  // downloads are moved in (HostStorage) or their host grids freed once uploaded (a device).
+  void uploadState(const SnowState& s, SnowState* taking) {
+    spec_ = s.spec;
+#define SNOW_UPLOAD_WITH_STATE(member, view, Element, role, access, fill)      \
+  if constexpr (uploadedWithState(FieldRole::role)) {                          \
+    if (taking && downloadedWithState(FieldRole::role)) {                      \
+      exec_.uploadTaking(member##_, taking->member.values());                  \
+      taking->member = Grid<Element>();                                        \
+    } else {                                                                   \
+      exec_.upload(member##_, s.member.values());                              \
+    }                                                                          \
+  }
+    SNOW_STATE_FIELDS(SNOW_UPLOAD_WITH_STATE)
+#undef SNOW_UPLOAD_WITH_STATE
+    avalancheFieldsReady_ = false;
+    bed_.ready = false;
+    makeScratch(true);
+    uploadStaticFields(s);
+  }
+
   SnowFieldsView view() {
     SnowFieldsView v;
     v.width = spec_.width;

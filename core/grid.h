@@ -67,6 +67,14 @@ class Grid {
     values_.assign(static_cast<size_t>(width) * static_cast<size_t>(height), fill);
   }
   void fill(T v) { values_.assign(values_.size(), v); }
+  // Takes `values` (width x height of them, row order) as the grid's, without a copy.
+  void adopt(int width, int height, std::vector<T>&& values) {
+    if (width < 0 || height < 0 || values.size() != static_cast<size_t>(width) * static_cast<size_t>(height))
+      throw std::invalid_argument("Grid: adopted values do not match the size");
+    width_ = width;
+    height_ = height;
+    values_ = std::move(values);
+  }
 
   int width() const { return width_; }
   int height() const { return height_; }

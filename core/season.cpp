@@ -25,7 +25,7 @@ SeasonReport SeasonRun::run() {
   const auto t0 = WallClock::now();
   if (cfg_.updateStaticFields) cfg_.updateStaticFields(0, state_);
   leaveNoSnowCells();
-  backend_.upload(state_);
+  backend_.uploadTaking(state_);  // the host's copies of what the backend evolves handed over
   releaseHostCopies();
   report_.initial = backend_.totals();
   maxTemperatureBase_ = backend_.maxTemperatureBaseC();
@@ -277,12 +277,11 @@ void SeasonRun::runEvents() {
 
 // The final state (with the terrain's own valid cells and faded ski tracks) and the report.
 void SeasonRun::finish() {
-  state_.restoreFields(downloadedWithState);
-  backend_.download(state_);
+  report_.final = backend_.totals();  // before the download hands the backend's fields over
+  backend_.downloadGiving(state_);
   if (staticReleased_) cfg_.updateStaticFields(staticDay_, state_);  // the last day's, as they were
   if (noSnow_) state_.validCell = std::move(terrainValid_);
   if (cfg_.skiTracks) cfg_.skiTracks->fade(state_);
-  report_.final = backend_.totals();
   const auto stats = scheduler_.stats();
   for (size_t i = 0; i < stats.size(); ++i) {
     reports_[i].starts = stats[i].starts;

@@ -62,6 +62,17 @@ struct HostStorage {
   void upload(Buffer<T>& b, const std::vector<T>& host) { b.values() = host; }
   template <class T>
   void download(Buffer<T>& b, std::vector<T>& host) { host = b.values(); }
+  // Handed over, not copied: the source is left empty.
+  template <class T>
+  void uploadTaking(Buffer<T>& b, std::vector<T>& host) {
+    b.values() = std::move(host);
+    host = std::vector<T>();
+  }
+  template <class T>
+  void downloadGiving(Buffer<T>& b, std::vector<T>& host) {
+    host = std::move(b.values());
+    b.values() = std::vector<T>();
+  }
   template <class T>
   void downloadRange(Buffer<T>& b, size_t offset, size_t count, T* out) {
     std::copy(b.values().begin() + offset, b.values().begin() + offset + count, out);

@@ -112,6 +112,18 @@ class CudaExec {
     if (!host.empty()) check(cudaMemcpy(host.data(), b.data(), host.size() * sizeof(T), cudaMemcpyDeviceToHost), "download");
   }
 
+  // The season's first upload and last download: the source freed once copied.
+  template <class T>
+  void uploadTaking(Buffer<T>& b, std::vector<T>& host) {
+    upload(b, host);
+    host = std::vector<T>();
+  }
+  template <class T>
+  void downloadGiving(Buffer<T>& b, std::vector<T>& host) {
+    download(b, host);
+    b.resize(0);
+  }
+
   template <class T>
   void downloadRange(Buffer<T>& b, size_t offset, size_t count, T* out) {
     if (count > 0) check(cudaMemcpy(out, b.data() + offset, count * sizeof(T), cudaMemcpyDeviceToHost), "download range");
