@@ -206,6 +206,7 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
   }
   active_ = true;
   lastSpeed_ = 0.f;
+  peakEnergy_ = 0.0;
   wallSeconds_ = elapsedSeconds(t0);
 }
 
@@ -218,6 +219,10 @@ bool AvalancheRun::step() {
   const int substeps = static_cast<int>(std::clamp(std::ceil(stepS / maxSubstep), 1.0, 10000.0));
   AvalancheArgs a = args_;
   a.dtS = static_cast<float>(stepS / substeps);
+  // After the first step, the last step's row statistics give the spans the passes run over.
+  a.spanY0 = record_.steps > 0 ? args_.y0 : 0;
+  a.spanY1 = record_.steps > 0 ? args_.y1 : 0;
+  a.statsIn = record_.steps % 2;
   const std::vector<float> stats = backend_.avalancheSteps(a, substeps);
   // The grown box this step covered, then the rows' statistics.
   const size_t n = stats.size() - 4;
@@ -227,10 +232,12 @@ bool AvalancheRun::step() {
   unionBox_.x1 = std::max(unionBox_.x1, bx1), unionBox_.y1 = std::max(unionBox_.y1, by1);
   record_.boxCellsMax = std::max(record_.boxCellsMax, (bx1 - bx0) * (by1 - by0));
   float speed = 0.f;
+  double energy = 0.0;
   int x0 = terrain_.spec.width, y0 = terrain_.spec.height, x1 = 0, y1 = 0;
   for (int r = 0; r < by1 - by0; ++r) {
     const float* s = &stats[4 * static_cast<size_t>(r)];
     speed = std::max(speed, s[0]);
+    energy += s[1];
     if (s[3] >= 0.f) {
       x0 = std::min(x0, static_cast<int>(s[2])), x1 = std::max(x1, static_cast<int>(s[3]) + 1);
       y0 = std::min(y0, by0 + r), y1 = std::max(y1, by0 + r + 1);
@@ -241,6 +248,7 @@ bool AvalancheRun::step() {
   record_.substeps += substeps;
   record_.simulatedS += stepS;
   lastSpeed_ = speed;
+  peakEnergy_ = std::max(peakEnergy_, energy);
   record_.maxSpeedMps = std::max(record_.maxSpeedMps, speed);
   const double seconds = elapsedSeconds(t0);
   wallSeconds_ += seconds;
@@ -256,6 +264,11 @@ bool AvalancheRun::step() {
     // (Not before the snow has once moved faster than the stop speed, or 2 s have passed: with
     // short steps, snow that has only begun to accelerate is not yet at rest.)
     record_.why = "at rest (fastest pipe " + std::to_string(speed) + " m/s)";
+    atRest_ = true;
+  } else if (energy < p_.avalancheStopEnergyFraction * peakEnergy_) {
+    // com1DFA's stopping criterion (stopCrit 0.01 of the peak kinetic energy): what still moves
+    // is the creep of a thin tail, which would otherwise hold the run open for minutes.
+    record_.why = "at rest (kinetic energy " + std::to_string(energy / peakEnergy_) + " of its peak)";
     atRest_ = true;
   } else if (record_.simulatedS >= p_.avalancheMaxDurationS) {
     record_.why = "stopped at the duration cap (fastest pipe still " + std::to_string(speed) + " m/s)";

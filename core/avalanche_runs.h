@@ -19,7 +19,9 @@
 //
 // At rest: when no pipe carries more than avalanche_stop_speed_mps (flow / pipe cross-section)
 // once the snow has moved faster than that or 2 s have passed (short steps would otherwise stop
-// snow that has only begun to accelerate), or after avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
+// snow that has only begun to accelerate), when the flow's kinetic energy has fallen below
+// avalanche_stop_energy_fraction of its peak (com1DFA's kind of stopping criterion), or after
+// avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
 // stable snow and the records are kept.
 #pragma once
 #include <chrono>
@@ -134,6 +136,7 @@ class AvalancheRun {
   AvalancheRecord record_;
   bool active_ = false, atRest_ = false;
   float lastSpeed_ = 0.f;
+  double peakEnergy_ = 0.0;  // the largest kinetic energy of a step (m^5/s^2: per unit density)
   bool keepMaps_ = false;
   double frameIntervalS_ = 0.0, nextFrameS_ = 0.0;
   void captureFrame();

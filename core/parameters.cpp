@@ -69,6 +69,7 @@ const std::vector<ParameterInfo>& parameterTable() {
       {"avalanche_min_unstable_m", &P::avalancheMinUnstableM, "m", 0.001, 10.0, "no release where U is thinner"},
       {"avalanche_stop_speed_mps", &P::avalancheStopSpeedMps, "m/s", 1e-4, 10.0, "at rest below this pipe speed"},
       {"avalanche_stop_thickness_m", &P::avalancheStopThicknessM, "m", 0.0, 10.0, "h_stop: moving snow this thin or thinner does not flow (thin-flow stop)"},
+      {"avalanche_stop_energy_fraction", &P::avalancheStopEnergyFraction, "1", 0.0, 1.0, "at rest once the flow's kinetic energy is below this share of its peak (0: off)"},
       {"avalanche_max_duration_s", &P::avalancheMaxDurationS, "s", 1.0, 36000.0, "cap on one avalanche's simulated time"},
       {"avalanche_step_s", &P::avalancheStepS, "s", 0.001, 10.0, "simulated time of one avalanche step"},
       {"diffusion_steps_per_day", &P::diffusionStepsPerDay, "1/day", 0.01, 1000.0, "powder diffusion step events per day"},

@@ -99,7 +99,7 @@ enum class ScratchExtent {
                    // made with the state unless the executor keeps them in row buffers
   AvalancheCell,   // one a cell, made at the first avalanche
   AvalanchePipes,  // four a cell (signed pipe flows), made at the first avalanche
-  AvalancheRows,   // four a row (statistics for the host), made at the first avalanche
+  AvalancheRows,   // two sets of four a row (statistics for the host), made at the first avalanche
 };
 
 // SNOW_SCRATCH_FIELDS(X) calls X(view, Element, extent) for each of the backend's working
@@ -134,7 +134,7 @@ constexpr unsigned long long scratchCount(ScratchExtent e, unsigned long long ce
     case ScratchExtent::PowderShares: return powderSharesInRows ? 0 : 5 * cells;
     case ScratchExtent::AvalancheCell: return cells;
     case ScratchExtent::AvalanchePipes: return 4 * cells;
-    case ScratchExtent::AvalancheRows: return 4 * rows;
+    case ScratchExtent::AvalancheRows: return 8 * rows;
   }
   return 0;
 }

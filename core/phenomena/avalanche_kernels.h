@@ -20,7 +20,37 @@ struct AvalancheArgs {
   float stopThicknessM = 0.f;        // h_stop: moving snow this thin or thinner does not flow
   // The box the pass runs over: [x0, x1) x [y0, y1).
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  // The step's start: rows [spanY0, spanY1) whose statistics (set statsIn of rowStats) hold the
+  // columns of the snow that could flow; spanY1 <= spanY0: none yet (the passes run over the box).
+  // The step's statistics go to the other set.
+  int spanY0 = 0, spanY1 = 0, statsIn = 0;
 };
+
+// Row y's statistics of set `set` (AvalancheRowStatsKernel).
+SNOW_HD SNOW_INLINE float* avalancheRowStats(const SnowFieldsView& v, int y, int set) {
+  return v.rowStats + 8 * static_cast<size_t>(y) + 4 * set;
+}
+
+// The columns [lo, hi] of row y that snow can reach within k substeps of the step's start: every
+// cell within k cells of one that could flow then (snow crosses at most one cell a substep), cut
+// to the box; lo > hi when none.
+SNOW_HD SNOW_INLINE void avalancheRowSpan(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, int& lo, int& hi) {
+  if (a.spanY1 <= a.spanY0) {
+    lo = a.x0, hi = a.x1 - 1;
+    return;
+  }
+  lo = a.x1, hi = a.x0 - 1;
+  const int r0 = y - k > a.spanY0 ? y - k : a.spanY0, r1 = y + k < a.spanY1 - 1 ? y + k : a.spanY1 - 1;
+  for (int r = r0; r <= r1; ++r) {
+    const float* s = avalancheRowStats(v, r, a.statsIn);
+    if (!(s[3] >= 0.f)) continue;
+    const int l = static_cast<int>(s[2]) - k, h = static_cast<int>(s[3]) + k;
+    lo = l < lo ? l : lo;
+    hi = h > hi ? h : hi;
+  }
+  lo = lo > a.x0 ? lo : a.x0;
+  hi = hi < a.x1 - 1 ? hi : a.x1 - 1;
+}
 
 // A cell that can send snow: moving snow thicker than h_stop (a granular layer thinner than its
 // h_stop comes to rest, Pouliquen 1999; it still receives snow, and flows again once thicker).
@@ -45,6 +75,24 @@ struct InBox {
   K kernel;
   int x0, y0;
   SNOW_HD void operator()(int x, int y) const { kernel(x0 + x, y0 + y); }
+};
+
+// One thread a row of the box (row = y - a.y0), calling kernel(x, y) over the row's span at
+// substep k (avalancheRowSpan): the cells a box holds around a long diagonal path cost nothing.
+// The cells it leaves out hold no flows and no snow that can flow, so each kernel would leave
+// them as they are (AvalancheClearIdleKernel keeps it so), and the bytes are the box's.
+template <class K>
+struct InRowSpans {
+  K kernel;
+  SnowFieldsView v;
+  AvalancheArgs a;
+  int k;
+  SNOW_HD void operator()(int, int row) const {
+    const int y = a.y0 + row;
+    int lo = 0, hi = -1;
+    avalancheRowSpan(v, a, y, k, lo, hi);
+    for (int x = lo; x <= hi; ++x) kernel(x, y);
+  }
 };
 
 struct AvalancheFlowKernel {
@@ -198,29 +246,35 @@ struct AvalancheClearIdleKernel {
   }
 };
 
-// One thread per row of the box: the fastest pipe, the deepest moving snow and the columns of
-// the snow that can flow, for the host to pick the next substep and the next box.
+// One thread per row of the box: the fastest pipe, the kinetic energy of the snow that can flow
+// (the sum of c U s^2 / 2, s its fastest pipe) and its columns, for the host to pick the next
+// box and to tell when the avalanche is at rest.
 struct AvalancheRowStatsKernel {
   SnowFieldsView v;
   AvalancheArgs a;
+  int k;  // the step's substeps: the span the step's snow can have reached
   SNOW_HD void operator()(int, int row) const {
     const int y = a.y0 + row;
-    float speed = 0.f, depth = 0.f;
+    float speed = 0.f, energy = 0.f;
     int lo = v.width, hi = -1;
     const float c = v.cellSizeXM * v.cellSizeYM;
-    for (int x = a.x0; x < a.x1; ++x) {
+    int x0 = 0, x1 = -1;
+    avalancheRowSpan(v, a, y, k, x0, x1);
+    for (int x = x0; x <= x1; ++x) {
       const int i = v.index(x, y);
       const float* f = v.flows + 4 * static_cast<size_t>(i);
-      for (int d = 0; d < 4; ++d) speed = maxf(speed, fabsf(f[d]) / c);
+      float fastest = 0.f;
+      for (int d = 0; d < 4; ++d) fastest = maxf(fastest, fabsf(f[d]) / c);
+      speed = maxf(speed, fastest);
       if (avalancheSource(v, a, i)) {  // the box follows the snow that can still flow
-        depth = maxf(depth, v.unstable[i]);
+        energy += 0.5f * c * v.unstable[i] * fastest * fastest;
         if (x < lo) lo = x;
         hi = x;
       }
     }
-    float* s = v.rowStats + 4 * static_cast<size_t>(y);
+    float* s = avalancheRowStats(v, y, 1 - a.statsIn);
     s[0] = speed;
-    s[1] = depth;
+    s[1] = energy;
     s[2] = static_cast<float>(lo);
     s[3] = static_cast<float>(hi);
   }

@@ -70,7 +70,8 @@ void runAvalancheRelease(Exec& exec, const SnowFieldsView& v) {
 }
 
 // Avalanche substeps over a box that grows by one cell per substep (snow moves at most one cell
-// a substep), then the per-row statistics of the grown box. Returns the grown box in `a`.
+// a substep), each pass over the box's rows' spans only (InRowSpans), then the per-row statistics
+// of the grown box. Returns the grown box in `a`.
 template <class Exec>
 void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a, int substeps) {
   for (int s = 0; s < substeps; ++s) {
@@ -80,21 +81,22 @@ void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a,
     a.y1 = a.y1 < v.height ? a.y1 + 1 : v.height;
     const int w = a.x1 - a.x0, h = a.y1 - a.y0;
     if (w <= 0 || h <= 0) return;
-    // Every cell with moving snow is at least one cell inside the box, so all of its pipes and
-    // neighbours are processed; cells outside hold no flows (AvalancheClearIdleKernel).
-    exec.forEachCell(w, h, InBox<AvalancheFlowKernel>{AvalancheFlowKernel{v, a}, a.x0, a.y0});
-    exec.forEachCell(w, h, InBox<AvalancheScaleKernel>{AvalancheScaleKernel{v, a}, a.x0, a.y0});
-    exec.forEachCell(w, h, InBox<AvalancheApplyScaleKernel>{AvalancheApplyScaleKernel{v}, a.x0, a.y0});
-    exec.forEachCell(w, h, InBox<AvalancheHeightKernel>{AvalancheHeightKernel{v, a}, a.x0, a.y0});
+    // Every cell with moving snow is at least one cell inside the row spans, so all of its pipes
+    // and neighbours are processed; cells outside hold no flows (AvalancheClearIdleKernel).
+    const int k = s + 1;
+    exec.forEachCell(1, h, InRowSpans<AvalancheFlowKernel>{AvalancheFlowKernel{v, a}, v, a, k});
+    exec.forEachCell(1, h, InRowSpans<AvalancheScaleKernel>{AvalancheScaleKernel{v, a}, v, a, k});
+    exec.forEachCell(1, h, InRowSpans<AvalancheApplyScaleKernel>{AvalancheApplyScaleKernel{v}, v, a, k});
+    exec.forEachCell(1, h, InRowSpans<AvalancheHeightKernel>{AvalancheHeightKernel{v, a}, v, a, k});
   }
   if (a.x1 > a.x0 && a.y1 > a.y0) {
-    exec.forEachCell(a.x1 - a.x0, a.y1 - a.y0, InBox<AvalancheClearIdleKernel>{AvalancheClearIdleKernel{v, a}, a.x0, a.y0});
-    exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a});
+    exec.forEachCell(1, a.y1 - a.y0, InRowSpans<AvalancheClearIdleKernel>{AvalancheClearIdleKernel{v, a}, v, a, substeps});
+    exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a, substeps});
   }
 }
 
-// `substeps` substeps from `args`' box, then what the host reads back: 4 floats per row of the
-// grown box (from `rowStats`, the buffer behind v.rowStats), then the box x0, y0, x1, y1.
+// `substeps` substeps from `args`' box, then what the host reads back: the step's 4 floats per
+// row of the grown box (from `rowStats`, the buffer behind v.rowStats), then the box x0, y0, x1, y1.
 template <class Exec, class RowStatsBuffer>
 std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowStatsBuffer& rowStats, const AvalancheArgs& args,
                                      int substeps) {
@@ -102,7 +104,12 @@ std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowSta
   runAvalancheSubsteps(exec, v, a, substeps);
   std::vector<float> stats;
   exec.download(rowStats, stats);
-  std::vector<float> box(stats.begin() + 4 * static_cast<size_t>(a.y0), stats.begin() + 4 * static_cast<size_t>(a.y1));
+  std::vector<float> box;
+  box.reserve(4 * static_cast<size_t>(a.y1 - a.y0) + 4);
+  for (int y = a.y0; y < a.y1; ++y) {
+    const size_t at = 8 * static_cast<size_t>(y) + 4 * static_cast<size_t>(1 - a.statsIn);
+    box.insert(box.end(), stats.begin() + at, stats.begin() + at + 4);
+  }
   box.push_back(static_cast<float>(a.x0));
   box.push_back(static_cast<float>(a.y0));
   box.push_back(static_cast<float>(a.x1));
