@@ -92,7 +92,7 @@ void writeStreamAtomically(const std::string& finalPath, const std::function<voi
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
         if (!out) throw std::runtime_error("cannot write " + temp);
         write(out);
-        out.flush();
+        out.close();  // a full disk or quota often shows only here, on shared storage too
         if (!out) throw std::runtime_error("write failed: " + temp);
       },
       durability);

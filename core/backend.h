@@ -46,7 +46,10 @@ class SnowBackend {
     upload(state);
     state.releaseFields(downloadedWithState);
   }
-  virtual void downloadGiving(SnowState& state) { download(state); }
+  virtual void downloadGiving(SnowState& state) {
+    state.restoreFields(downloadedWithState);  // uploadTaking left them without a size
+    download(state);
+  }
   // Replaces the static fields (exposure, temperature base, wind) only.
   virtual void uploadStaticFields(const SnowState& state) = 0;
 

@@ -75,7 +75,7 @@ struct ModelParameters {
   double avalancheMinUnstableM = 0.05;        // no release where U is thinner
   double avalancheStopSpeedMps = 0.05;        // at rest when no pipe flows faster
   double avalancheStopThicknessM = 0.05;      // h_stop: moving snow this thin does not flow (it is at rest)
-  double avalancheStopEnergyFraction = 0.001;  // at rest when the kinetic energy falls below this share of its peak (com1DFA's stopCrit)
+  double avalancheStopEnergyFraction = 0.001;  // at rest when the kinetic energy falls below this share of its peak (com1DFA's kind of criterion; its stopCrit is 0.01)
   double avalancheMaxDurationS = 600.0;       // cap on one avalanche's simulated time
   double avalancheStepS = 0.1;                // simulated time of one avalanche step (temporal zoom)
   // --- §3.2 / §7.4 event frequencies (mean events per simulated day) and durations

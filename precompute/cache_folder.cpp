@@ -31,10 +31,13 @@ double ageDays(const std::string& path, std::chrono::system_clock::time_point no
   return (nowSeconds - mtime) / 86400.0;
 }
 
-// An entry's temporary (core/atomic_file's name for it): ".<stage>-<key>.tmp-<host>-<pid>-<nonce>.bin".
+// An entry's temporary: core/atomic_file's name for it, ".<stage>-<key>.tmp-<host>-<pid>-<nonce>.bin",
+// or the earlier cache writer's, ".<stage>-<key>.bin.tmp-<host>-<pid>-<nonce>", which a killed
+// writer of an older snowbake may have left.
 bool isTemporaryEntryName(const std::string& name) {
   static const std::regex entryStem(R"(\.[a-z]+-[0-9a-f]{16}\.tmp-.+\.bin)");
-  return isTemporaryFileName(name) && std::regex_match(name, entryStem);
+  static const std::regex earlier(R"(\.[a-z]+-[0-9a-f]{16}\.bin\.tmp-.+)");
+  return (isTemporaryFileName(name) && std::regex_match(name, entryStem)) || std::regex_match(name, earlier);
 }
 
 void checkOptions(const CachePruneOptions& o) {

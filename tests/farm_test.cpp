@@ -273,7 +273,8 @@ TEST(CachePrune, RemovesEntriesUnusedForLongerThanTheAgeThenTheLeastRecentlyUsed
       {"wind-00000000000000a3.bin", {3000, 5.0}},      {"exposure-00000000000000a4.bin", {4000, 1.0}},
       {"notes.txt", {500, 100.0}},                     // not an entry: never touched
       {".wind-00000000000000a5.tmp-vm-12-4242-00000000000000ff.bin", {600, 2.0}},  // a killed writer's: stale, removed
-      {".wind-00000000000000a6.tmp-vm-13-4343-00000000000000ff.bin", {700, 0.01}}};  // a live writer's: kept
+      {".wind-00000000000000a6.tmp-vm-13-4343-00000000000000ff.bin", {700, 0.01}},   // a live writer's: kept
+      {".wind-00000000000000a7.bin.tmp-vm-14-4444-00000000000000ff", {800, 3.0}}};  // an older snowbake's killed writer's: removed
   for (const auto& [name, f] : files) {
     writeBytes(dir / name, f.first);
     setAgeDays(dir / name, f.second);
@@ -282,9 +283,10 @@ TEST(CachePrune, RemovesEntriesUnusedForLongerThanTheAgeThenTheLeastRecentlyUsed
   snow::CachePruneOptions o{dir.string(), 30.0, 7000e-9, true};  // 30 days, 7000 bytes, dry run
   snow::CachePruneReport r = snow::pruneCache(o, now);
   const std::vector<std::string> expected = {(dir / ".wind-00000000000000a5.tmp-vm-12-4242-00000000000000ff.bin").string(),
+                                             (dir / ".wind-00000000000000a7.bin.tmp-vm-14-4444-00000000000000ff").string(),
                                              (dir / "exposure-00000000000000a1.bin").string(), (dir / "wind-00000000000000a2.bin").string()};
   EXPECT_EQ(r.removed, expected);
-  EXPECT_EQ(r.removedBytes, 600u + 1000u + 2000u);
+  EXPECT_EQ(r.removedBytes, 600u + 800u + 1000u + 2000u);
   EXPECT_EQ(r.keptEntries, 2u);
   EXPECT_EQ(r.keptBytes, 7000u);
   EXPECT_TRUE(fs::exists(dir / "exposure-00000000000000a1.bin"));  // a dry run removes nothing

@@ -131,7 +131,7 @@ TEST(AtomicFile, EveryCallHasItsOwnTemporaryNameWithTheFinalExtension) {
   EXPECT_FALSE(isTemporaryFileName(".snow_depth.exr"));
 }
 
-TEST(AtomicFile, DurableWriteLeavesTheWholeFileAndNoTemporary) {
+TEST(AtomicFile, EightThreadsWritingOneFileDurablyLeaveOneWholeVersionAndNoTemporary) {
   const fs::path dir = tempDir();
   const std::string path = (dir / "entry.bin").string();
   std::vector<std::thread> writers;
