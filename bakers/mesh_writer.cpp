@@ -94,12 +94,13 @@ void writeChunked(const std::string& path, const std::function<void(ChunkStream&
 // Binary glTF 2.0 written directly (assimp's exporter took seconds a million triangles): one
 // mesh, one primitive, POSITION / NORMAL / TEXCOORD_0 (glTF's v runs down the image) and uint32
 // indices, a plain snow material. Streamed: the buffer's layout is known before it is written.
-void writeGlb(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
-  const size_t n = m.positions.size(), t = m.triangles.size();
-  const bool uv = m.uvs.size() == n;
+template <class Mesh>
+void writeGlb(ChunkStream& out, const Mesh& m) {
+  const size_t n = m.vertices(), t = m.triangles();
+  const bool uv = m.hasUvs();
   std::array<float, 3> lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-  for (const auto& p : m.positions) {
-    const auto q = yUp(p);
+  for (size_t k = 0; k < n; ++k) {
+    const auto q = yUp(m.position(k));
     for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], q[c]), hi[c] = std::max(hi[c], q[c]);
   }
   // Positions, normals, UVs, indices: every piece a multiple of 4 bytes, so no padding between.
@@ -148,31 +149,38 @@ void writeGlb(ChunkStream& out, const MeshData& m, const std::vector<std::array<
   out << json;
   u32(static_cast<uint32_t>(binLength));
   u32(0x004E4942u);  // "BIN"
-  for (const auto& p : m.positions) bytes(yUp(p).data(), 12);
-  for (const auto& v : normals) bytes(yUp(v).data(), 12);
+  for (size_t k = 0; k < n; ++k) bytes(yUp(m.position(k)).data(), 12);
+  for (size_t k = 0; k < n; ++k) bytes(yUp(m.normal(k)).data(), 12);
   if (uv)
-    for (const auto& u : m.uvs) {
+    for (size_t k = 0; k < n; ++k) {
+      const auto u = m.uv(k);
       const float q[2] = {u[0], 1.f - u[1]};
       bytes(q, 8);
     }
-  for (const auto& tri : m.triangles) bytes(tri.data(), 12);
+  for (size_t k = 0; k < t; ++k) bytes(m.triangle(k).data(), 12);
 }
 
 // Wavefront OBJ written directly (shortest round-trip decimal of each float), y up.
-void writeObj(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
-  const bool uv = m.uvs.size() == m.positions.size();
+template <class Mesh>
+void writeObj(ChunkStream& out, const Mesh& m) {
+  const bool uv = m.hasUvs();
+  const size_t n = m.vertices();
   out << "# snowbake snow mesh: metres, y up (x east, y altitude, z south)\no snow\n";
-  for (const auto& p : m.positions) {
-    const auto q = yUp(p);
+  for (size_t k = 0; k < n; ++k) {
+    const auto q = yUp(m.position(k));
     out << "v " << q[0] << ' ' << q[1] << ' ' << q[2] << '\n';
   }
   if (uv)
-    for (const auto& u : m.uvs) out << "vt " << u[0] << ' ' << u[1] << '\n';
-  for (const auto& v : normals) {
-    const auto q = yUp(v);
+    for (size_t k = 0; k < n; ++k) {
+      const auto u = m.uv(k);
+      out << "vt " << u[0] << ' ' << u[1] << '\n';
+    }
+  for (size_t k = 0; k < n; ++k) {
+    const auto q = yUp(m.normal(k));
     out << "vn " << q[0] << ' ' << q[1] << ' ' << q[2] << '\n';
   }
-  for (const auto& tri : m.triangles) {
+  for (size_t k = 0; k < m.triangles(); ++k) {
+    const std::array<uint32_t, 3> tri = m.triangle(k);
     // "f a/a/a b/b/b c/c/c" (or "a//a" without UVs): each index formatted once and copied.
     char* q = out.room(3 * (1 + 3 * 11 + 2) + 2);
     *q++ = 'f';
@@ -198,27 +206,28 @@ void writeObj(ChunkStream& out, const MeshData& m, const std::vector<std::array<
 // Binary PLY (little endian, z up) written directly (assimp's exporter took over a second a
 // million triangles): x y z, nx ny nz and s t per vertex, faces as uchar-counted int lists, the
 // header assimp writes and Blender, Houdini, MeshLab and assimp read.
-void writePly(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
-  const bool uv = m.uvs.size() == m.positions.size();
+template <class Mesh>
+void writePly(ChunkStream& out, const Mesh& m) {
+  const bool uv = m.hasUvs();
   out << "ply\nformat binary_little_endian 1.0\ncomment snowbake snow mesh: metres, z up (x east, y north)\nelement vertex "
-      << static_cast<long long>(m.positions.size())
+      << static_cast<long long>(m.vertices())
       << "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\n";
   if (uv) out << "property float s\nproperty float t\n";
-  out << "element face " << static_cast<long long>(m.triangles.size()) << "\nproperty list uchar int vertex_index\nend_header\n";
+  out << "element face " << static_cast<long long>(m.triangles()) << "\nproperty list uchar int vertex_index\nend_header\n";
   // The floats' and ints' bytes are copied as they are: little-endian hosts only (x86-64, ARM64).
   static_assert(std::endian::native == std::endian::little, "the PLY writer copies little-endian bytes");
   const size_t vertexBytes = uv ? 32 : 24;
-  for (size_t k = 0; k < m.positions.size(); ++k) {
+  for (size_t k = 0; k < m.vertices(); ++k) {
     char* q = out.room(vertexBytes);
-    std::memcpy(q, m.positions[k].data(), 12);
-    std::memcpy(q + 12, normals[k].data(), 12);
-    if (uv) std::memcpy(q + 24, m.uvs[k].data(), 8);
+    std::memcpy(q, m.position(k).data(), 12);
+    std::memcpy(q + 12, m.normal(k).data(), 12);
+    if (uv) std::memcpy(q + 24, m.uv(k).data(), 8);
     out.advanceTo(q + vertexBytes);
   }
-  for (const auto& tri : m.triangles) {
+  for (size_t k = 0; k < m.triangles(); ++k) {
     char* q = out.room(13);
     *q = 3;
-    std::memcpy(q + 1, tri.data(), 12);
+    std::memcpy(q + 1, m.triangle(k).data(), 12);
     out.advanceTo(q + 13);
   }
 }
@@ -226,7 +235,9 @@ void writePly(ChunkStream& out, const MeshData& m, const std::vector<std::array<
 // ASCII FBX 7.4 written directly (assimp's writer took 25 s a million triangles and its binary
 // one writes unreadable files): one mesh geometry with per-vertex normals and UVs, one model, one
 // material; y up, metres (UnitScaleFactor 100: FBX counts in centimetres).
-void writeFbx(ChunkStream& out, const MeshData& m, const std::vector<std::array<float, 3>>& normals) {
+template <class Mesh>
+void writeFbx(ChunkStream& out, const Mesh& m) {
+  const size_t n = m.vertices();
   auto num = [&](float v) { out << v; };
   auto integer = [&](long long v) { out << v; };
   out << "; FBX 7.4.0 project file\n; snowbake snow mesh: metres, y up (x east, y altitude, z south)\n"
@@ -240,20 +251,21 @@ void writeFbx(ChunkStream& out, const MeshData& m, const std::vector<std::array<
          "Definitions:  {\n\tVersion: 100\n\tCount: 3\n\tObjectType: \"Model\" {\n\t\tCount: 1\n\t}\n"
          "\tObjectType: \"Geometry\" {\n\t\tCount: 1\n\t}\n\tObjectType: \"Material\" {\n\t\tCount: 1\n\t}\n}\n"
          "Objects:  {\n\tGeometry: 1000, \"Geometry::snow\", \"Mesh\" {\n\t\tVertices: *";
-  integer(static_cast<long long>(3 * m.positions.size()));
+  integer(static_cast<long long>(3 * n));
   out << " {\n\t\t\ta: ";
   bool first = true;
-  for (const auto& p : m.positions)
-    for (float c : yUp(p)) {
+  for (size_t k = 0; k < n; ++k)
+    for (float c : yUp(m.position(k))) {
       if (!first) out << ',';
       first = false;
       num(c);
     }
   out << "\n\t\t}\n\t\tPolygonVertexIndex: *";
-  integer(static_cast<long long>(3 * m.triangles.size()));
+  integer(static_cast<long long>(3 * m.triangles()));
   out << " {\n\t\t\ta: ";
   first = true;
-  for (const auto& t : m.triangles) {
+  for (size_t k = 0; k < m.triangles(); ++k) {
+    const std::array<uint32_t, 3> t = m.triangle(k);
     if (!first) out << ',';
     first = false;
     integer(t[0]);
@@ -264,25 +276,25 @@ void writeFbx(ChunkStream& out, const MeshData& m, const std::vector<std::array<
   }
   out << "\n\t\t}\n\t\tGeometryVersion: 124\n\t\tLayerElementNormal: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"\"\n"
          "\t\t\tMappingInformationType: \"ByVertice\"\n\t\t\tReferenceInformationType: \"Direct\"\n\t\t\tNormals: *";
-  integer(static_cast<long long>(3 * normals.size()));
+  integer(static_cast<long long>(3 * n));
   out << " {\n\t\t\t\ta: ";
   first = true;
-  for (const auto& n : normals)
-    for (float c : yUp(n)) {
+  for (size_t k = 0; k < n; ++k)
+    for (float c : yUp(m.normal(k))) {
       if (!first) out << ',';
       first = false;
       num(c);
     }
   out << "\n\t\t\t}\n\t\t}\n";
-  const bool uv = m.uvs.size() == m.positions.size();
+  const bool uv = m.hasUvs();
   if (uv) {
     out << "\t\tLayerElementUV: 0 {\n\t\t\tVersion: 101\n\t\t\tName: \"UVMap\"\n\t\t\tMappingInformationType: \"ByVertice\"\n"
            "\t\t\tReferenceInformationType: \"Direct\"\n\t\t\tUV: *";
-    integer(static_cast<long long>(2 * m.uvs.size()));
+    integer(static_cast<long long>(2 * n));
     out << " {\n\t\t\t\ta: ";
     first = true;
-    for (const auto& u : m.uvs)
-      for (float c : u) {
+    for (size_t k = 0; k < n; ++k)
+      for (float c : m.uv(k)) {
         if (!first) out << ',';
         first = false;
         num(c);
@@ -301,50 +313,76 @@ void writeFbx(ChunkStream& out, const MeshData& m, const std::vector<std::array<
 
 }  // namespace
 
-void writeMesh(const std::string& path, const std::string& format, const MeshData& m) {
+namespace {
+
+// What the writers read of a MeshData: its arrays, and its own normals in place where it has
+// them (a copy is the mesh's size again).
+struct MeshDataReader {
+  const MeshData& m;
+  std::vector<std::array<float, 3>> computed;
+  size_t vertices() const { return m.positions.size(); }
+  size_t triangles() const { return m.triangles.size(); }
+  bool hasUvs() const { return m.uvs.size() == m.positions.size(); }
+  const std::array<float, 3>& position(size_t k) const { return m.positions[k]; }
+  const std::array<float, 3>& normal(size_t k) const { return m.normals.size() == m.positions.size() ? m.normals[k] : computed[k]; }
+  const std::array<float, 2>& uv(size_t k) const { return m.uvs[k]; }
+  const std::array<uint32_t, 3>& triangle(size_t k) const { return m.triangles[k]; }
+};
+
+void checkFormat(const std::string& format) {
   if (format != "ply" && format != "obj" && format != "glb" && format != "fbx")
     throw std::invalid_argument("mesh format '" + format + "' is not one of: ply, obj, glb, fbx");
+}
+
+template <class Mesh>
+void writeFormat(const std::string& path, const std::string& format, const Mesh& m) {
+  checkFormat(format);
+  if (m.vertices() == 0 || m.triangles() == 0) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
+  if (format == "glb") return writeChunked(path, [&](ChunkStream& out) { writeGlb(out, m); });
+  if (format == "obj") return writeChunked(path, [&](ChunkStream& out) { writeObj(out, m); });
+  if (format == "fbx") return writeChunked(path, [&](ChunkStream& out) { writeFbx(out, m); });
+  writeChunked(path, [&](ChunkStream& out) { writePly(out, m); });
+}
+
+}  // namespace
+
+void writeMesh(const std::string& path, const std::string& format, const MeshData& m) {
+  checkFormat(format);
   if (m.positions.empty() || m.triangles.empty()) throw std::runtime_error(path + ": no triangles to write (no valid cells?)");
-  // The mesh's own normals are read in place, not copied (a copy is the mesh's size again).
-  std::vector<std::array<float, 3>> computed;
-  if (m.normals.size() != m.positions.size()) computed = areaWeightedNormals(m.positions, m.triangles);
-  const std::vector<std::array<float, 3>>& normals = m.normals.size() == m.positions.size() ? m.normals : computed;
-  if (format == "glb") return writeChunked(path, [&](ChunkStream& out) { writeGlb(out, m, normals); });
-  if (format == "obj") return writeChunked(path, [&](ChunkStream& out) { writeObj(out, m, normals); });
-  if (format == "fbx") return writeChunked(path, [&](ChunkStream& out) { writeFbx(out, m, normals); });
-  writeChunked(path, [&](ChunkStream& out) { writePly(out, m, normals); });
+  MeshDataReader reader{m, {}};
+  if (m.normals.size() != m.positions.size()) reader.computed = areaWeightedNormals(m.positions, m.triangles);
+  writeFormat(path, format, reader);
 }
 
 namespace {
 
 // Vertices of the grid points a triangulation uses, numbered in row order.
 struct GridVertices {
-  std::vector<uint32_t> index;  // per grid point, UINT32_MAX when unused
-  std::vector<std::array<int, 2>> points;
+  std::vector<uint32_t> index;   // per grid point (the triangulation's numbers), UINT32_MAX when unused
+  std::vector<uint32_t> points;  // the vertices' grid points (the triangulation's numbers)
 };
-
-using GridTriangle = std::array<std::array<int, 2>, 3>;
 
 // `triangles`' elements through `get` (a triangle or a pointer to one): no list of pointers to
 // every triangle is made; the points are counted before they are listed (no growth slack).
 template <class Triangles, class Get>
-GridVertices usedPoints(int width, int height, const Triangles& triangles, Get get) {
+GridVertices usedPoints(const RtinMesh& t, const Triangles& triangles, Get get) {
   GridVertices g;
-  g.index.assign(static_cast<size_t>(width) * height, UINT32_MAX);
+  g.index.assign(static_cast<size_t>(t.width) * t.height, UINT32_MAX);
   size_t used = 0;
-  for (const auto& t : triangles)
-    for (const auto& p : get(t)) {
-      uint32_t& i = g.index[static_cast<size_t>(p[1]) * width + p[0]];
+  for (const auto& tri : triangles)
+    for (uint32_t p : get(tri)) {
+      uint32_t& i = g.index[p];
       used += i == UINT32_MAX;
       i = 0;
     }
   g.points.reserve(used);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      uint32_t& i = g.index[static_cast<size_t>(y) * width + x];
+  for (int y = 0; y < t.height; ++y)
+    for (int x = 0; x < t.width; ++x) {
+      const uint32_t p = t.point(x, y);
+      uint32_t& i = g.index[p];
       if (i == UINT32_MAX) continue;
       i = static_cast<uint32_t>(g.points.size());
-      g.points.push_back({x, y});
+      g.points.push_back(p);
     }
   return g;
 }
@@ -356,29 +394,64 @@ std::array<float, 2> uvAt(const GridSpec& spec, int x, int y) {
   return {static_cast<float>((x + 0.5) / spec.width), static_cast<float>(1.0 - (y + 0.5) / spec.height)};
 }
 
+// The surface mesh of surfaceMesh() read as it is written: positions, UVs and indices computed
+// from the triangulation and the grid, so that only the vertex numbering (4 bytes a grid point
+// and a vertex) and the normals' sums (24 bytes a vertex) are held beside the triangulation.
+struct GridSurfaceReader {
+  const RtinMesh& t;
+  const Grid<float>& altitude;
+  const GridSpec& spec;
+  GridVertices g;
+  std::vector<std::array<double, 3>> normalSums;
+
+  GridSurfaceReader(const RtinMesh& tri, const Grid<float>& alt, const GridSpec& sp)
+      : t(tri), altitude(alt), spec(sp), g(usedPoints(tri, tri.triangles, [](const std::array<uint32_t, 3>& v) -> const auto& { return v; })) {
+    normalSums = areaWeightedNormalSums(
+        vertices(), triangles(), [&](size_t k) { return position(k); }, [&](size_t k) { return triangle(k); });
+  }
+  size_t vertices() const { return g.points.size(); }
+  size_t triangles() const { return t.triangles.size(); }
+  bool hasUvs() const { return true; }
+  std::array<float, 3> position(size_t k) const {
+    const int x = t.x(g.points[k]), y = t.y(g.points[k]);
+    return pointAt(spec, x, y, altitude(x, y));
+  }
+  std::array<float, 3> normal(size_t k) const { return normalFromSum(normalSums[k]); }
+  std::array<float, 2> uv(size_t k) const { return uvAt(spec, t.x(g.points[k]), t.y(g.points[k])); }
+  std::array<uint32_t, 3> triangle(size_t k) const {
+    const auto& v = t.triangles[k];
+    return {g.index[v[0]], g.index[v[1]], g.index[v[2]]};
+  }
+};
+
 }  // namespace
 
 MeshData surfaceMesh(const RtinMesh& t, const Grid<float>& altitude, const GridSpec& spec) {
   MeshData m;
   {
     // The arrays sized once (the triangulation says how many), the points freed before the normals.
-    GridVertices g = usedPoints(t.width, t.height, t.triangles, [](const GridTriangle& tri) -> const GridTriangle& { return tri; });
+    GridVertices g = usedPoints(t, t.triangles, [](const std::array<uint32_t, 3>& v) -> const auto& { return v; });
     m.positions.reserve(g.points.size());
     m.uvs.reserve(g.points.size());
-    for (const auto& p : g.points) {
-      m.positions.push_back(pointAt(spec, p[0], p[1], altitude(p[0], p[1])));
-      m.uvs.push_back(uvAt(spec, p[0], p[1]));
+    for (uint32_t p : g.points) {
+      const int x = t.x(p), y = t.y(p);
+      m.positions.push_back(pointAt(spec, x, y, altitude(x, y)));
+      m.uvs.push_back(uvAt(spec, x, y));
     }
     g.points = {};
     m.triangles.reserve(t.triangles.size());
-    for (const auto& tri : t.triangles) {
-      std::array<uint32_t, 3> v;
-      for (int k = 0; k < 3; ++k) v[k] = g.index[static_cast<size_t>(tri[k][1]) * t.width + tri[k][0]];
-      m.triangles.push_back(v);
-    }
+    for (const auto& tri : t.triangles) m.triangles.push_back({g.index[tri[0]], g.index[tri[1]], g.index[tri[2]]});
   }
   m.normals = areaWeightedNormals(m.positions, m.triangles);
   return m;
+}
+
+MeshCounts writeSurfaceMeshes(const std::vector<std::pair<std::string, std::string>>& pathsAndFormats, const RtinMesh& triangulation,
+                              const Grid<float>& altitude, const GridSpec& spec) {
+  for (const auto& pf : pathsAndFormats) checkFormat(pf.second);
+  const GridSurfaceReader reader(triangulation, altitude, spec);
+  for (const auto& [path, format] : pathsAndFormats) writeFormat(path, format, reader);
+  return {reader.vertices(), reader.triangles()};
 }
 
 MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<float>& depth, const Grid<uint8_t>& valid,
@@ -393,18 +466,18 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
       }
     return std::max(0.f, depth(x, y));
   };
+  auto pointDepth = [&](uint32_t p) { return bodyDepth(t.x(p), t.y(p)); };
   // Triangles holding snow at a vertex.
-  std::vector<const GridTriangle*> kept;
+  std::vector<const std::array<uint32_t, 3>*> kept;
   for (const auto& tri : t.triangles)
-    if (bodyDepth(tri[0][0], tri[0][1]) > 0.f || bodyDepth(tri[1][0], tri[1][1]) > 0.f || bodyDepth(tri[2][0], tri[2][1]) > 0.f)
-      kept.push_back(&tri);
+    if (pointDepth(tri[0]) > 0.f || pointDepth(tri[1]) > 0.f || pointDepth(tri[2]) > 0.f) kept.push_back(&tri);
   MeshData m;
   if (kept.empty()) return m;
   // Top vertex per grid point used (row order), and a bottom one where the snow is deeper than 0.
-  const GridVertices g = usedPoints(w, h, kept, [](const GridTriangle* tri) -> const GridTriangle& { return *tri; });
+  const GridVertices g = usedPoints(t, kept, [](const std::array<uint32_t, 3>* tri) -> const auto& { return *tri; });
   std::vector<uint32_t> top(g.points.size()), bottom(g.points.size());
   for (size_t k = 0; k < g.points.size(); ++k) {
-    const int x = g.points[k][0], y = g.points[k][1];
+    const int x = t.x(g.points[k]), y = t.y(g.points[k]);
     const float d = bodyDepth(x, y), b = bedrock(x, y);
     top[k] = bottom[k] = static_cast<uint32_t>(m.positions.size());
     m.positions.push_back(pointAt(spec, x, y, b + d));
@@ -415,13 +488,13 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
       m.uvs.push_back(uvAt(spec, x, y));
     }
   }
-  auto vid = [&](const std::array<int, 2>& p, int which) {
-    const uint32_t k = g.index[static_cast<size_t>(p[1]) * w + p[0]];
+  auto vid = [&](uint32_t p, int which) {
+    const uint32_t k = g.index[p];
     return which == 0 ? top[k] : bottom[k];
   };
   // Undirected edges of the kept triangles (grid point keys, with the triangle's edge number),
   // sorted: a rim edge is one whose key pair appears once.
-  auto key = [&](const std::array<int, 2>& p) { return static_cast<uint64_t>(p[1]) * w + p[0]; };
+  auto key = [&](uint32_t p) { return static_cast<uint64_t>(p); };
   struct Edge {
     uint64_t a, b;
     size_t id;  // 3 * kept triangle + edge
@@ -449,7 +522,7 @@ MeshData snowBodyMesh(const RtinMesh& t, const Grid<float>& bedrock, const Grid<
   for (size_t t = 0; t < kept.size(); ++t) {
     const auto& q = *kept[t];
     for (int k = 0; k < 3; ++k) {
-      const auto &pa = q[k], &pb = q[(k + 1) % 3];
+      const uint32_t pa = q[k], pb = q[(k + 1) % 3];
       if (!rim[3 * t + k]) continue;
       const uint32_t at = vid(pa, 0), ab = vid(pa, 1), bt = vid(pb, 0), bb = vid(pb, 1);
       if (at != ab) m.triangles.push_back({at, ab, bb});

@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/grid.h"
@@ -41,6 +42,16 @@ struct RtinMesh;
 // The surface `altitude` (e.g. bedrock + snow depth) over the triangulation's triangles: a vertex
 // per grid point used, at ((i + 0.5) dx, (H - j - 0.5) dy, altitude), with UVs.
 MeshData surfaceMesh(const RtinMesh& triangulation, const Grid<float>& altitude, const GridSpec& spec);
+
+struct MeshCounts {
+  size_t vertices = 0, triangles = 0;
+};
+
+// The same files as writeMesh(path, format, surfaceMesh(...)) for each (path, format), written as
+// the mesh is read from the triangulation: its positions, UVs and indices are never held (a
+// quarter of surfaceMesh's bytes beside the triangulation). Returns the mesh's counts.
+MeshCounts writeSurfaceMeshes(const std::vector<std::pair<std::string, std::string>>& pathsAndFormats, const RtinMesh& triangulation,
+                              const Grid<float>& altitude, const GridSpec& spec);
 
 // The snow body alone, closed: its top (bedrock + depth) over the triangles that hold snow, its
 // bottom on the bedrock (facing down), side walls where it meets the grid's edge; where the snow

@@ -140,10 +140,11 @@ void OutputWriter::writeOccluderSnow(const Day& d) {
 }
 
 // One adaptive triangulation for every part asked (rtin.h), within the vertical error bound of
-// the surface (and of the bedrock, the body's bottom); each part's mesh built on its own task,
-// then the triangulation and the surface grid freed, then each part written on its own task into
-// its own sink, merged in the parts' order (the triangulation is the mesh's size again: not held
-// while the files are written).
+// the surface (and of the bedrock, the body's bottom); each part on its own task into its own
+// sink, merged in the parts' order. An untiled surface is written as it is read from the
+// triangulation (writeSurfaceMeshes: no mesh arrays); the other parts' meshes are built, then the
+// triangulation and the surface grid freed, then their files written (the triangulation is not
+// held beside the files being written).
 void OutputWriter::writeGridMeshParts(const Day& d) {
   const SnowState& s = d.s;
   const auto& out = scene_.outputs;
@@ -157,19 +158,24 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
   currentSink().addSeconds("mesh triangulation (adaptive)", elapsedSeconds(tTri));
   const std::string frameNote = " (adaptive triangulation, vertical error at most " + fixed(out.meshMaxErrorM, 3) +
                                 " m at every grid point; x east, y north from the south-west corner; UVs line up with the maps)";
+  auto listAll = [&](const std::string& stem, const MeshCounts& counts, const std::string& what) {
+    for (const std::string& format : out.meshes)
+      listFile(d.base(stem, src_.outDir) + "." + format,
+               what + ", " + std::to_string(counts.vertices) + " vertices, " + std::to_string(counts.triangles) + " triangles" + frameNote, "m",
+               meshFormatDescription(format), d.day, 0.f, 0.f);
+  };
   auto writeAll = [&](const std::string& stem, const MeshData& mesh, const std::string& what) {
-    for (const std::string& format : out.meshes) {
-      const std::string path = d.base(stem, src_.outDir) + "." + format;
-      writeMesh(path, format, mesh);
-      listFile(path,
-               what + ", " + std::to_string(mesh.positions.size()) + " vertices, " + std::to_string(mesh.triangles.size()) + " triangles" +
-                   frameNote,
-               "m", meshFormatDescription(format), d.day, 0.f, 0.f);
-    }
+    for (const std::string& format : out.meshes) writeMesh(d.base(stem, src_.outDir) + "." + format, format, mesh);
+    listAll(stem, {mesh.positions.size(), mesh.triangles.size()}, what);
+  };
+  const int tileCells = out.meshTileSizeM > 0.0 ? std::max(1, static_cast<int>(std::lround(out.meshTileSizeM / s.spec.cellSizeXM))) : 0;
+  const bool tiled = !(tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height));
+  auto streamSurface = [&] {
+    std::vector<std::pair<std::string, std::string>> files;
+    for (const std::string& format : out.meshes) files.push_back({d.base("snow_surface", src_.outDir) + "." + format, format});
+    listAll("snow_surface", writeSurfaceMeshes(files, triangulation, surface, s.spec), "snow surface B+C+S+U+P");
   };
   auto writeSurface = [&](const MeshData& mesh) {
-    const int tileCells = out.meshTileSizeM > 0.0 ? std::max(1, static_cast<int>(std::lround(out.meshTileSizeM / s.spec.cellSizeXM))) : 0;
-    if (tileCells == 0 || tileCells >= std::max(s.spec.width, s.spec.height)) return writeAll("snow_surface", mesh, "snow surface B+C+S+U+P");
     for (const MeshTile& t : cutIntoTiles(mesh, s.spec, tileCells))
       writeAll("snow_surface_x" + std::to_string(t.column) + "_y" + std::to_string(t.row), t.mesh,
                "snow surface B+C+S+U+P, tile column " + std::to_string(t.column) + " (from the west), row " + std::to_string(t.row) +
@@ -189,6 +195,10 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
     partGroup.run([&, k] {
       SinkScope scope(partSinks[k]);
       auto tm = WallClock::now();
+      if (parts[k] == "surface" && !tiled) {
+        streamSurface();  // its time listed with its files
+        return;
+      }
       meshes[k] = parts[k] == "surface" ? surfaceMesh(triangulation, surface, s.spec)
                                         : snowBodyMesh(triangulation, s.bedrockM, findLayer("depth")->compute(LayerInputs{&s}), s.validCell, s.spec);
       currentSink().addSeconds("mesh building", elapsedSeconds(tm));
@@ -199,7 +209,11 @@ void OutputWriter::writeGridMeshParts(const Day& d) {
   for (size_t k = 0; k < parts.size(); ++k)
     partGroup.run([&, k] {
       SinkScope scope(partSinks[k]);
-      if (parts[k] == "surface") writeSurface(meshes[k]); else writeBody(meshes[k]);
+      if (parts[k] == "surface") {
+        if (tiled) writeSurface(meshes[k]);
+      } else {
+        writeBody(meshes[k]);
+      }
       meshes[k] = MeshData();  // freed once written
     });
   partGroup.wait();

@@ -110,11 +110,13 @@ RtinMesh buildRtin(const std::vector<const Grid<float>*>& fields, const Grid<uin
   emit([&](const Tri& t) {
     // Counter-clockwise seen from above: rows run south, so flip when (x, y) order is clockwise.
     const long cross = static_cast<long>(t.bx - t.ax) * (t.cy - t.ay) - static_cast<long>(t.cx - t.ax) * (t.by - t.ay);
-    if (cross < 0) mesh.triangles.push_back({{{t.ax, t.ay}, {t.bx, t.by}, {t.cx, t.cy}}});
-    else mesh.triangles.push_back({{{t.ax, t.ay}, {t.cx, t.cy}, {t.bx, t.by}}});
+    const uint32_t a = mesh.point(t.ax, t.ay), b = mesh.point(t.bx, t.by), c = mesh.point(t.cx, t.cy);
+    if (cross < 0) mesh.triangles.push_back({a, b, c});
+    else mesh.triangles.push_back({a, c, b});
   });
   errors = std::vector<float>();  // before the sort
-  // A fixed order whatever the traversal: by the first vertex, then the rest.
+  // A fixed order whatever the traversal: by the first vertex's (x, y), then the rest's (the
+  // column-by-column numbers sort as (x, y) pairs).
   std::sort(mesh.triangles.begin(), mesh.triangles.end());
   return mesh;
 }
@@ -122,9 +124,9 @@ RtinMesh buildRtin(const std::vector<const Grid<float>*>& fields, const Grid<uin
 double rtinMaxVerticalError(const RtinMesh& mesh, const Grid<float>& field) {
   double worst = 0.0;
   for (const auto& t : mesh.triangles) {
-    const auto &a = t[0], &b = t[1], &c = t[2];
-    forEachPoint(a[0], a[1], b[0], b[1], c[0], c[1], [&](int x, int y, double wa, double wb, double wc) {
-      const double interp = wa * field(a[0], a[1]) + wb * field(b[0], b[1]) + wc * field(c[0], c[1]);
+    const int ax = mesh.x(t[0]), ay = mesh.y(t[0]), bx = mesh.x(t[1]), by = mesh.y(t[1]), cx = mesh.x(t[2]), cy = mesh.y(t[2]);
+    forEachPoint(ax, ay, bx, by, cx, cy, [&](int x, int y, double wa, double wb, double wc) {
+      const double interp = wa * field(ax, ay) + wb * field(bx, by) + wc * field(cx, cy);
       worst = std::max(worst, std::abs(interp - field(x, y)));
     });
   }

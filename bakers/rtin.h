@@ -18,8 +18,13 @@ namespace snow {
 
 struct RtinMesh {
   int width = 0, height = 0;  // the grid
-  // Triangles as grid vertices (x, y), counter-clockwise seen from above (rows run south).
-  std::vector<std::array<std::array<int, 2>, 3>> triangles;
+  // Triangles as three grid points, each numbered column by column (x * height + y: 12 bytes a
+  // triangle, not 24, and sorted by (x, y) as numbers), counter-clockwise seen from above (rows
+  // run south).
+  std::vector<std::array<uint32_t, 3>> triangles;
+  uint32_t point(int x, int y) const { return static_cast<uint32_t>(x) * static_cast<uint32_t>(height) + static_cast<uint32_t>(y); }
+  int x(uint32_t point) const { return static_cast<int>(point / static_cast<uint32_t>(height)); }
+  int y(uint32_t point) const { return static_cast<int>(point % static_cast<uint32_t>(height)); }
   double maxErrorM = 0.0;  // the bound it was built for
 };
 

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <algorithm>
 #include <map>
 
@@ -66,7 +68,7 @@ TEST(AdaptiveMesh, VerticalErrorStaysWithinTheBoundAndTrianglesFallAsItGrows) {
     previous = m.triangles.size();
     // Every triangle inside the grid and on valid points.
     for (const auto& t : m.triangles)
-      for (const auto& p : t) ASSERT_TRUE(p[0] < 150 && p[1] < 97 && s.valid(p[0], p[1]));
+      for (uint32_t p : t) ASSERT_TRUE(m.x(p) < 150 && m.y(p) < 97 && s.valid(m.x(p), m.y(p)));
   }
   // A plane: two triangles, error 0.
   Grid<float> plane(129, 129, 0.f);
@@ -214,6 +216,32 @@ TEST(AdaptiveMesh, SurfaceMeshHeightsAndUvsLineUpWithTheGrid) {
   for (size_t k = 0; k < mesh.positions.size(); ++k) {
     EXPECT_NEAR(mesh.uvs[k][0], mesh.positions[k][0] / (64 * 20.0), 1e-6);
     EXPECT_NEAR(mesh.uvs[k][1], mesh.positions[k][1] / (48 * 20.0), 1e-6);
+  }
+}
+
+// writeSurfaceMeshes reads the mesh as it writes it (no mesh arrays): the same bytes as the mesh
+// built by surfaceMesh and written by writeMesh, in every format, with a hole in the grid.
+TEST(AdaptiveMesh, SurfaceWrittenAsItIsReadIsTheSameBytesAsTheBuiltMesh) {
+  const Surface s = makeSurface(150, 97, true);
+  const RtinMesh m = buildRtin({&s.surface}, s.valid, 0.2);
+  const MeshData mesh = surfaceMesh(m, s.surface, s.spec);
+  const fs::path dir = test::uniqueTempDir("mesh_surface_stream_test");
+  std::vector<std::pair<std::string, std::string>> streamed;
+  for (const std::string format : {"ply", "glb", "obj", "fbx"}) {
+    writeMesh((dir / ("built." + format)).string(), format, mesh);
+    streamed.push_back({(dir / ("streamed." + format)).string(), format});
+  }
+  const MeshCounts counts = writeSurfaceMeshes(streamed, m, s.surface, s.spec);
+  EXPECT_EQ(counts.vertices, mesh.positions.size());
+  EXPECT_EQ(counts.triangles, mesh.triangles.size());
+  auto bytes = [](const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  for (const std::string format : {"ply", "glb", "obj", "fbx"}) {
+    const std::string built = bytes(dir / ("built." + format));
+    EXPECT_GT(built.size(), 1000u) << format;
+    EXPECT_TRUE(built == bytes(dir / ("streamed." + format))) << format;
   }
 }
 
