@@ -119,8 +119,12 @@ void RayScene::occluded16(const bool valid[16], const std::array<float, 3> o[16]
   alignas(64) int mask[16];
   for (int k = 0; k < 16; ++k) {
     mask[k] = valid[k] ? -1 : 0;
-    rays.org_x[k] = o[k][0], rays.org_y[k] = o[k][1], rays.org_z[k] = o[k][2];
-    rays.dir_x[k] = d[k][0], rays.dir_y[k] = d[k][1], rays.dir_z[k] = d[k][2];
+    // Embree reads every lane's ray, masked or not (its debug build asserts them valid): a masked
+    // lane gets a finite ray, not the caller's unset origin.
+    const std::array<float, 3> org = valid[k] ? o[k] : std::array<float, 3>{0.f, 0.f, 0.f};
+    const std::array<float, 3> dir = valid[k] ? d[k] : std::array<float, 3>{0.f, 0.f, 1.f};
+    rays.org_x[k] = org[0], rays.org_y[k] = org[1], rays.org_z[k] = org[2];
+    rays.dir_x[k] = dir[0], rays.dir_y[k] = dir[1], rays.dir_z[k] = dir[2];
     rays.tnear[k] = 0.f;
     rays.tfar[k] = tfar;
     rays.mask[k] = 0xffffffffu;
