@@ -220,8 +220,9 @@ bool AvalancheRun::step() {
   AvalancheArgs a = args_;
   a.dtS = static_cast<float>(stepS / substeps);
   // After the first step, the last step's row statistics give the spans the passes run over.
-  a.spanY0 = record_.steps > 0 ? args_.y0 : 0;
-  a.spanY1 = record_.steps > 0 ? args_.y1 : 0;
+  const bool spans = rowSpans_ && record_.steps > 0;
+  a.spanY0 = spans ? args_.y0 : 0;
+  a.spanY1 = spans ? args_.y1 : 0;
   a.statsIn = record_.steps % 2;
   const std::vector<float> stats = backend_.avalancheSteps(a, substeps);
   // The grown box this step covered, then the rows' statistics.

@@ -108,6 +108,9 @@ class AvalancheRun {
   const AvalancheRecord& record() const { return record_; }
   // Keep each avalanche's maps, and frames of its motion every `frameIntervalS` simulated
   // seconds (0: no frames). Frames download the state: they cost O(grid) each.
+  // Off: every step's passes run over the whole box, not its rows' spans (the reference whose
+  // bytes the spans must give: Avalanche.RowSpansGiveTheSameBytesAsTheWholeBox).
+  void useRowSpans(bool on) { rowSpans_ = on; }
   void keepMaps(bool maps, double frameIntervalS) {
     keepMaps_ = maps || frameIntervalS > 0.0;
     frameIntervalS_ = frameIntervalS;
@@ -121,6 +124,7 @@ class AvalancheRun {
   // Sets the cells of `moving` in motion from the snapshot (records, box, substep arguments).
   void start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, std::chrono::steady_clock::time_point t0);
   SnowBackend& backend_;
+  bool rowSpans_ = true;
   const ModelParameters& p_;
   const SnowState& terrain_;
   // The snow layers at release (the whole grid), and those of the avalanche's box at its end or

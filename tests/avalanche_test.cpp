@@ -39,9 +39,10 @@ struct Outcome {
 };
 
 Outcome runAvalanche(SnowState s, int x, int y, const ModelParameters& p = ModelParameters{},
-                     std::unique_ptr<SnowBackend> backend = createCpuBackend()) {
+                     std::unique_ptr<SnowBackend> backend = createCpuBackend(), bool rowSpans = true) {
   backend->upload(s);
   AvalancheRun run(*backend, p, s);
+  run.useRowSpans(rowSpans);
   Outcome o;
   run.release(x, y, 0.0, 0.0, true);
   o.record = run.runToRest();
@@ -318,6 +319,32 @@ TEST(Avalanche, SameBytesSerialAndOnOneAndTwoThreads) {
     test::expectSameBytes(a.state, b.state);
     EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float))) << threads;
   }
+}
+
+// A release on a rough diagonal slope runs along a band of snow across the grid, so its box holds
+// far more cells than its path: the passes over the rows' spans give the same bytes as the passes
+// over the whole box (state, scour and deposit, the record's steps and runout).
+TEST(Avalanche, RowSpansGiveTheSameBytesAsTheWholeBox) {
+  SnowState s = test::terrainFrom(96, 96, 5.0, -20.f, [](double x, double y) {
+    return 2000.0 - 0.6 * (x + y) + 0.4 * std::sin(0.37 * x) * std::cos(0.29 * y);
+  });
+  int band = 0;
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x)
+      if (std::abs(x - y) < 4) s.unstableM(x, y) = 1.2f, ++band;
+  const Outcome spans = runAvalanche(s, 6, 6);
+  const Outcome box = runAvalanche(s, 6, 6, ModelParameters{}, createCpuBackend(), false);
+  ASSERT_TRUE(spans.record.released);
+  ASSERT_GT(spans.record.steps, 5);
+  // The spans leave out most of the box: the snow's band is a small share of it.
+  EXPECT_LT(2 * band, spans.record.boxCellsMax);
+  test::expectSameBytes(box.state, spans.state);
+  EXPECT_EQ(box.state.avalancheScourM.values(), spans.state.avalancheScourM.values());
+  EXPECT_EQ(box.state.avalancheDepositM.values(), spans.state.avalancheDepositM.values());
+  EXPECT_EQ(box.record.steps, spans.record.steps);
+  EXPECT_EQ(box.record.runoutM, spans.record.runoutM);
+  std::printf("[ measure ] row spans against the box: %d steps, box up to %d cells, band %d cells, runout %.0f m\n",
+              spans.record.steps, spans.record.boxCellsMax, band, spans.record.runoutM);
 }
 
 // No unstable snow at the rupture point: nothing is released and the record says why.
