@@ -35,7 +35,8 @@ constexpr double kEmbreeBytesPerTriangle = 120.0;
 // Snow assumed in a VDB column when the voxel count is predicted before the season: 3 m.
 constexpr double kVdbDepthM = 3.0;
 // OpenVDB: leaves of 8^3 voxels, six grids (level set, density, four layers) and the bool
-// topology; a leaf of floats is 2 KiB plus its masks.
+// topology; a leaf of floats is 2 KiB plus its masks. Every column is held snowed: a frame early
+// in a season holds far less (docs/memory.md: the rows this over-predicts, what heaptrack shows).
 constexpr double kVdbLeafBytes = 2112.0;
 constexpr int kVdbGrids = 4;  // level set + density + about two layers' leaves per column
 // Mesh mode: bytes a lattice site holds (position, normal, coverage, deposit, neighbour links),
