@@ -64,8 +64,49 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
   // Voxel (i, j, k) is filled from its centre ((i + 1/2) vs, ...): the transform puts it there.
   const auto transform = openvdb::math::Transform::createLinearTransform(vs);
   transform->postTranslate(openvdb::Vec3d(0.5 * vs, 0.5 * vs, 0.5 * vs));
+  VdbSummary summary;
+  summary.path = path;
+  // Calls f(coord, layer) for every snow voxel, column by column.
+  const int ni = static_cast<int>(std::ceil(w * dx / vs)), nj = static_cast<int>(std::ceil(h * dy / vs));
+  auto forEachSnowVoxel = [&](auto&& f) {
+    for (int j = 0; j < nj; ++j) {
+      const double yNorth = (j + 0.5) * vs;  // metres north of the south edge
+      const int row = h - 1 - std::min(h - 1, static_cast<int>(yNorth / dy));
+      for (int i = 0; i < ni; ++i) {
+        const int col = std::min(w - 1, static_cast<int>((i + 0.5) * vs / dx));
+        if (!s.validCell(col, row)) continue;
+        const double bed = s.bedrockM(col, row);
+        const double top[4] = {bed + s.compactedM(col, row), bed + s.compactedM(col, row) + s.stableM(col, row),
+                               bed + s.compactedM(col, row) + s.stableM(col, row) + s.unstableM(col, row),
+                               bed + s.depthM(col, row)};
+        if (!(top[3] > bed)) continue;
+        const int k0 = static_cast<int>(std::ceil(bed / vs - 0.5)), k1 = static_cast<int>(std::floor(top[3] / vs - 0.5));
+        for (int k = k0; k <= k1; ++k) {
+          const double z = (k + 0.5) * vs;
+          if (!(z > bed && z < top[3])) continue;
+          int l = 0;
+          while (l < 3 && z >= top[l]) ++l;
+          f(openvdb::Coord(i, j, k), l);
+        }
+      }
+    }
+  };
+  // The level set first, from the topology alone, which is then freed: its construction's
+  // dilation and normalisation (the writer's largest transient) never stand beside the density
+  // and layer grids.
+  openvdb::FloatGrid::Ptr sdf;
+  {
+    auto topology = openvdb::BoolGrid::create(false);
+    auto topoAcc = topology->getAccessor();
+    forEachSnowVoxel([&](const openvdb::Coord& c, int) {
+      topoAcc.setValue(c, true);
+      ++summary.snowVoxels;
+    });
+    topology->setTransform(transform);  // the level set's distances in metres
+    sdf = summary.snowVoxels > 0 ? openvdb::tools::topologyToLevelSet(*topology, 3, 0)
+                                 : openvdb::createLevelSet<openvdb::FloatGrid>(vs, 3.0);
+  }
   auto fog = openvdb::FloatGrid::create(0.f);
-  auto topology = openvdb::BoolGrid::create(false);
   const char* layerNames[4] = {"compacted", "stable", "unstable", "powder"};
   const double layerDensity[4] = {o.compactedKgPerM3, o.stableKgPerM3, o.unstableKgPerM3, o.powderKgPerM3};
   openvdb::FloatGrid::Ptr layers[4];
@@ -73,39 +114,11 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
   std::vector<openvdb::FloatGrid::Accessor> layerAcc;
   for (int l = 0; l < 4; ++l) layerAcc.push_back(layers[l]->getAccessor());
   auto fogAcc = fog->getAccessor();
-  auto topoAcc = topology->getAccessor();
-  VdbSummary summary;
-  summary.path = path;
-  const int ni = static_cast<int>(std::ceil(w * dx / vs)), nj = static_cast<int>(std::ceil(h * dy / vs));
-  for (int j = 0; j < nj; ++j) {
-    const double yNorth = (j + 0.5) * vs;  // metres north of the south edge
-    const int row = h - 1 - std::min(h - 1, static_cast<int>(yNorth / dy));
-    for (int i = 0; i < ni; ++i) {
-      const int col = std::min(w - 1, static_cast<int>((i + 0.5) * vs / dx));
-      if (!s.validCell(col, row)) continue;
-      const double bed = s.bedrockM(col, row);
-      const double top[4] = {bed + s.compactedM(col, row), bed + s.compactedM(col, row) + s.stableM(col, row),
-                             bed + s.compactedM(col, row) + s.stableM(col, row) + s.unstableM(col, row),
-                             bed + s.depthM(col, row)};
-      if (!(top[3] > bed)) continue;
-      const int k0 = static_cast<int>(std::ceil(bed / vs - 0.5)), k1 = static_cast<int>(std::floor(top[3] / vs - 0.5));
-      for (int k = k0; k <= k1; ++k) {
-        const double z = (k + 0.5) * vs;
-        if (!(z > bed && z < top[3])) continue;
-        const openvdb::Coord c(i, j, k);
-        fogAcc.setValue(c, 1.f);
-        topoAcc.setValue(c, true);
-        int l = 0;
-        while (l < 3 && z >= top[l]) ++l;
-        layerAcc[l].setValue(c, static_cast<float>(layerDensity[l]));
-        ++summary.snowVoxels;
-      }
-    }
-  }
+  forEachSnowVoxel([&](const openvdb::Coord& c, int l) {
+    fogAcc.setValue(c, 1.f);
+    layerAcc[l].setValue(c, static_cast<float>(layerDensity[l]));
+  });
   openvdb::GridPtrVec grids;
-  topology->setTransform(transform);  // the level set's distances in metres
-  auto sdf = summary.snowVoxels > 0 ? openvdb::tools::topologyToLevelSet(*topology, 3, 0)
-                                    : openvdb::createLevelSet<openvdb::FloatGrid>(vs, 3.0);
   sdf->setTransform(transform);
   sdf->setName("snow_sdf");
   sdf->setGridClass(openvdb::GRID_LEVEL_SET);
