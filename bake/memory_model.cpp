@@ -34,11 +34,13 @@ constexpr double kEmbreeGridBytesPerCell = 28.0;
 constexpr double kEmbreeBytesPerTriangle = 120.0;
 // Snow assumed in a VDB column when the voxel count is predicted before the season: 3 m.
 constexpr double kVdbDepthM = 3.0;
-// OpenVDB: leaves of 8^3 voxels, six grids (level set, density, four layers) and the bool
-// topology; a leaf of floats is 2 KiB plus its masks. Every column is held snowed: a frame early
-// in a season holds far less (docs/memory.md: the rows this over-predicts, what heaptrack shows).
-constexpr double kVdbLeafBytes = 2112.0;
-constexpr int kVdbGrids = 4;  // level set + density + about two layers' leaves per column
+// OpenVDB: leaves of 8^3 voxels over the columns, kVdbDepthM deep. Measured: the VDB writer's
+// peak (the level set being built, or the six grids built) per leaf slot (columns / 64 x leaf
+// layers), every column snowed: heaptrack, occlusion mode at 1024², 207 MB over 32768 slots.
+// A frame early in a season holds far less (docs/memory.md: the rows this over-predicts).
+constexpr double kVdbBytesPerLeafSlot = 6400.0;
+// Mesh mode's snow body: three grids of float leaves (2 KiB and their masks) per leaf slot.
+constexpr double kSnowBodyBytesPerLeafSlot = 3 * 2112.0;
 // Mesh mode: bytes a lattice site holds (position, normal, coverage, deposit, neighbour links),
 // and a triangle of the input mesh with its Embree BVH.
 constexpr double kSiteBytes = 160.0;
@@ -183,7 +185,7 @@ double vdbBytes(const Scene& s, const GridSpec& spec) {
   const double vs = s.outputs.vdbVoxelSizeM > 0 ? s.outputs.vdbVoxelSizeM : std::min(spec.cellSizeXM, spec.cellSizeYM);
   const double columns = (spec.width * spec.cellSizeXM / vs) * (spec.height * spec.cellSizeYM / vs);
   const double leafLayers = std::ceil(kVdbDepthM / vs / 8.0) + 1.0;
-  return columns / 64.0 * leafLayers * kVdbLeafBytes * kVdbGrids;
+  return columns / 64.0 * leafLayers * kVdbBytesPerLeafSlot;
 }
 
 }  // namespace
@@ -399,7 +401,7 @@ MemoryPrediction predictMeshBake(const Scene& s, size_t triangles, const double 
   const MemoryOwner mesh{"mesh and its ray scene", static_cast<double>(triangles) * kMeshTriangleBytes, "terrain.file", MemoryGroup::State};
   const MemoryOwner lattice{"launch-site lattice", sites * kSiteBytes, "mesh_snow.site_spacing_m", MemoryGroup::Scratch};
   p.phases.push_back({"placement", {mesh, lattice}});
-  p.phases.push_back({"snow body", {mesh, lattice, {"snow body voxels", columns / 64.0 * leafLayers * kVdbLeafBytes * 3.0, voxelKey, MemoryGroup::Writers}}});
+  p.phases.push_back({"snow body", {mesh, lattice, {"snow body voxels", columns / 64.0 * leafLayers * kSnowBodyBytesPerLeafSlot, voxelKey, MemoryGroup::Writers}}});
   return p;
 }
 
