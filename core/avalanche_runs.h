@@ -108,13 +108,13 @@ class AvalancheRun {
   const AvalancheRecord& record() const { return record_; }
   // Keep each avalanche's maps, and frames of its motion every `frameIntervalS` simulated
   // seconds (0: no frames). Frames download the state: they cost O(grid) each.
-  // Off: every step's passes run over the whole box, not its rows' spans (the reference whose
-  // bytes the spans must give: Avalanche.RowSpansGiveTheSameBytesAsTheWholeBox).
-  void useRowSpans(bool on) { rowSpans_ = on; }
   void keepMaps(bool maps, double frameIntervalS) {
     keepMaps_ = maps || frameIntervalS > 0.0;
     frameIntervalS_ = frameIntervalS;
   }
+  // Off: every step's passes run over the whole box, not its rows' spans (the reference whose
+  // bytes the spans must give: Avalanche.RowSpansGiveTheSameBytesAsTheWholeBox).
+  void useRowSpans(bool on) { rowSpans_ = on; }
 
  private:
   bool releaseFromSnapshot(int x, int y, double day, double seaLevelTemperatureC, bool user);
