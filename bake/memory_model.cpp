@@ -3,6 +3,7 @@
 // and mode_mesh.cpp run them. The few constants measured rather than counted say so; their
 // source is tools/measure-memory.sh (docs/memory.md).
 #include "memory_model.h"
+#include "memory_vdb.h"
 
 #include <algorithm>
 #include <cmath>
@@ -32,13 +33,6 @@ constexpr double kSweepScratchPerCell = 16.0;
 constexpr double kWindSolverPerCell = 20.0;
 constexpr double kEmbreeGridBytesPerCell = 28.0;
 constexpr double kEmbreeBytesPerTriangle = 120.0;
-// Snow assumed in a VDB column when the voxel count is predicted before the season: 3 m.
-constexpr double kVdbDepthM = 3.0;
-// OpenVDB: leaves of 8^3 voxels over the columns, kVdbDepthM deep. Measured: the VDB writer's
-// peak (the level set being built, or the six grids built) per leaf slot (columns / 64 x leaf
-// layers), every column snowed: heaptrack, occlusion mode at 1024², 207 MB over 32768 slots.
-// A frame early in a season holds far less (docs/memory.md: the rows this over-predicts).
-constexpr double kVdbBytesPerLeafSlot = 6400.0;
 // Mesh mode's snow body: three grids of float leaves (2 KiB and their masks) per leaf slot.
 constexpr double kSnowBodyBytesPerLeafSlot = 3 * 2112.0;
 // Mesh mode: bytes a lattice site holds (position, normal, coverage, deposit, neighbour links),
@@ -46,10 +40,10 @@ constexpr double kSnowBodyBytesPerLeafSlot = 3 * 2112.0;
 constexpr double kSiteBytes = 160.0;
 constexpr double kMeshTriangleBytes = 200.0;
 constexpr double kRecordBytes = 4096.0;
-// Measured: bytes a cell the grid's snow-surface mesh holds at its peak, while the mesh is built
-// beside the triangulation (heaptrack at 2048², 7.2 M triangles for 4.2 M cells: the triangulation
-// 174 MB, the mesh being built 290 MB; issue 29, docs/memory.md).
-constexpr double kSurfaceMeshBytesPerCell = 110.0;
+// Measured: bytes a cell the grid's snow-surface mesh holds at its peak, the triangulation and
+// the file written as it is read from it (heaptrack, the default preset at 1024², day 10: buildRtin
+// 21.7 MB and writeSurfaceMeshes 29.6 MB at their peaks for 1.05 M cells; docs/memory.md).
+constexpr double kSurfaceMeshBytesPerCell = 50.0;
 
 // Bytes a cell of the state's fields with the roles `pick` accepts, optional fields only when
 // `present` says the scene makes them.
@@ -162,16 +156,14 @@ double seasonRangeBytesPerDay(const Scene& s, double cells, double skiTextureByt
   return perDay * encodings;
 }
 
-double vdbBytes(const Scene& s, const GridSpec& spec);
-
 // A day's writers run one after another (OutputWriter::writeDay): the layers (with their
 // encodings, displacement and multi-channel EXR), then the VDB, then the meshes; the day holds
-// the largest of the three.
-std::vector<MemoryOwner> dayWriters(const Scene& s, const GridSpec& spec, double cells) {
+// the largest of the three. The VDB holds the snow of `day`.
+std::vector<MemoryOwner> dayWriters(const Scene& s, const GridSpec& spec, double cells, const SnowReach& reach, double day) {
   std::vector<MemoryOwner> layers = writerOwners(s, cells);
   double layerBytes = 0;
   for (const auto& o : layers) layerBytes += o.bytes;
-  const double vdb = s.outputs.vdb ? vdbBytes(s, spec) : 0.0;
+  const double vdb = vdbWriterBytes(s, spec, reach, day);
   const double mesh = s.outputs.meshes.empty() ? 0.0 : cells * kSurfaceMeshBytesPerCell;
   // The VDB's voxels are the grid's cells unless the scene sets their size: then the grid sizes it.
   const char* vdbKey = s.outputs.vdbVoxelSizeM > 0 ? "outputs.vdb_voxel_size_m" : "terrain.size";
@@ -180,13 +172,6 @@ std::vector<MemoryOwner> dayWriters(const Scene& s, const GridSpec& spec, double
   return layers;
 }
 
-double vdbBytes(const Scene& s, const GridSpec& spec) {
-  if (!s.outputs.vdb) return 0;
-  const double vs = s.outputs.vdbVoxelSizeM > 0 ? s.outputs.vdbVoxelSizeM : std::min(spec.cellSizeXM, spec.cellSizeYM);
-  const double columns = (spec.width * spec.cellSizeXM / vs) * (spec.height * spec.cellSizeYM / vs);
-  const double leafLayers = std::ceil(kVdbDepthM / vs / 8.0) + 1.0;
-  return columns / 64.0 * leafLayers * kVdbBytesPerLeafSlot;
-}
 
 }  // namespace
 
@@ -273,7 +258,7 @@ std::string memoryBreakdownJson(const MemoryPrediction& p, double measured, cons
   return o.str();
 }
 
-MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles) {
+MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach) {
   using G = MemoryGroup;
   const double cells = static_cast<double>(spec.width) * spec.height;
   const OptionalFields present{s};
@@ -325,7 +310,11 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   if (windStates > 0) pre.owners.push_back(wind);
   p.phases.push_back(pre);
 
-  const std::vector<MemoryOwner> writer = dayWriters(s, spec, cells);
+  // The season's end's writers, and the latest frame's (the most snow a frame writes).
+  const std::vector<MemoryOwner> writer = dayWriters(s, spec, cells, reach, s.days);
+  double lastFrame = 0;
+  for (double d : s.outputs.frameDays) lastFrame = std::max(lastFrame, std::min(d, s.days));
+  const std::vector<MemoryOwner> frameWriter = dayWriters(s, spec, cells, reach, lastFrame);
   const double track = s.outputs.skiTrackFactor;
   const bool skiTracks = hasLayer(s, "ski_tracks");
   const MemoryOwner skiTexture{"ski-track texture", skiTracks ? cells * track * track * 4.0 : 0.0, "outputs.ski_track_factor", G::Records};
@@ -373,7 +362,7 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
     // static fields the host released, and two of the texture (the writer's and its layer).
     season.owners.push_back({"frame in flight: state copy", state - (staticOnHost ? 0.0 : staticOwner.bytes), "outputs.frames_days", G::FramesInFlight});
     if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::FramesInFlight});
-    for (const auto& w : writer) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
+    for (const auto& w : frameWriter) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
     season.owners.push_back({"frames held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size()), "outputs.ranges", G::FramesInFlight});
   }
   p.phases.push_back(season);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "memory_vdb.h"
 #include "scene/scene.h"
 
 namespace snow {
@@ -59,8 +60,9 @@ std::string memoryBreakdownText(const MemoryPrediction& p, double measuredPeakBy
 std::string memoryBreakdownJson(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double cells);
 
 // What a grid bake (mode = "season" or "occlusion") holds on a grid of `spec`, with
-// `occluderTriangles` triangles of occluder meshes.
-MemoryPrediction predictGridBake(const Scene& scene, const GridSpec& spec, size_t occluderTriangles);
+// `occluderTriangles` triangles of occluder meshes; `reach` (the terrain's heights against the
+// rain-snow limit) sizes the VDB by the snow expected on its day, unknown: every column snowed.
+MemoryPrediction predictGridBake(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach = {});
 // mode = "mesh": the lattice and the snow body over a mesh of `triangles` triangles whose
 // bounding box is `extentM` (x, y, z).
 MemoryPrediction predictMeshBake(const Scene& scene, size_t triangles, const double extentM[3]);

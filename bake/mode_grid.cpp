@@ -56,9 +56,10 @@ GeoFrame geoFrameOf(const TerrainInfo& ti) {
 namespace {
 
 // The memory model's prediction for the grid, logged; refused above the budget before any work.
-MemoryPrediction checkGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, std::ostream& log) {
+MemoryPrediction checkGridMemory(const Scene& scene, const BakeTerrain& terrain, std::ostream& log) {
+  const GridSpec& spec = terrain.info().spec;
   refuseBeyondTheModel(scene, spec);
-  const MemoryPrediction p = predictGridBake(scene, spec, occluderTriangles);
+  const MemoryPrediction p = predictGridBake(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain));
   const double budget = memoryBudgetBytes(scene);
   refuseAboveBudget(scene, p, budget);
   log << "memory: " << p.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
@@ -75,13 +76,17 @@ void checkBuiltinMemory(const Scene& scene) {
   spec.width = spec.height = b.size;
   spec.cellSizeXM = spec.cellSizeYM = b.cellSizeM;
   refuseBeyondTheModel(scene, spec);
-  refuseAboveBudget(scene, predictGridBake(scene, spec, 0), memoryBudgetBytes(scene));
+  refuseAboveBudget(scene, predictGridBake(scene, spec, 0, builtinSnowReach(b, scene.params.rainSnowLimitM)), memoryBudgetBytes(scene));
 }
 
 size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
   size_t n = 0;
   for (const auto& m : meshes) n += m.triangles.size();
   return n;
+}
+
+SnowReach terrainSnowReach(const Scene& scene, const BakeTerrain& terrain) {
+  return snowReachOf(terrain.terrain.heightsM, terrain.terrain.valid, scene.params.rainSnowLimitM);
 }
 
 void reportFilesWritten(const std::vector<std::string>& paths, const char* stage) {
@@ -116,7 +121,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   std::optional<BakeStage> stage(std::in_place, "terrain");
   progress().stage("terrain", 0.0);
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
-  const MemoryPrediction memory = checkGridMemory(scene, terrain.info().spec, triangleCount(terrain.occluders), log);
+  const MemoryPrediction memory = checkGridMemory(scene, terrain, log);
   progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";

@@ -3,6 +3,7 @@
 #include <ostream>
 #include <string>
 
+#include "memory_vdb.h"
 #include "stages.h"
 
 namespace snow {
@@ -17,11 +18,13 @@ std::string resolvedScenePath(const std::string& outDir);
 std::string manifestPath(const std::string& outDir);  // DIR/manifest.json, written last
 // The grid modes' pieces `snowbake plan` shares (mode_grid.cpp): the layers written (the scene's,
 // and valid_mask where the terrain has NODATA cells), the rasters' georeference, a builtin
-// terrain's memory refused before it is made, the occluders' triangles.
+// terrain's memory refused before it is made, the occluders' triangles, where snow can fall on
+// the terrain (the memory model's VDB term).
 std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti);
 GeoFrame geoFrameOf(const TerrainInfo& ti);
 void checkBuiltinMemory(const Scene& scene);
 size_t triangleCount(const std::vector<TriangleMesh>& meshes);
+SnowReach terrainSnowReach(const Scene& scene, const BakeTerrain& terrain);
 // mode = "season" and mode = "occlusion" (mode_grid.cpp).
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart);
 // mode = "mesh" (mode_mesh.cpp): Fearing's snow on the mesh itself, no grid and no season.

@@ -65,7 +65,7 @@ void planGrid(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
   const BakeTerrain terrain = loadBakeTerrain(scene, *std::make_unique<std::ostringstream>());
   const GridSpec& spec = terrain.info().spec;
   refuseBeyondTheModel(scene, spec);
-  plan.memory = predictGridBake(scene, spec, triangleCount(terrain.occluders));
+  plan.memory = predictGridBake(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain));
   plan.budgetBytes = memoryBudgetBytes(scene);
   refuseAboveBudget(scene, plan.memory, plan.budgetBytes);
   const bool occlusion = scene.mode == SceneMode::Occlusion;

@@ -5,6 +5,7 @@
 
 #include <sys/wait.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -204,4 +205,36 @@ TEST(MemoryModel, EveryPredictedOwnerIsInTheBreakdownsGroupTable) {
   EXPECT_NEAR(grouped, p.peakPhase().bytes(), 1.0);
   for (const auto& phase : p.phases)
     for (const auto& o : phase.owners) EXPECT_STRNE(snow::memoryGroupName(o.group), "?") << o.name;
+}
+
+// The VDB term follows the snow expected on its day: none before any snowfall can have come,
+// none where no cell is above the rain-snow limit, more on a later day; unknown terrain: every
+// column snowed 3 m deep (the upper bound).
+TEST(MemoryModel, VdbTermFollowsTheSnowExpectedOnItsDay) {
+  snow::Scene scene = snow::loadScene("preset:default");
+  snow::GridSpec spec;
+  spec.width = spec.height = 512;
+  spec.cellSizeXM = spec.cellSizeYM = 10.0;
+  snow::SnowReach reach;
+  reach.known = true, reach.share = 0.8, reach.meanExcessM = 700.0;
+  const double day10 = snow::vdbWriterBytes(scene, spec, reach, 10.0), day60 = snow::vdbWriterBytes(scene, spec, reach, 60.0);
+  const double upper = snow::vdbWriterBytes(scene, spec, snow::SnowReach{}, 60.0);
+  EXPECT_GT(day10, 0.0);
+  EXPECT_LT(day10, day60);
+  EXPECT_LE(day60, upper);
+  EXPECT_DOUBLE_EQ(upper, 512.0 * 512.0 / 64.0 * 2.0 * 6400.0);  // 3 m in 10 m voxels: two leaf layers
+  EXPECT_EQ(snow::vdbWriterBytes(scene, spec, reach, 0.0), 0.0);
+  snow::SnowReach bare = reach;
+  bare.share = 0.0, bare.meanExcessM = 0.0;
+  EXPECT_EQ(snow::vdbWriterBytes(scene, spec, bare, 60.0), 0.0);
+  // Fixed snowfall periods: the days before the first hold no snow; the Poisson expectation.
+  scene.weather.snowfallPeriods = {{20.0, 23.0}};
+  EXPECT_EQ(snow::vdbWriterBytes(scene, spec, reach, 19.0), 0.0);
+  EXPECT_DOUBLE_EQ(snow::expectedSnowfallDays(scene, 30.0), 3.0);
+  scene.weather.snowfallPeriods.clear();
+  const double a = 1.0 / 7.0, k = a + 1.0 / 3.0;
+  EXPECT_NEAR(snow::expectedSnowfallDays(scene, 10.0), a / k * (10.0 - (1.0 - std::exp(-k * 10.0)) / k), 1e-12);
+  // Initial snow: its depth is not the snowfall's, so every column is held snowed.
+  scene.initialSnow[0].kind = snow::InitialSnowLayer::Kind::Constant;
+  EXPECT_DOUBLE_EQ(snow::vdbWriterBytes(scene, spec, reach, 10.0), 512.0 * 512.0 / 64.0 * 2.0 * 6400.0);
 }
