@@ -14,6 +14,7 @@
 #include "core/errors.h"
 #include "core/snow_fields.h"
 #include "bakers/value_range.h"
+#include "bakers/vdb_writer.h"
 #include "precompute/exposure.h"
 #include "scene/layers.h"
 
@@ -171,7 +172,6 @@ std::vector<MemoryOwner> dayWriters(const Scene& s, const GridSpec& spec, double
   if (mesh >= layerBytes) return {{"snow-surface mesh", mesh, "outputs.meshes", MemoryGroup::Writers}};
   return layers;
 }
-
 
 }  // namespace
 
@@ -442,7 +442,7 @@ void refuseBeyondTheModel(const Scene& s, const GridSpec& spec) {
     throw InputError(keyWhere(s, "outputs.ski_track_factor") + ": a texture of " + std::to_string(spec.width * int64_t(o.skiTrackFactor)) +
                      " x " + std::to_string(spec.height * int64_t(o.skiTrackFactor)) + " texels is more than 2^31: lower it");
   if (o.vdb) {
-    const double vs = o.vdbVoxelSizeM > 0 ? o.vdbVoxelSizeM : std::min(spec.cellSizeXM, spec.cellSizeYM);
+    const double vs = vdbVoxelSizeM(o.vdbVoxelSizeM, spec);
     const double columns = spec.width * spec.cellSizeXM / vs, rows = spec.height * spec.cellSizeYM / vs;
     // OpenVDB's coordinates are 32-bit, and the writer visits every column of voxels.
     if (columns > 1e6 || rows > 1e6 || columns * rows > 4e9) {

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "bakers/vdb_writer.h"
+
 namespace snow {
 
 namespace {
@@ -64,7 +66,7 @@ double expectedSnowfallDays(const Scene& s, double day) {
 
 double vdbWriterBytes(const Scene& s, const GridSpec& spec, const SnowReach& reach, double day) {
   if (!s.outputs.vdb) return 0;
-  const double vs = s.outputs.vdbVoxelSizeM > 0 ? s.outputs.vdbVoxelSizeM : std::min(spec.cellSizeXM, spec.cellSizeYM);
+  const double vs = vdbVoxelSizeM(s.outputs.vdbVoxelSizeM, spec);
   const double columns = (spec.width * spec.cellSizeXM / vs) * (spec.height * spec.cellSizeYM / vs);
   double share = 1.0, depth = kVdbDepthM, occupied = 1.0;
   if (reach.known && !snowBeyondTheSnowfall(s)) {

@@ -257,7 +257,7 @@ void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const s
 void OutputWriter::writeVdb(const Day& d) {
   if (!scene_.outputs.vdb) return;
   VdbOptions vo;
-  vo.voxelSizeM = scene_.outputs.vdbVoxelSizeM > 0.0 ? scene_.outputs.vdbVoxelSizeM : std::min(d.s.spec.cellSizeXM, d.s.spec.cellSizeYM);
+  vo.voxelSizeM = vdbVoxelSizeM(scene_.outputs.vdbVoxelSizeM, d.s.spec);
   const std::string path = d.base("snow", src_.outDir) + ".vdb";
   if (src_.plan) return planFile(path, "OpenVDB", "snow body: snow_sdf (level set), density and the layers' densities (fog)", 0.0);
   const VdbSummary v = writeSnowVdb(path, d.s, vo);

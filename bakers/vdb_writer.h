@@ -5,6 +5,7 @@
 // is snow when its centre lies between the bedrock and the snow surface of the cell under it, so
 // snow thinner than about half a voxel is not in the volume.
 #pragma once
+#include <algorithm>
 #include <string>
 
 #include "core/snow_state.h"
@@ -22,6 +23,12 @@ struct VdbSummary {
   std::string path;
   size_t snowVoxels = 0;
 };
+
+// The voxel size the bake writes: outputs.vdb_voxel_size_m (`sceneVoxelSizeM`, 0 when unset),
+// else the grid's smaller cell size.
+inline double vdbVoxelSizeM(double sceneVoxelSizeM, const GridSpec& spec) {
+  return sceneVoxelSizeM > 0.0 ? sceneVoxelSizeM : std::min(spec.cellSizeXM, spec.cellSizeYM);
+}
 
 // Written atomically. Throws std::runtime_error on failure.
 VdbSummary writeSnowVdb(const std::string& path, const SnowState& state, const VdbOptions& options);
