@@ -233,7 +233,8 @@ std::vector<std::pair<MemoryGroup, double>> MemoryPrediction::peakByGroup() cons
   return out;
 }
 
-std::string memoryBreakdownText(const MemoryPrediction& p, double measured, const std::string& stage, double cells) {
+std::string memoryBreakdownText(const MemoryPrediction& p, double measured, const std::string& stage, double units,
+                                const std::string& unit) {
   std::ostringstream o;
   o << std::fixed << std::setprecision(0) << "memory: measured peak " << measured / kMiB << " MiB (VmHWM)"
     << (stage.empty() ? "" : ", reached by the end of the " + stage + " stage") << "; predicted " << p.peakBytes() / kMiB << " MiB in the "
@@ -242,15 +243,17 @@ std::string memoryBreakdownText(const MemoryPrediction& p, double measured, cons
   o << "  " << std::left << std::setw(26) << "libraries" << std::right << std::setw(8) << p.libraryBytes / kMiB << " MiB\n";
   for (const auto& [g, bytes] : p.peakByGroup())
     o << "  " << std::left << std::setw(26) << memoryGroupName(g) << std::right << std::setw(8) << bytes / kMiB << " MiB  "
-      << std::setw(5) << bytes / std::max(cells, 1.0) << " B/cell\n";
-  o << "  measured above the libraries: " << std::setprecision(1) << (measured - p.libraryBytes) / std::max(cells, 1.0) << " bytes a cell\n";
+      << std::setw(5) << bytes / std::max(units, 1.0) << " B/" << unit << "\n";
+  o << "  measured above the libraries: " << std::setprecision(1) << (measured - p.libraryBytes) / std::max(units, 1.0) << " bytes a "
+    << unit << "\n";
   return o.str();
 }
 
-std::string memoryBreakdownJson(const MemoryPrediction& p, double measured, const std::string& stage, double cells) {
+std::string memoryBreakdownJson(const MemoryPrediction& p, double measured, const std::string& stage, double units,
+                                const std::string& unit) {
   std::ostringstream o;
   o << std::fixed << std::setprecision(1) << "{\"measured_peak_mib\": " << measured / kMiB << ", \"measured_peak_stage\": \"" << stage
-    << "\", \"measured_bytes_per_cell_above_libraries\": " << (measured - p.libraryBytes) / std::max(cells, 1.0)
+    << "\", \"measured_bytes_per_" << unit << "_above_libraries\": " << (measured - p.libraryBytes) / std::max(units, 1.0)
     << ", \"predicted_peak_mib\": " << p.peakBytes() / kMiB << ", \"predicted_peak_phase\": \"" << p.peakPhase().name
     << "\", \"predicted_mib\": {\"libraries\": " << p.libraryBytes / kMiB;
   for (const auto& [g, bytes] : p.peakByGroup()) o << ", \"" << memoryGroupName(g) << "\": " << bytes / kMiB;

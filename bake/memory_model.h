@@ -55,9 +55,12 @@ struct MemoryPrediction {
 };
 
 // The breakdown against the measured peak (VmHWM) and the stage it came in: the lines `bake
-// --verbose` prints, and the manifest's one-line JSON object ("memory"). `cells`: the grid's.
-std::string memoryBreakdownText(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double cells);
-std::string memoryBreakdownJson(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double cells);
+// --verbose` prints, and the manifest's one-line JSON object ("memory"). `units`: the grid's cells
+// (`unit` "cell"), or mesh mode's launch sites ("site"), the count the bytes are shown per.
+std::string memoryBreakdownText(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double units,
+                                const std::string& unit = "cell");
+std::string memoryBreakdownJson(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double units,
+                                const std::string& unit = "cell");
 
 // What a grid bake (mode = "season" or "occlusion") holds on a grid of `spec`, with
 // `occluderTriangles` triangles of occluder meshes; `reach` (the terrain's heights against the

@@ -12,6 +12,7 @@
 #include "core/hash.h"
 #include "bake_stage.h"
 #include "memory_model.h"
+#include "memory_trace.h"
 #include "modes.h"
 #include "progress.h"
 #include "static_snow/fallen_snow.h"
@@ -52,6 +53,7 @@ MeshSnowManifest meshManifest(const Scene& scene, const TriangleMesh& mesh, cons
 }  // namespace
 
 BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, WallClock::time_point tStart) {
+  resetStageMemory();
   BakeResult result;
   result.backendName = "cpu (Embree ray queries, TBB)";
   auto t0 = WallClock::now();
@@ -62,12 +64,12 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   for (const auto& p : mesh.positions)
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
   log << "mode: mesh (Fearing 2000: snow on the mesh itself; no grid, no season)\n";
+  const double extent[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+  const MemoryPrediction memory = predictMeshBake(scene, mesh.triangles.size(), extent);
   {
-    const double extent[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
-    const MemoryPrediction p = predictMeshBake(scene, mesh.triangles.size(), extent);
     const double budget = memoryBudgetBytes(scene);
-    refuseAboveBudget(scene, p, budget);
-    log << "memory: " << p.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
+    refuseAboveBudget(scene, memory, budget);
+    log << "memory: " << memory.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
   }
   log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
       << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
@@ -125,7 +127,15 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   }
   manifest.commandLine = options.commandLine;
   progress().stage("outputs", 1.0);
+  stage.emplace("manifest");  // the snow body's and the files' memory noted
   progress().stage("manifest", 0.0);
+  {
+    const double measuredPeak = readProcessMemory().peakBytes;
+    const std::string peakStage = stageOfPeak(stageMemory(), measuredPeak);
+    const double sites = static_cast<double>(snow.sites.size());
+    manifest.memoryJson = memoryBreakdownJson(memory, measuredPeak, peakStage, sites, "site");
+    if (options.verbose) log << memoryBreakdownText(memory, measuredPeak, peakStage, sites, "site");
+  }
   writeTextAtomically(manifestPath(options.outDir), meshSnowManifestToJson(manifest));
   result.files.push_back(manifestPath(options.outDir));
   reportFilesWritten(result.files);

@@ -125,6 +125,13 @@ ordered_json filesJson(const Manifest& m) {
   return files;
 }
 
+// The memory object on a line of its own before "files" (the one line two runs of a bake differ by).
+std::string withMemoryLine(std::string text, const std::string& memoryJson) {
+  if (!memoryJson.empty())
+    if (const size_t at = text.find("\n  \"files\": "); at != std::string::npos) text.insert(at, "\n  \"memory\": " + memoryJson + ",");
+  return text;
+}
+
 }  // namespace
 
 std::string manifestToJson(const Manifest& m) {
@@ -143,10 +150,7 @@ std::string manifestToJson(const Manifest& m) {
                           {"melt_removed", m.meltRemovedM3},
                           {"final_snow", m.finalSnowM3}};
   j["files"] = filesJson(m);
-  std::string text = j.dump(2) + "\n";
-  if (!m.memoryJson.empty())
-    if (const size_t at = text.find("\n  \"files\": "); at != std::string::npos) text.insert(at, "\n  \"memory\": " + m.memoryJson + ",");
-  return text;
+  return withMemoryLine(j.dump(2) + "\n", m.memoryJson);
 }
 
 std::string meshSnowManifestToJson(const MeshSnowManifest& m) {
@@ -183,7 +187,7 @@ std::string meshSnowManifestToJson(const MeshSnowManifest& m) {
   ordered_json files = ordered_json::array();
   for (const auto& f : m.files) files.push_back({{"path", f.path}, {"content", f.content}, {"unit", f.unit}, {"format", f.format}});
   j["files"] = files;
-  return j.dump(2) + "\n";
+  return withMemoryLine(j.dump(2) + "\n", m.memoryJson);
 }
 
 }  // namespace snow

@@ -135,6 +135,7 @@ struct MeshSnowManifest {
   size_t bodyTriangles = 0;
   std::vector<MeshSnowFile> files;
   std::vector<std::string> commandLine;  // as Manifest's
+  std::string memoryJson;                // as Manifest's, bytes per launch site
 };
 std::string meshSnowManifestToJson(const MeshSnowManifest& manifest);
 

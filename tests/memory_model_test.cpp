@@ -2,6 +2,7 @@
 // scenes of tools/measure-memory.sh, refusals above the budget and beyond the model before any
 // work, and an allocation that fails anyway reported with its stage (exit 1, not an abort).
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <sys/wait.h>
 
@@ -193,6 +194,31 @@ TEST(MemoryModel, VerboseBakePrintsTheBreakdownByGroupAndTheManifestHoldsItOnOne
     }
   EXPECT_EQ(memoryLines, 1) << manifest.substr(0, 2000);
   EXPECT_GT(peakMiB, 100.0);  // the libraries alone are more: it is the process's peak
+}
+
+// Mesh mode too: the breakdown per launch site in the log and on the manifest's "memory" line
+// (valid JSON), with the stage its peak was reached by.
+TEST(MemoryModel, MeshBakePrintsTheBreakdownPerSiteAndItsManifestHoldsIt) {
+  const fs::path dir = workDir();
+  {
+    std::ofstream obj(dir / "box.obj");
+    obj << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0.5 0.5 1\nv 1.5 0.5 1\nv 1.5 1.5 1\nv 0.5 1.5 1\n"
+           "f 1 2 3\nf 1 3 4\nf 5 6 7\nf 5 7 8\n";
+    std::ofstream toml(dir / "mesh.toml");
+    toml << "mode = \"mesh\"\n[terrain]\nfile = \"box.obj\"\n[mesh_snow]\nsite_spacing_m = 0.1\n[outputs]\nmeshes = [\"obj\"]\n";
+  }
+  const Outcome r = bake(dir, "'" + (dir / "mesh.toml").string() + "' --verbose");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.err.find("memory: measured peak "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" B/site\n"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("measured above the libraries: "), std::string::npos) << r.err;
+  const nlohmann::json m = nlohmann::json::parse(slurp(dir / "out" / "manifest.json"));
+  ASSERT_TRUE(m.contains("memory")) << m.dump(2).substr(0, 2000);
+  const auto& mem = m["memory"];
+  EXPECT_GT(mem["measured_peak_mib"].get<double>(), 100.0);  // the process's peak: the libraries alone are more
+  EXPECT_FALSE(mem["measured_peak_stage"].get<std::string>().empty());
+  EXPECT_GT(mem["measured_bytes_per_site_above_libraries"].get<double>(), 0.0);
+  EXPECT_FALSE(mem["predicted_peak_phase"].get<std::string>().empty());
 }
 
 // Every owner of every phase belongs to a group of the table (the breakdown leaves none out).

@@ -59,7 +59,7 @@ bake() {
   measured=$(( $(tail -1 "$work/rss") / 1024 ))
   # The stage by whose end the process's peak was reached: the manifest's "memory" line.
   stage="$(grep -o '"measured_peak_stage": "[^"]*"' "$work/out/manifest.json" | sed -E 's/.*: "(.*)"/\1/' || true)"
-  stage="${stage:-not noted}"  # mesh mode's manifest has no "memory" line
+  stage="${stage:-not noted}"  # a manifest without a "memory" line (mesh mode's before 2026-12-03)
   local error
   error="$(awk -v p="$predicted" -v m="$measured" 'BEGIN { printf "%+.1f", 100 * (p - m) / m }')"
   if [ $csv = 1 ]; then echo "$name,$predicted,$measured,$error,$phase,$stage"; else
