@@ -131,9 +131,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   stage.emplace("inputs and art direction");
   SnowState state = initialState(terrain);
   const ArtDirectionPlan art = prepareArtDirection(scene, terrain.info(), state, log);
-  if (scene.bedforms.enabled && !occlusionMode)
-    if (const std::string problem = validateBedformParameters(scene.bedforms.params, state.spec); !problem.empty())
-      throw InputError(scene.sourceName + ": " + problem);
+  checkBedformsSuitTheGrid(scene, state.spec);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
   // The record fields stay zero until the season: not held through the precompute's peak.

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <sstream>
 
-#include "core/bedform_runs.h"
 #include "core/errors.h"
 #include "core/format.h"
 #include "modes.h"
@@ -69,9 +68,7 @@ void planGrid(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
   plan.budgetBytes = memoryBudgetBytes(scene);
   refuseAboveBudget(scene, plan.memory, plan.budgetBytes);
   const bool occlusion = scene.mode == SceneMode::Occlusion;
-  if (scene.bedforms.enabled && !occlusion)
-    if (const std::string problem = validateBedformParameters(scene.bedforms.params, spec); !problem.empty())
-      throw InputError(scene.sourceName + ": " + problem);
+  checkBedformsSuitTheGrid(scene, spec);
   plan.width = spec.width, plan.height = spec.height;
   plan.stages = gridStages(scene, terrain, options);
 

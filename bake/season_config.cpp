@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 
+#include "core/bedform_runs.h"
 #include "core/errors.h"
 #include "core/format.h"
 #include "stages.h"
@@ -82,6 +83,16 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
       if (windChanges) pre.windForDay(day, s);
     };
   return config;
+}
+
+void checkBedformsSuitTheGrid(const Scene& scene, const GridSpec& spec) {
+  if (!scene.bedforms.enabled || scene.mode == SceneMode::Occlusion) return;
+  const std::string problem = validateBedformParameters(scene.bedforms.params, spec);
+  if (problem.empty()) return;
+  // The problem starts with its key ("bedforms.periodic: ...", "bedforms.slab_m = ..."): its line.
+  const std::string key = problem.substr(0, problem.find_first_of(" :"));
+  const auto at = scene.keyLocations.find(key);
+  throw InputError((at != scene.keyLocations.end() ? at->second : scene.sourceName) + ": " + problem);
 }
 
 }  // namespace snow

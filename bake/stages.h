@@ -90,6 +90,9 @@ struct SeasonOutputs {
 };
 SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const ArtDirectionPlan& art,
                               const Precomputed& pre, const std::vector<std::string>& layers, SeasonOutputs& outputs, std::ostream& log);
+// Refuses [bedforms] settings that do not suit the grid (an odd grid's periodic window, a slab
+// the cells cannot hold), naming the key's file and line; nothing when bedforms are off.
+void checkBedformsSuitTheGrid(const Scene& scene, const GridSpec& spec);
 
 // stage_season.cpp: the season, with frame days written beside it (frame_writer.h); logs its report.
 SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int threads, SnowBackend& backend, SnowState& state,

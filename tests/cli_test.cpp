@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 
 #include "bakers/grid_writer.h"
@@ -298,6 +299,56 @@ TEST(Cli, TerrainFlagBakesARealDemOnThePresetReplacingItsTerrainTable) {
                         (dir / "o2").string());
   ASSERT_EQ(resampled.status, 0) << resampled.err;
   EXPECT_EQ(snow::readFloatImage((dir / "o2" / "depth.exr").string()).width(), 219);  // 439 cells of 5 m: 2195 m at 10 m
+  fs::remove_all(dir);
+}
+
+// --terrain on every real DEM of ../shared/data with every preset: each bake either runs (its
+// outputs and manifest written) or is refused with exit 2 naming the preset's file, the line and
+// the key of what does not fit the DEM, with nothing written; and each preset bakes some DEM.
+// Short seasons where a preset allows it; art direction keeps its 90-day timeline, so its one
+// square DEM (Front Range, 758 x 758 cells) is cropped to 150 x 150 cells.
+TEST(Cli, TerrainFlagBakesOrRefusesByLineEveryRealDemOnEveryPreset) {
+  const std::string data = SNOWBAKE_SHARED_DATA_DIR;
+  if (!fs::exists(data + "/dem")) GTEST_SKIP() << "shared data not found: " << data;
+  std::vector<std::string> dems;
+  for (const char* name : {"front_range_small_srtm3.asc", "front_range_srtm3.asc", "tyrol_avaKot_5m.asc", "tyrol_avaWog_5m.asc"})
+    dems.push_back(data + "/dem/" + name);
+  for (const char* c : {"avaAlr", "avaHelix", "avaKot", "avaWog"}) dems.push_back(data + "/avaframe/" + c + "/dem.tif");
+  for (const auto& d : dems) ASSERT_TRUE(fs::exists(d)) << d;
+  struct Preset {
+    std::string scene, name, args;
+  };
+  const std::string presets = std::string(SNOWBAKE_SOURCE_DIR) + "/presets/";
+  const std::vector<Preset> all = {
+      {"preset:default", "preset:default", "--set season.days=2 --set 'outputs.frames_days=[1]'"},
+      {presets + "bedforms.toml", "bedforms.toml", "--set season.days=1 --set 'outputs.frames_days=[]'"},
+      {presets + "art_direction.toml", "art_direction.toml", ""}};
+  const fs::path dir = workDir();
+  int run = 0;
+  for (const Preset& p : all) {
+    int baked = 0;
+    for (const std::string& dem : dems) {
+      std::string args = p.args;
+      if (p.name == "art_direction.toml" && dem.find("/front_range_srtm3.asc") != std::string::npos)
+        args += " --set 'terrain.crop_m=[0,0,10650,13890]'";
+      const fs::path out = dir / ("o" + std::to_string(run++));
+      const ProcessResult r = snowbake(dir, "bake '" + p.scene + "' --terrain '" + dem + "' " + args + " --quiet --no-cache --out '" + out.string() + "'");
+      const std::string what = p.name + " on " + dem;
+      if (r.status == 0) {
+        ++baked;
+        EXPECT_TRUE(fs::exists(out / "manifest.json")) << what;
+        EXPECT_TRUE(fs::exists(out / "depth.exr") || fs::exists(out / "depth.16.png")) << what;
+      } else {
+        EXPECT_EQ(r.status, 2) << what << "\n" << r.err;
+        const std::regex named(std::regex_replace(p.name, std::regex("\\."), "\\.") + ":[0-9]+: [a-z_]+\\.[a-z_.]+");
+        EXPECT_TRUE(std::regex_search(r.err, named)) << what << ": the refusal names no file, line and key\n" << r.err;
+        EXPECT_TRUE(!fs::exists(out) || fs::is_empty(out)) << what << ": refused but wrote";
+      }
+      fs::remove_all(out);
+    }
+    EXPECT_GE(baked, 1) << p.name << " baked none of the real DEMs";
+    if (p.name == "preset:default") EXPECT_EQ(baked, static_cast<int>(dems.size())) << "the default preset suits every DEM";
+  }
   fs::remove_all(dir);
 }
 

@@ -3,7 +3,7 @@
 # (docs/testing.md). Builds build-asan (SNOWBAKE_SANITIZE=ON, CPU only) with only the binaries
 # it runs: snowbake (the CLI tests run it), snowbake_tests, bench_tests and snowbake_fuzz.
 #   SNOWBAKE_SANITIZE_FILTER  gtest filter of the sanitized suite (default: every test but the
-#                             four heaviest, each over 20 s unsanitized, whose code lighter tests
+#                             five heaviest, each over 20 s unsanitized, whose code lighter tests
 #                             run too, and the Blender and BlenderAddon suites, which check
 #                             Blender's reading, not our code)
 #   SNOWBAKE_SANITIZE_SHARDS  processes running the suite at once (default: the cores)
@@ -12,6 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 heavy="Bedform.TheThesisBarchanSetGrowsCrescentsOfItsHeight:Stress.TwoHundredRandomTerrainsAndParameters"
 heavy+=":HorizonSweep.AgreesWithEmbreeOnRealAndBuiltinTerrain:Season.StressRoughTerrainsStayPhysical"
+heavy+=":Cli.TerrainFlagBakesOrRefusesByLineEveryRealDemOnEveryPreset"
 filter="${SNOWBAKE_SANITIZE_FILTER:--$heavy:Blender*}"
 shards="${SNOWBAKE_SANITIZE_SHARDS:-$(nproc)}"
 fuzzSeconds="${SNOWBAKE_FUZZ_SECONDS:-10}"
