@@ -6,6 +6,7 @@
 
 #include <iostream>
 
+#include "memory_trace.h"
 #include "modes.h"
 #include "progress.h"
 
@@ -28,6 +29,7 @@ BakeResult runBake(const BakeOptions& options, std::ostream& log) {
   tbb::global_control threadLimit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
   log << "snowbake " << programVersion() << ": scene " << scene.sourceName << " (" << scene.name << "), seed " << scene.seed << ", "
       << threads << " thread" << (threads == 1 ? "" : "s") << "\n";
+  resetStageMemory();  // the stages' memory of this bake, for the peak's stage (memory_trace.h)
   if (scene.mode == SceneMode::Mesh) return runMeshBake(scene, options, log, tStart);
   return runGridBake(scene, options, threads, log, tStart);
 }

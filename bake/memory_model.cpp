@@ -3,6 +3,7 @@
 // and mode_mesh.cpp run them. The few constants measured rather than counted say so; their
 // source is tools/measure-memory.sh (docs/memory.md).
 #include "memory_model.h"
+#include "memory_trace.h"
 #include "memory_vdb.h"
 
 #include <algorithm>
@@ -261,6 +262,13 @@ std::string memoryBreakdownJson(const MemoryPrediction& p, double measured, cons
   return o.str();
 }
 
+std::string measuredMemoryBreakdown(const MemoryPrediction& p, double units, const std::string& unit, bool verbose, std::ostream& log) {
+  const double measured = readProcessMemory().peakBytes;
+  const std::string stage = stageOfPeak(stageMemory(), measured);
+  if (verbose) log << memoryBreakdownText(p, measured, stage, units, unit);
+  return memoryBreakdownJson(p, measured, stage, units, unit);
+}
+
 MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach) {
   using G = MemoryGroup;
   const double cells = static_cast<double>(spec.width) * spec.height;
@@ -412,8 +420,7 @@ std::string keyWhere(const Scene& s, const std::string& givenKey) {
   // The grid's owners are sized by terrain.size for the builtin terrain, by the file otherwise.
   const std::string key = givenKey == "terrain.size" && !s.terrain.builtin ? "terrain.file" : givenKey;
   if (key == "terrain.file" && s.terrain.declaredAt == "--terrain") return "--terrain " + s.terrain.file;
-  const auto it = s.keyLocations.find(key);
-  return (it != s.keyLocations.end() ? it->second : s.sourceName) + ": " + key;
+  return s.keyLocation(key) + ": " + key;
 }
 }  // namespace
 

@@ -7,6 +7,7 @@
 // measured peak resident set.
 #pragma once
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,9 @@ std::string memoryBreakdownText(const MemoryPrediction& p, double measuredPeakBy
                                 const std::string& unit = "cell");
 std::string memoryBreakdownJson(const MemoryPrediction& p, double measuredPeakBytes, const std::string& peakStage, double units,
                                 const std::string& unit = "cell");
+// Both against the process's peak so far and the stage it was reached by (memory_trace.h): the
+// lines written to `log` when `verbose`; the manifest's object returned.
+std::string measuredMemoryBreakdown(const MemoryPrediction& p, double units, const std::string& unit, bool verbose, std::ostream& log);
 
 // What a grid bake (mode = "season" or "occlusion") holds on a grid of `spec`, with
 // `occluderTriangles` triangles of occluder meshes; `reach` (the terrain's heights against the

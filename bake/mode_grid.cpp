@@ -14,7 +14,6 @@
 #include "core/errors.h"
 #include "core/format.h"
 #include "memory_model.h"
-#include "memory_trace.h"
 #include "modes.h"
 #include "progress.h"
 #include "stages.h"
@@ -117,7 +116,6 @@ void createOutputFolder(const std::string& dir) {
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
   checkBuiltinMemory(scene);
-  resetStageMemory();
   std::optional<BakeStage> stage(std::in_place, "terrain");
   progress().stage("terrain", 0.0);
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
@@ -184,11 +182,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
                                             occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
                                             options.commandLine});
-  const double measuredPeak = readProcessMemory().peakBytes;
-  const std::string peakStage = stageOfPeak(stageMemory(), measuredPeak);
-  const double cells = static_cast<double>(state.spec.cellCount());
-  manifest.memoryJson = memoryBreakdownJson(memory, measuredPeak, peakStage, cells);
-  if (options.verbose) log << memoryBreakdownText(memory, measuredPeak, peakStage, cells);
+  manifest.memoryJson = measuredMemoryBreakdown(memory, static_cast<double>(state.spec.cellCount()), "cell", options.verbose, log);
   result.files = files.paths;
   writeTextAtomically(manifestPath(options.outDir), manifestToJson(manifest));
   result.files.push_back(manifestPath(options.outDir));

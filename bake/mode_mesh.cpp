@@ -12,7 +12,6 @@
 #include "core/hash.h"
 #include "bake_stage.h"
 #include "memory_model.h"
-#include "memory_trace.h"
 #include "modes.h"
 #include "progress.h"
 #include "static_snow/fallen_snow.h"
@@ -53,7 +52,6 @@ MeshSnowManifest meshManifest(const Scene& scene, const TriangleMesh& mesh, cons
 }  // namespace
 
 BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, WallClock::time_point tStart) {
-  resetStageMemory();
   BakeResult result;
   result.backendName = "cpu (Embree ray queries, TBB)";
   auto t0 = WallClock::now();
@@ -129,13 +127,7 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
   progress().stage("outputs", 1.0);
   stage.emplace("manifest");  // the snow body's and the files' memory noted
   progress().stage("manifest", 0.0);
-  {
-    const double measuredPeak = readProcessMemory().peakBytes;
-    const std::string peakStage = stageOfPeak(stageMemory(), measuredPeak);
-    const double sites = static_cast<double>(snow.sites.size());
-    manifest.memoryJson = memoryBreakdownJson(memory, measuredPeak, peakStage, sites, "site");
-    if (options.verbose) log << memoryBreakdownText(memory, measuredPeak, peakStage, sites, "site");
-  }
+  manifest.memoryJson = measuredMemoryBreakdown(memory, static_cast<double>(snow.sites.size()), "site", options.verbose, log);
   writeTextAtomically(manifestPath(options.outDir), meshSnowManifestToJson(manifest));
   result.files.push_back(manifestPath(options.outDir));
   reportFilesWritten(result.files);

@@ -90,9 +90,7 @@ void checkBedformsSuitTheGrid(const Scene& scene, const GridSpec& spec) {
   const std::string problem = validateBedformParameters(scene.bedforms.params, spec);
   if (problem.empty()) return;
   // The problem starts with its key ("bedforms.periodic: ...", "bedforms.slab_m = ..."): its line.
-  const std::string key = problem.substr(0, problem.find_first_of(" :"));
-  const auto at = scene.keyLocations.find(key);
-  throw InputError((at != scene.keyLocations.end() ? at->second : scene.sourceName) + ": " + problem);
+  throw InputError(scene.keyLocation(problem.substr(0, problem.find_first_of(" :"))) + ": " + problem);
 }
 
 }  // namespace snow

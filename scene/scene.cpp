@@ -8,4 +8,9 @@ int Scene::startDayOfYear() const {
   return cumulative[startMonth - 1] + startDay + (leap && startMonth > 2 ? 1 : 0);
 }
 
+std::string Scene::keyLocation(const std::string& dottedKey) const {
+  const auto it = keyLocations.find(dottedKey);
+  return it != keyLocations.end() ? it->second : sourceName;
+}
+
 }  // namespace snow

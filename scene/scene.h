@@ -159,6 +159,8 @@ struct Scene {
   std::string canonicalToml;     // the merged, validated document (hashed into the manifest)
 
   int startDayOfYear() const;
+  // Where `dottedKey` was given ("scene.toml:12"), else the scene's source name (a default).
+  std::string keyLocation(const std::string& dottedKey) const;
 };
 
 // Loads and validates a scene file. `overrides` are "dotted.key=VALUE" strings from --set,
