@@ -29,9 +29,11 @@ double surfaceAt(const Grid<float>& bedrock, size_t i, const SnowBox& b, size_t 
 }  // namespace
 
 AvalancheRun::AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain)
-    : backend_(backend), p_(params), terrain_(terrain) {}
-
-double AvalancheRun::surfaceBefore(size_t i) const { return surfaceAt(terrain_.bedrockM, i, before_, i); }
+    : backend_(backend), p_(params), terrain_(terrain) {
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx)
+      neighbourDistanceM_[3 * (dy + 1) + (dx + 1)] = std::hypot(dx * terrain.spec.cellSizeXM, dy * terrain.spec.cellSizeYM);
+}
 
 void AvalancheRun::downloadBefore() {
   before_.x0 = before_.y0 = 0;
@@ -51,32 +53,81 @@ double AvalancheRun::steepestDrop(int x, int y) const {
   for (int ny = std::max(0, y - 1); ny < std::min(g.height, y + 2); ++ny)
     for (int nx = std::max(0, x - 1); nx < std::min(g.width, x + 2); ++nx) {
       if ((nx == x && ny == y) || !terrain_.validCell(nx, ny)) continue;
-      const double dist = std::hypot((nx - x) * g.cellSizeXM, (ny - y) * g.cellSizeYM);
+      const double dist = neighbourDistanceM_[3 * (ny - y + 1) + (nx - x + 1)];
       slope = std::max(slope, (a - surfaceBefore(static_cast<size_t>(ny) * g.width + nx)) / dist);
     }
   return slope;
 }
 
+// The release weights of rows [y0, y1) into w, row after row: min(1, f U (s - tan theta_c) /
+// (1 - tan theta_c)) where the cell is valid with U >= avalanche_min_unstable_m and s > tan theta_c,
+// else 0. s is steepestDrop's value: the largest of (A - A_n) / L_n is, for each of the three
+// lengths L, (A - min A_n) / L (subtraction and division are monotonic), so a ring of three
+// surface rows (+inf where not valid or outside) gives it with three divisions.
+void AvalancheRun::releaseWeights(int y0, int y1, double* w) const {
+  const GridSpec& g = terrain_.spec;
+  const int width = g.width;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
+  const bool factors = terrain_.avalancheReleaseFactor.size() == g.cellCount();
+  const double lx = neighbourDistanceM_[5], ly = neighbourDistanceM_[7], ld = neighbourDistanceM_[8];
+  const uint8_t* valid = terrain_.validCell.values().data();
+  const float* u = before_.unstable.values().data();
+  const float* factor = factors ? terrain_.avalancheReleaseFactor.values().data() : nullptr;
+  std::vector<double> ring(3 * static_cast<size_t>(width + 2), inf);
+  auto rowOf = [&](int y) { return &ring[static_cast<size_t>((y + 3) % 3) * (width + 2)]; };
+  auto fill = [&](int y) {
+    double* r = rowOf(y) + 1;
+    if (y < 0 || y >= g.height) return std::fill(r, r + width, inf);
+    const size_t i0 = static_cast<size_t>(y) * width;
+    const float *b = terrain_.bedrockM.values().data() + i0, *c = before_.compacted.values().data() + i0;
+    const float *st = before_.stable.values().data() + i0, *un = u + i0, *p = before_.powder.values().data() + i0;
+    for (int x = 0; x < width; ++x) r[x] = static_cast<double>(b[x]) + c[x] + st[x] + un[x] + p[x];  // surfaceBefore's sum
+    for (int x = 0; x < width; ++x)
+      if (!valid[i0 + x]) r[x] = inf;
+  };
+  fill(y0 - 1), fill(y0);
+  for (int y = y0; y < y1; ++y) {
+    fill(y + 1);
+    const double *up = rowOf(y - 1), *mid = rowOf(y), *down = rowOf(y + 1);
+    double* out = w + static_cast<size_t>(y - y0) * width;
+    const size_t i0 = static_cast<size_t>(y) * width;
+    for (int x = 0; x < width; ++x) {
+      out[x] = 0.0;
+      const double ux = u[i0 + x];
+      if (!valid[i0 + x] || !(ux >= p_.avalancheMinUnstableM)) continue;
+      const double a = mid[x + 1];
+      const double nx = std::min(mid[x], mid[x + 2]), ny = std::min(up[x + 1], down[x + 1]);
+      const double nd = std::min(std::min(up[x], up[x + 2]), std::min(down[x], down[x + 2]));
+      const double excess = std::max(std::max(0.0, (a - nx) / lx), std::max((a - ny) / ly, (a - nd) / ld)) - tanRest;
+      const double f = factor ? factor[i0 + x] : 1.0;
+      if (excess > 0.0) out[x] = std::min(1.0, f * ux * excess / std::max(1e-6, 1.0 - tanRest));
+    }
+  }
+}
+
 bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC) {
   downloadBefore();
   const GridSpec& g = terrain_.spec;
-  const double tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
-  const bool factors = terrain_.avalancheReleaseFactor.size() == g.cellCount();
-  // The weight of cell (x, y), added to the running total in row order.
-  auto addWeight = [&](int x, int y, double& total) {
-    const size_t i = static_cast<size_t>(y) * g.width + x;
-    const double u = before_.unstable.values()[i];
-    if (terrain_.validCell.values()[i] && u >= p_.avalancheMinUnstableM) {
-      const double excess = steepestDrop(x, y) - tanRest;
-      const double factor = factors ? terrain_.avalancheReleaseFactor.values()[i] : 1.0;
-      if (excess > 0.0) total += std::min(1.0, factor * u * excess / std::max(1e-6, 1.0 - tanRest));
-    }
-  };
+  const int width = g.width;
+  // Bands of rows weighed (on the backend's host threads), then summed in row order: the same
+  // doubles on any thread count. A band's weights (512 KiB) stay in cache for the sum.
+  constexpr int kRowsPerChunk = 4;
+  const int bandRows = kRowsPerChunk * std::max(1, (1 << 16) / std::max(1, kRowsPerChunk * width));
+  weights_.resize(static_cast<size_t>(std::min(bandRows, g.height)) * width);
   rowStartWeights_.assign(static_cast<size_t>(g.height) + 1, 0.0);
   double total = 0.0;
-  for (int y = 0; y < g.height; ++y) {
-    rowStartWeights_[static_cast<size_t>(y)] = total;
-    for (int x = 0; x < g.width; ++x) addWeight(x, y, total);
+  for (int b0 = 0; b0 < g.height; b0 += bandRows) {
+    const int b1 = std::min(g.height, b0 + bandRows);
+    backend_.forEachHostChunk(b1 - b0, kRowsPerChunk, [&](int a, int b) {
+      releaseWeights(b0 + a, b0 + b, &weights_[static_cast<size_t>(a) * width]);
+    });
+    for (int y = b0; y < b1; ++y) {
+      rowStartWeights_[static_cast<size_t>(y)] = total;
+      const double* w = &weights_[static_cast<size_t>(y - b0) * width];
+      for (int x = 0; x < width; ++x)
+        if (w[x] != 0.0) total += w[x];  // (adding +0 changes no double: only the chain of non-zero weights is serial)
+    }
   }
   rowStartWeights_[static_cast<size_t>(g.height)] = total;
   if (!(total > 0.0)) return false;
@@ -87,14 +138,16 @@ bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTe
   const auto above = std::upper_bound(rowStartWeights_.begin(), rowStartWeights_.end() - 1, target);
   for (int y = std::max(0, static_cast<int>(above - rowStartWeights_.begin()) - 1); y < g.height; ++y) {
     double running = rowStartWeights_[static_cast<size_t>(y)];
-    bool found = false;
-    for (int x = 0; x < g.width && !found; ++x) {
-      addWeight(x, y, running);
-      if (running > target) cell = static_cast<size_t>(y) * g.width + x, found = true;
+    releaseWeights(y, y + 1, weights_.data());
+    int found = -1;
+    for (int x = 0; x < width && found < 0; ++x)
+      if ((running += weights_[static_cast<size_t>(x)]) > target) found = x;  // (as the total, +0 changes nothing)
+    if (found >= 0) {
+      cell = static_cast<size_t>(y) * width + found;
+      break;
     }
-    if (found) break;
   }
-  return releaseFromSnapshot(static_cast<int>(cell % g.width), static_cast<int>(cell / g.width), day, seaLevelTemperatureC, false);
+  return releaseFromSnapshot(static_cast<int>(cell % width), static_cast<int>(cell / width), day, seaLevelTemperatureC, false);
 }
 
 void AvalancheRun::beginRecord(int rx, int ry, double day, bool user) {
@@ -187,9 +240,9 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
         record_.releasedM3 += (static_cast<double>(before_.unstable(x, y)) + before_.powder(x, y)) * s.spec.cellAreaM2();
         x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
       }
-  backend_.avalancheRelease(moving);
   args_ = makeAvalancheArgs(p_, seaLevelTemperatureC);
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
+  backend_.avalancheRelease(moving, args_);
   unionBox_ = args_;
   record_.released = true;
   if (keepMaps_) {

@@ -133,7 +133,16 @@ class AvalancheRun {
   // Running totals of the spontaneous release weights at each row's start (in place of one
   // double a cell): the draw rescans only the row it falls in.
   std::vector<double> rowStartWeights_;
-  double surfaceBefore(size_t i) const;
+  std::vector<double> weights_;  // a band of rows' release weights
+  void releaseWeights(int y0, int y1, double* w) const;
+  // A = B + C + S + U + P of the snapshot at cell i, in double.
+  double surfaceBefore(size_t i) const {
+    return static_cast<double>(terrain_.bedrockM.values()[i]) + before_.compacted.values()[i] + before_.stable.values()[i] +
+           before_.unstable.values()[i] + before_.powder.values()[i];
+  }
+  // hypot of the offsets to the neighbour (dx, dy) in metres, at 3 (dy + 1) + dx + 1: steepestDrop's
+  // divisors, the same doubles at every call.
+  double neighbourDistanceM_[9] = {};
   void downloadBefore();
   AvalancheArgs args_;
   AvalancheArgs unionBox_;

@@ -4,6 +4,8 @@
 // runs each module's runX over the backend's forEachCell / forEachCellOfColour.
 // This header is plain C++ so that host code never needs CUDA headers.
 #pragma once
+#include <algorithm>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -49,6 +51,12 @@ class SnowBackend {
   virtual void downloadGiving(SnowState& state) {
     state.restoreFields(downloadedWithState);  // uploadTaking left them without a size
     download(state);
+  }
+  // Host work of the runners cut into independent chunks [a, b) of [0, n) (the spontaneous
+  // release weights, band by band): on the backend's host threads where it has them, else in
+  // order. Each chunk writes only its own output, so the result is the same on any split.
+  virtual void forEachHostChunk(int n, int chunk, const std::function<void(int, int)>& f) {
+    for (int a = 0; a < n; a += chunk) f(a, std::min(n, a + chunk));
   }
   // Replaces the static fields (exposure, temperature base, wind) only.
   virtual void uploadStaticFields(const SnowState& state) = 0;
@@ -102,8 +110,9 @@ class SnowBackend {
   virtual void skierBatch(const SkierArgs& args, std::vector<SkierAgent>& agents, std::vector<std::vector<double>>& paths) = 0;
 
   // Avalanches (phenomena/avalanches.h; the host loop is core/avalanche_runs.h). Release: `moving` (one
-  // byte per cell) marks the released cells; records U + P and joins their powder to U.
-  virtual void avalancheRelease(const std::vector<uint8_t>& moving) = 0;
+  // byte per cell) marks the released cells, all inside `box` ([x0, x1) x [y0, y1)); records U + P
+  // and joins their powder to U.
+  virtual void avalancheRelease(const std::vector<uint8_t>& moving, const AvalancheArgs& box) = 0;
   // `substeps` substeps of args.dtS, the box dilated by one cell before each (snow moves at most
   // one cell a substep), then per-row statistics of the final box: 4 floats per row y0..y1-1
   // (fastest pipe m/s, deepest moving snow m, first and last column holding moving snow or -1).

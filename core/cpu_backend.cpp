@@ -24,16 +24,24 @@ class TbbExec : public HostStorage {
   // Powder diffusion's shares live in row buffers here (forEachCellThen below), not in the view.
   static constexpr bool kPowderSharesInRows = true;
 
-  // A kernel with a row path (rowSpan, found by argument-dependent lookup) runs it per row.
+  // A kernel with a row path (rowSpan, found by argument-dependent lookup) runs it per row. A
+  // pass of one task's rows runs on the calling thread (an avalanche's small boxes, thousands of
+  // passes a second: the task's scheduling would cost more than the rows).
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {
-    tbb::parallel_for(tbb::blocked_range<int>(0, height, kRowGrain), [&](const tbb::blocked_range<int>& rows) {
-      for (int y = rows.begin(); y < rows.end(); ++y) {
+    auto rows = [&](int y0, int y1) {
+      for (int y = y0; y < y1; ++y) {
         if constexpr (HasRowSpan<K>) rowSpan(kernel, y, 0, width);
         else
           for (int x = 0; x < width; ++x) kernel(x, y);
       }
-    });
+    };
+    if (height <= kRowGrain) return rows(0, height);
+    tbb::parallel_for(tbb::blocked_range<int>(0, height, kRowGrain),
+                      [&](const tbb::blocked_range<int>& r) { rows(r.begin(), r.end()); });
+  }
+  void forEachHostChunk(int n, int chunk, const std::function<void(int, int)>& f) {
+    tbb::parallel_for(0, (n + chunk - 1) / chunk, [&](int k) { f(k * chunk, std::min(n, (k + 1) * chunk)); });
   }
   // `first` on every cell, then `second` (SerialExec::forEachCellThen).
   template <class F, class G>

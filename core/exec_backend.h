@@ -14,6 +14,12 @@
 
 namespace snow {
 
+// An executor with host threads of its own for forEachHostChunk (C++17: nvcc reads this header).
+template <class E, class = void>
+struct HasHostChunks : std::false_type {};
+template <class E>
+struct HasHostChunks<E, std::void_t<decltype(&E::forEachHostChunk)>> : std::true_type {};
+
 template <class Exec>
 class ExecBackend final : public SnowBackend {
  public:
@@ -64,6 +70,11 @@ class ExecBackend final : public SnowBackend {
       s.bedformCohesion.resize(spec_.width, spec_.height, 0.f);
       exec_.download(bed_.cohesion, s.bedformCohesion.values());
     }
+  }
+
+  void forEachHostChunk(int n, int chunk, const std::function<void(int, int)>& f) override {
+    if constexpr (HasHostChunks<Exec>::value) exec_.forEachHostChunk(n, chunk, f);
+    else SnowBackend::forEachHostChunk(n, chunk, f);
   }
 
   double snowfall(const SnowfallArgs& a) override { return runSnowfall(exec_, view(), a); }
@@ -144,16 +155,25 @@ class ExecBackend final : public SnowBackend {
     runSkierBatch(exec_, view(), skiers_, args, agents, paths);
   }
 
-  void avalancheRelease(const std::vector<uint8_t>& moving) override {
-    if (!avalancheFieldsReady_) {  // allocated on the first avalanche only
+  void avalancheRelease(const std::vector<uint8_t>& moving, const AvalancheArgs& box) override {
+    const bool wholeGrid = !avalancheFieldsReady_;
+    if (!avalancheFieldsReady_) {  // allocated on the first avalanche after an upload only
       makeScratch(false);
       avalancheFieldsReady_ = true;
     }
-    exec_.upload(snowMoving_, moving);
-    runAvalancheRelease(exec_, view());
+    if (wholeGrid) {
+      exec_.upload(snowMoving_, moving);
+    } else {  // outside the last avalanche's box no flag is set: the release box's rows are enough
+      putAvalancheAtRest(exec_, view(), avalancheTouched_);
+      for (int y = box.y0; y < box.y1; ++y) {
+        const size_t at = static_cast<size_t>(y) * spec_.width + box.x0;
+        exec_.uploadRange(snowMoving_, at, static_cast<size_t>(box.x1 - box.x0), moving.data() + at);
+      }
+    }
+    runAvalancheRelease(exec_, view(), avalancheTouched_, AvalancheTouched{box.x0, box.y0, box.x1, box.y1}, wholeGrid);
   }
   std::vector<float> avalancheSteps(const AvalancheArgs& args, int substeps) override {
-    return runAvalancheSteps(exec_, view(), rowStats_, args, substeps);
+    return runAvalancheSteps(exec_, view(), rowStats_, avalancheTouched_, args, substeps);
   }
   void avalancheSettle(const AvalancheArgs& a) override { runAvalancheSettle(exec_, view(), a); }
 
@@ -250,6 +270,7 @@ class ExecBackend final : public SnowBackend {
 #undef SNOW_SCRATCH_BUFFER
   Buffer<float> editWeight_;
   bool avalancheFieldsReady_ = false;
+  AvalancheTouched avalancheTouched_;  // phenomena/avalanches.h
   BedformStorage<Exec> bed_;
   SkierStorage<Exec> skiers_;
 };

@@ -300,6 +300,21 @@ struct AvalancheReleaseKernel {
   }
 };
 
+// A cell the last avalanche touched, back at rest for the next one: what the release kernel
+// gives a cell it does not release, but U + P and U (recorded where the next avalanche reaches).
+struct AvalancheRestKernel {
+  SnowFieldsView v;
+  SNOW_HD void operator()(int x, int y) const {
+    const int i = v.index(x, y);
+    float* f = v.flows + 4 * static_cast<size_t>(i);
+    f[0] = f[1] = f[2] = f[3] = 0.f;
+    v.avalanchePeakSpeed[i] = 0.f;
+    v.avalanchePeakThickness[i] = 0.f;
+    v.avalancheFlowing[i] = 0;
+    v.moving[i] = 0;
+  }
+};
+
 // At rest: the moving snow is deposited as stable snow (avalanche debris is dense and fused),
 // the net change of each cell is recorded as scour or deposit, flows and flags cleared.
 struct AvalancheSettleKernel {

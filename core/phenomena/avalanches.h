@@ -28,7 +28,8 @@
 //
 // Preconditions: snowMoving marks the released cells (avalancheRelease uploads it); scratch:
 // flows, avalancheBefore, avalancheU and rowStats (made by the backend at the first avalanche),
-// scratchPowder (the outflow scales).
+// scratchPowder (the outflow scales). A release costs its box, not the grid: the scratch is
+// kept at rest outside the box an avalanche touches (AvalancheTouched below).
 // Mass: conserved (see above); the scour and deposit records (avalancheScourM, avalancheDepositM)
 // are kept at the settle.
 // Backend: SnowBackend::avalancheRelease, avalancheSteps and avalancheSettle (ExecBackend runs
@@ -62,10 +63,54 @@ inline AvalancheArgs makeAvalancheArgs(const ModelParameters& p, double seaLevel
   return a;
 }
 
-// The released cells (snowMoving, uploaded by the caller) start moving.
+// The cells an avalanche has written: its release box, grown to each substep's box. Outside it
+// the avalanche's scratch is at rest (flows, both peaks and the flowing flag zero), and U + P and
+// U at release are recorded on a cell only when the box first reaches it (growTouchedBox): no
+// pass reads them elsewhere, and the cell has not changed since the release (while an avalanche
+// runs nothing else does), so each value is the one a whole-grid release would record.
+struct AvalancheTouched {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
 template <class Exec>
-void runAvalancheRelease(Exec& exec, const SnowFieldsView& v) {
-  exec.forEachCell(v.width, v.height, AvalancheReleaseKernel{v});
+void releaseKernelInBox(Exec& exec, const SnowFieldsView& v, int x0, int y0, int x1, int y1) {
+  if (x1 > x0 && y1 > y0) exec.forEachCell(x1 - x0, y1 - y0, InBox<AvalancheReleaseKernel>{AvalancheReleaseKernel{v}, x0, y0});
+}
+
+// Widens `t` to hold the box [x0, x1) x [y0, y1), with a margin so that a box growing by a cell a
+// substep widens it every few substeps only; the release kernel records the new cells.
+template <class Exec>
+void growTouchedBox(Exec& exec, const SnowFieldsView& v, AvalancheTouched& t, int x0, int y0, int x1, int y1) {
+  if (x0 >= t.x0 && y0 >= t.y0 && x1 <= t.x1 && y1 <= t.y1) return;
+  constexpr int kMargin = 8;
+  const int nx0 = x0 < t.x0 ? (x0 > kMargin ? x0 - kMargin : 0) : t.x0;
+  const int ny0 = y0 < t.y0 ? (y0 > kMargin ? y0 - kMargin : 0) : t.y0;
+  const int nx1 = x1 > t.x1 ? (x1 + kMargin < v.width ? x1 + kMargin : v.width) : t.x1;
+  const int ny1 = y1 > t.y1 ? (y1 + kMargin < v.height ? y1 + kMargin : v.height) : t.y1;
+  releaseKernelInBox(exec, v, nx0, ny0, nx1, t.y0);  // the rows above the old box, then below it
+  releaseKernelInBox(exec, v, nx0, t.y1, nx1, ny1);
+  releaseKernelInBox(exec, v, nx0, t.y0, t.x0, t.y1);  // the columns left of it, then right of it
+  releaseKernelInBox(exec, v, t.x1, t.y0, nx1, t.y1);
+  t = {nx0, ny0, nx1, ny1};
+}
+
+// The last avalanche's touched box back at rest (its moving flags too, should it not have
+// settled), before the next release's flags are uploaded.
+template <class Exec>
+void putAvalancheAtRest(Exec& exec, const SnowFieldsView& v, const AvalancheTouched& t) {
+  if (t.x1 > t.x0 && t.y1 > t.y0)
+    exec.forEachCell(t.x1 - t.x0, t.y1 - t.y0, InBox<AvalancheRestKernel>{AvalancheRestKernel{v}, t.x0, t.y0});
+}
+
+// The released cells (snowMoving, uploaded by the caller; all inside `box`) start moving. With
+// `wholeGrid` (the first avalanche after the state's upload, whose peaks may be anywhere) the
+// release kernel runs on every cell; else on the release box, the rest being at rest
+// (putAvalancheAtRest). `t` becomes the release box.
+template <class Exec>
+void runAvalancheRelease(Exec& exec, const SnowFieldsView& v, AvalancheTouched& t, const AvalancheTouched& box, bool wholeGrid) {
+  if (wholeGrid) exec.forEachCell(v.width, v.height, AvalancheReleaseKernel{v});
+  else releaseKernelInBox(exec, v, box.x0, box.y0, box.x1, box.y1);
+  t = box;
   exec.finish();
 }
 
@@ -73,7 +118,7 @@ void runAvalancheRelease(Exec& exec, const SnowFieldsView& v) {
 // a substep), each pass over the box's rows' spans only (InRowSpans), then the per-row statistics
 // of the grown box. Returns the grown box in `a`.
 template <class Exec>
-void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a, int substeps) {
+void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheTouched& touched, AvalancheArgs& a, int substeps) {
   for (int s = 0; s < substeps; ++s) {
     a.x0 = a.x0 > 0 ? a.x0 - 1 : 0;
     a.y0 = a.y0 > 0 ? a.y0 - 1 : 0;
@@ -81,6 +126,7 @@ void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a,
     a.y1 = a.y1 < v.height ? a.y1 + 1 : v.height;
     const int w = a.x1 - a.x0, h = a.y1 - a.y0;
     if (w <= 0 || h <= 0) return;
+    growTouchedBox(exec, v, touched, a.x0, a.y0, a.x1, a.y1);
     // Every cell with moving snow is at least one cell inside the row spans, so all of its pipes
     // and neighbours are processed; cells outside hold no flows (AvalancheClearIdleKernel).
     const int k = s + 1;
@@ -98,10 +144,10 @@ void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheArgs& a,
 // `substeps` substeps from `args`' box, then what the host reads back: the step's 4 floats per
 // row of the grown box (from `rowStats`, the buffer behind v.rowStats), then the box x0, y0, x1, y1.
 template <class Exec, class RowStatsBuffer>
-std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowStatsBuffer& rowStats, const AvalancheArgs& args,
-                                     int substeps) {
+std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowStatsBuffer& rowStats, AvalancheTouched& touched,
+                                     const AvalancheArgs& args, int substeps) {
   AvalancheArgs a = args;
-  runAvalancheSubsteps(exec, v, a, substeps);
+  runAvalancheSubsteps(exec, v, touched, a, substeps);
   std::vector<float> stats;
   exec.download(rowStats, stats);
   std::vector<float> box;
