@@ -229,6 +229,38 @@ TEST(Avalanche, PeakFieldsHoldEachAvalanchesAndTheSeasonsMaximum) {
   }
 }
 
+// A release writes the avalanche scratch only in the box the avalanche reaches (AvalancheTouched):
+// three avalanches in a row on one backend, the third across the first's track, give the same
+// bytes as each run after a fresh upload of the state, where the release covers the whole grid.
+TEST(Avalanche, ReleasesInTheirBoxGiveTheSameBytesAsWholeGridReleases) {
+  SnowState s = test::terrainFrom(60, 120, 2.0, -20.f, [](double x, double y) { return 2000.0 - 1.2 * y + 0.1 * x; });
+  for (int y = 10; y < 20; ++y)
+    for (int x = 5; x < 15; ++x) s.unstableM(x, y) = 1.f, s.unstableM(x + 40, y) = 2.f, s.unstableM(x + 18, y + 50) = 1.5f;
+  const ModelParameters params;
+  const int releases[3][2] = {{28, 65}, {10, 15}, {50, 15}};
+  for (auto make : {createSerialBackend, createCpuBackend}) {
+    auto inRow = make();
+    inRow->upload(s);
+    AvalancheRun run(*inRow, params, s);
+    SnowState fresh = s;
+    for (const auto& r : releases) {
+      ASSERT_TRUE(run.release(r[0], r[1], 0.0, 0.0, true));
+      run.runToRest();
+      auto once = make();  // the whole-grid release: the first after an upload
+      once->upload(fresh);
+      AvalancheRun alone(*once, params, fresh);
+      ASSERT_TRUE(alone.release(r[0], r[1], 0.0, 0.0, true));
+      alone.runToRest();
+      once->download(fresh);
+      EXPECT_EQ(run.record().steps, alone.record().steps);
+    }
+    SnowState inRowState = s;
+    inRow->download(inRowState);
+    test::expectSameBytes(fresh, inRowState);
+    EXPECT_GT(fresh.avalancheDepositM(28, 100) + fresh.avalancheDepositM(10, 100), 0.f);  // the tracks reached the foot
+  }
+}
+
 // Spontaneous releases start only where a cell can release: none on a plane gentler than the
 // rest angle however deep its unstable snow, and on a steep one at a cell steeper than it.
 TEST(Avalanche, SpontaneousReleasesOnlyWhereACellCanRelease) {
