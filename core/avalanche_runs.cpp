@@ -4,6 +4,7 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <utility>
 
 #include "util.h"
 
@@ -39,6 +40,26 @@ void AvalancheRun::downloadBefore() {
   before_.x0 = before_.y0 = 0;
   before_.width = terrain_.spec.width, before_.height = terrain_.spec.height;
   backend_.downloadBox(before_, false);
+  snapshotKept_ = true;
+  snapshotVersion_ = backend_.stateVersion();
+  rowWeights_.assign(static_cast<size_t>(terrain_.spec.height), 0.0);
+  staleY0_ = 0, staleY1_ = terrain_.spec.height;
+}
+
+// The settled box into the snapshot, so that it holds the state again: its rows' weights are stale.
+void AvalancheRun::keepSnapshotOfBox() {
+  const int w = terrain_.spec.width;
+  for (int y = unionBox_.y0; y < unionBox_.y1; ++y) {
+    const size_t i = static_cast<size_t>(y) * w + unionBox_.x0, j = after_.index(unionBox_.x0, y);
+    const size_t n = static_cast<size_t>(unionBox_.x1 - unionBox_.x0);
+    for (auto [to, from] : {std::pair{&before_.compacted, &after_.compacted}, {&before_.stable, &after_.stable},
+                            {&before_.unstable, &after_.unstable}, {&before_.powder, &after_.powder}})
+      std::copy_n(from->values().data() + j, n, to->values().data() + i);
+  }
+  if (unionBox_.y1 > unionBox_.y0) {
+    staleY0_ = staleY1_ > staleY0_ ? std::min(staleY0_, unionBox_.y0) : unionBox_.y0;
+    staleY1_ = std::max(staleY1_, unionBox_.y1);
+  }
 }
 
 bool AvalancheRun::release(int x, int y, double day, double seaLevelTemperatureC, bool user) {
@@ -106,48 +127,59 @@ void AvalancheRun::releaseWeights(int y0, int y1, double* w) const {
   }
 }
 
-bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC) {
-  downloadBefore();
-  const GridSpec& g = terrain_.spec;
-  const int width = g.width;
-  // Bands of rows weighed (on the backend's host threads), then summed in row order: the same
-  // doubles on any thread count. A band's weights (512 KiB) stay in cache for the sum.
+// The release weights' row sums of rows [r0, r1), band by band on the backend's host threads,
+// each row summed in order: the same doubles on any thread count. A band's weights (512 KiB)
+// stay in cache for its sums.
+void AvalancheRun::weighRows(int r0, int r1) {
+  const int width = terrain_.spec.width;
   constexpr int kRowsPerChunk = 4;
   const int bandRows = kRowsPerChunk * std::max(1, (1 << 16) / std::max(1, kRowsPerChunk * width));
-  weights_.resize(static_cast<size_t>(std::min(bandRows, g.height)) * width);
-  rowStartWeights_.assign(static_cast<size_t>(g.height) + 1, 0.0);
-  double total = 0.0;
-  for (int b0 = 0; b0 < g.height; b0 += bandRows) {
-    const int b1 = std::min(g.height, b0 + bandRows);
+  weights_.resize(static_cast<size_t>(std::min(bandRows, terrain_.spec.height)) * width);
+  for (int b0 = r0; b0 < r1; b0 += bandRows) {
+    const int b1 = std::min(r1, b0 + bandRows);
     backend_.forEachHostChunk(b1 - b0, kRowsPerChunk, [&](int a, int b) {
       releaseWeights(b0 + a, b0 + b, &weights_[static_cast<size_t>(a) * width]);
     });
     for (int y = b0; y < b1; ++y) {
-      rowStartWeights_[static_cast<size_t>(y)] = total;
       const double* w = &weights_[static_cast<size_t>(y - b0) * width];
+      double sum = 0.0;
       for (int x = 0; x < width; ++x)
-        if (w[x] != 0.0) total += w[x];  // (adding +0 changes no double: only the chain of non-zero weights is serial)
+        if (w[x] != 0.0) sum += w[x];
+      rowWeights_[static_cast<size_t>(y)] = sum;
     }
   }
+}
+
+bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC) {
+  // Only the last avalanches' rows have changed since the snapshot when no other step has run
+  // (settle copied their box in); a row's weights read the rows beside it.
+  if (!snapshotKept_ || backend_.stateVersion() != snapshotVersion_) downloadBefore();
+  const GridSpec& g = terrain_.spec;
+  const int width = g.width;
+  weighRows(std::max(0, staleY0_ - 1), std::min(g.height, staleY1_ + 1));
+  staleY0_ = staleY1_ = 0;
+  rowStartWeights_.assign(static_cast<size_t>(g.height) + 1, 0.0);
+  double total = 0.0;
+  for (int y = 0; y < g.height; ++y) rowStartWeights_[static_cast<size_t>(y)] = total, total += rowWeights_[static_cast<size_t>(y)];
   rowStartWeights_[static_cast<size_t>(g.height)] = total;
   if (!(total > 0.0)) return false;
-  // The first cell whose running total passes the target: its row is the last whose start total
-  // is at most the target, then that row is summed again in the same order (the same doubles).
+  // The row is the last whose start total is at most the target (one with weight: the target is
+  // below the next start); in it, the first cell whose running sum passes what is left, or the
+  // row's last weighted cell where rounding leaves the sum just short.
   const double target = cellDraw * total;
-  size_t cell = g.cellCount() - 1;
   const auto above = std::upper_bound(rowStartWeights_.begin(), rowStartWeights_.end() - 1, target);
-  for (int y = std::max(0, static_cast<int>(above - rowStartWeights_.begin()) - 1); y < g.height; ++y) {
-    double running = rowStartWeights_[static_cast<size_t>(y)];
-    releaseWeights(y, y + 1, weights_.data());
-    int found = -1;
-    for (int x = 0; x < width && found < 0; ++x)
-      if ((running += weights_[static_cast<size_t>(x)]) > target) found = x;  // (as the total, +0 changes nothing)
-    if (found >= 0) {
-      cell = static_cast<size_t>(y) * width + found;
-      break;
-    }
+  const int y = std::max(0, static_cast<int>(above - rowStartWeights_.begin()) - 1);
+  releaseWeights(y, y + 1, weights_.data());
+  const double left = target - rowStartWeights_[static_cast<size_t>(y)];
+  double running = 0.0;
+  int found = -1;
+  for (int x = 0; x < width; ++x) {
+    if (weights_[static_cast<size_t>(x)] == 0.0) continue;
+    found = x;
+    if ((running += weights_[static_cast<size_t>(x)]) > left) break;
   }
-  return releaseFromSnapshot(static_cast<int>(cell % width), static_cast<int>(cell / width), day, seaLevelTemperatureC, false);
+  if (found < 0) return false;
+  return releaseFromSnapshot(found, y, day, seaLevelTemperatureC, false);
 }
 
 void AvalancheRun::beginRecord(int rx, int ry, double day, bool user) {
@@ -405,6 +437,7 @@ AvalancheRecord AvalancheRun::settle() {
     record_.maps->peakSpeed = GridCrop{after.x0, after.y0, after.peakSpeed};
     if (frameIntervalS_ > 0.0) record_.maps->frames.push_back({record_.simulatedS, boxDepth()});
   }
+  keepSnapshotOfBox();
   wallSeconds_ += elapsedSeconds(t0);
   record_.seconds = wallSeconds_;
   return record_;

@@ -93,8 +93,10 @@ class AvalancheRun {
   // release, each weighted by how unstable it is, min(1, U / 1 m x (s - tan theta_c) / (1 - tan theta_c))
   // (s the steepest drop of the snow surface to an 8-neighbour; U >= avalanche_min_unstable_m;
   // times the scene's avalanche_release multiplier): nothing releases below the rest angle, and
-  // nothing at all where no cell can (false). Downloads the state; weights summed in row order in
-  // double, so the draw is the same on every backend and thread count.
+  // nothing at all where no cell can (false). Downloads the state unless only this runner's
+  // avalanches have run since its last snapshot (then it weighs their rows again only); each row's
+  // weights summed in order in double, then the rows, so the draw is the same on every backend
+  // and thread count.
   bool trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC);
   bool active() const { return active_; }
   bool atRest() const { return atRest_; }
@@ -133,8 +135,16 @@ class AvalancheRun {
   // Running totals of the spontaneous release weights at each row's start (in place of one
   // double a cell): the draw rescans only the row it falls in.
   std::vector<double> rowStartWeights_;
-  std::vector<double> weights_;  // a band of rows' release weights
+  std::vector<double> rowWeights_;  // each row's weights summed in order
+  std::vector<double> weights_;     // a band of rows' release weights
   void releaseWeights(int y0, int y1, double* w) const;
+  void weighRows(int r0, int r1);
+  // The snapshot kept between tries: while the backend's stateVersion is the one it was taken at,
+  // only the avalanches since have changed the state, and settle() copies their boxes in.
+  bool snapshotKept_ = false;
+  uint64_t snapshotVersion_ = 0;
+  int staleY0_ = 0, staleY1_ = 0;  // the rows whose weights are out of date
+  void keepSnapshotOfBox();
   // A = B + C + S + U + P of the snapshot at cell i, in double.
   double surfaceBefore(size_t i) const {
     return static_cast<double>(terrain_.bedrockM.values()[i]) + before_.compacted.values()[i] + before_.stable.values()[i] +

@@ -5,6 +5,7 @@
 // This header is plain C++ so that host code never needs CUDA headers.
 #pragma once
 #include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
@@ -58,6 +59,10 @@ class SnowBackend {
   virtual void forEachHostChunk(int n, int chunk, const std::function<void(int, int)>& f) {
     for (int a = 0; a < n; a += chunk) f(a, std::min(n, a + chunk));
   }
+  // Counts the calls that may have changed the snow layers, but the avalanche's own (release,
+  // steps, settle): while it stays the same, the avalanche runner's snapshot needs only the boxes
+  // of its own avalanches (AvalancheRun::trySpontaneous).
+  virtual uint64_t stateVersion() const = 0;
   // Replaces the static fields (exposure, temperature base, wind) only.
   virtual void uploadStaticFields(const SnowState& state) = 0;
 

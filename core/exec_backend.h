@@ -31,6 +31,7 @@ class ExecBackend final : public SnowBackend {
   // The state's fields by their roles (snow_fields.h); the scratch fields made with the state
   // zeroed; the avalanche's and the bedforms' fields made again at their first step.
   void upload(const SnowState& s) override { uploadState(s, nullptr); }
+  uint64_t stateVersion() const override { return stateVersion_; }
   void uploadTaking(SnowState& s) override { uploadState(s, &s); }
 
   // Static fields, and the art-direction ones the scene paints (empty buffers otherwise: null in
@@ -58,6 +59,7 @@ class ExecBackend final : public SnowBackend {
   }
 
   void downloadGiving(SnowState& s) override {
+    ++stateVersion_;  // the fields leave the backend until the next upload
 #define SNOW_DOWNLOAD_GIVING(member, view, Element, role, access, fill)        \
   if constexpr (downloadedWithState(FieldRole::role)) {                        \
     std::vector<Element> values;                                               \
@@ -164,18 +166,18 @@ class ExecBackend final : public SnowBackend {
     if (wholeGrid) {
       exec_.upload(snowMoving_, moving);
     } else {  // outside the last avalanche's box no flag is set: the release box's rows are enough
-      putAvalancheAtRest(exec_, view(), avalancheTouched_);
+      putAvalancheAtRest(exec_, fieldsView(), avalancheTouched_);
       for (int y = box.y0; y < box.y1; ++y) {
         const size_t at = static_cast<size_t>(y) * spec_.width + box.x0;
         exec_.uploadRange(snowMoving_, at, static_cast<size_t>(box.x1 - box.x0), moving.data() + at);
       }
     }
-    runAvalancheRelease(exec_, view(), avalancheTouched_, AvalancheTouched{box.x0, box.y0, box.x1, box.y1}, wholeGrid);
+    runAvalancheRelease(exec_, fieldsView(), avalancheTouched_, AvalancheTouched{box.x0, box.y0, box.x1, box.y1}, wholeGrid);
   }
   std::vector<float> avalancheSteps(const AvalancheArgs& args, int substeps) override {
-    return runAvalancheSteps(exec_, view(), rowStats_, avalancheTouched_, args, substeps);
+    return runAvalancheSteps(exec_, fieldsView(), rowStats_, avalancheTouched_, args, substeps);
   }
-  void avalancheSettle(const AvalancheArgs& a) override { runAvalancheSettle(exec_, view(), a); }
+  void avalancheSettle(const AvalancheArgs& a) override { runAvalancheSettle(exec_, fieldsView(), a); }
 
   LayerTotals totals() override {
     const double area = spec_.cellAreaM2();
@@ -198,6 +200,7 @@ class ExecBackend final : public SnowBackend {
   // The state's fields by their roles; with `taking` (the same state), the fields the season
   // downloads are moved in (HostStorage) or their host grids freed once uploaded (a device).
   void uploadState(const SnowState& s, SnowState* taking) {
+    ++stateVersion_;
     spec_ = s.spec;
 #define SNOW_UPLOAD_WITH_STATE(member, view, Element, role, access, fill)      \
   if constexpr (uploadedWithState(FieldRole::role)) {                          \
@@ -216,7 +219,13 @@ class ExecBackend final : public SnowBackend {
     uploadStaticFields(s);
   }
 
+  // The kernels' view; every kernel but the avalanche's takes it through view(), which counts the
+  // call (stateVersion: a kernel that only reads is counted too, which costs a download, no more).
   SnowFieldsView view() {
+    ++stateVersion_;
+    return fieldsView();
+  }
+  SnowFieldsView fieldsView() {
     SnowFieldsView v;
     v.width = spec_.width;
     v.height = spec_.height;
@@ -270,6 +279,7 @@ class ExecBackend final : public SnowBackend {
 #undef SNOW_SCRATCH_BUFFER
   Buffer<float> editWeight_;
   bool avalancheFieldsReady_ = false;
+  uint64_t stateVersion_ = 0;
   AvalancheTouched avalancheTouched_;  // phenomena/avalanches.h
   BedformStorage<Exec> bed_;
   SkierStorage<Exec> skiers_;

@@ -261,6 +261,43 @@ TEST(Avalanche, ReleasesInTheirBoxGiveTheSameBytesAsWholeGridReleases) {
   }
 }
 
+// The runner keeps its snapshot between spontaneous tries while only its own avalanches have run
+// (settle copies their boxes in), and downloads it again after any other step (here a snowfall
+// between the third and fourth tries): the tries draw the same cells and leave the same bytes as
+// with the state uploaded again before each try, which forces a whole download.
+TEST(Avalanche, KeptSnapshotDrawsAsAFreshDownloadBetweenTries) {
+  SnowState s = test::makeRoughState(96, 80, 11);
+  for (size_t i = 0; i < s.spec.cellCount(); ++i)
+    if (s.validCell.values()[i]) s.unstableM.values()[i] = 0.15f;
+  const ModelParameters params;
+  SnowfallArgs fall;
+  fall.intensity = 4000.f, fall.rainSnowLimitM = 0.f, fall.seaLevelTemperatureC = -10.f, fall.unstableCriticalSlope = 10.f;
+  auto kept = createCpuBackend(), fresh = createCpuBackend();
+  kept->upload(s);
+  fresh->upload(s);
+  AvalancheRun a(*kept, params, s), b(*fresh, params, s);
+  int released = 0;
+  for (double draw : {0.13, 0.71, 0.42, 0.95, 0.27, 0.58}) {
+    if (released == 3) kept->snowfall(fall), fresh->snowfall(fall);
+    SnowState again = s;
+    fresh->download(again);
+    fresh->upload(again);
+    const bool ra = a.trySpontaneous(draw, 0.0, -10.0), rb = b.trySpontaneous(draw, 0.0, -10.0);
+    ASSERT_EQ(ra, rb) << draw;
+    if (!ra) continue;
+    ++released;
+    const AvalancheRecord x = a.runToRest(), y = b.runToRest();
+    EXPECT_EQ(x.ruptureX, y.ruptureX) << draw;
+    EXPECT_EQ(x.ruptureY, y.ruptureY) << draw;
+    EXPECT_EQ(x.steps, y.steps) << draw;
+  }
+  EXPECT_GE(released, 5);
+  SnowState ka = s, fb = s;
+  kept->download(ka);
+  fresh->download(fb);
+  test::expectSameBytes(ka, fb);
+}
+
 // Spontaneous releases start only where a cell can release: none on a plane gentler than the
 // rest angle however deep its unstable snow, and on a steep one at a cell steeper than it.
 TEST(Avalanche, SpontaneousReleasesOnlyWhereACellCanRelease) {
