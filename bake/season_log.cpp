@@ -71,7 +71,9 @@ void logSeasonReport(const SeasonReport& report, const Scene& scene, const Seaso
   if (report.noSnowRemovedM3 > 0.0)
     log << "  no-snow mask: " << std::scientific << std::setprecision(4) << report.noSnowRemovedM3 << std::defaultfloat
         << " m^3 of initial snow removed\n";
-  if (report.avalancheTries > 0) log << "  spontaneous avalanche events: " << report.avalancheTries << "\n";
+  if (report.avalancheTries > 0)
+    log << "  spontaneous avalanche events: " << report.avalancheTries << " (" << report.avalancheTryCalls << " tries with the retries, "
+        << report.avalancheSnapshotsKept << " on a kept snapshot; " << fixed(report.avalancheTrySeconds, 2) << " s)\n";
   logReleasesPerStorm(report, config, log);
   if (config.bedforms)
     log << "  wind bedforms: " << report.bedforms.domainCells << " cells, " << report.bedforms.rounds << " rounds, "

@@ -154,6 +154,7 @@ bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTe
   // Only the last avalanches' rows have changed since the snapshot when no other step has run
   // (settle copied their box in); a row's weights read the rows beside it.
   if (!snapshotKept_ || backend_.stateVersion() != snapshotVersion_) downloadBefore();
+  else ++snapshotsKept_;
   const GridSpec& g = terrain_.spec;
   const int width = g.width;
   weighRows(std::max(0, staleY0_ - 1), std::min(g.height, staleY1_ + 1));

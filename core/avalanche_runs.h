@@ -98,6 +98,7 @@ class AvalancheRun {
   // weights summed in order in double, then the rows, so the draw is the same on every backend
   // and thread count.
   bool trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC);
+  uint64_t snapshotsKept() const { return snapshotsKept_; }  // tries that found the snapshot kept
   bool active() const { return active_; }
   bool atRest() const { return atRest_; }
   // One step of avalanche_step_s. Returns true when the snow has come to rest (or the duration
@@ -142,6 +143,7 @@ class AvalancheRun {
   // The snapshot kept between tries: while the backend's stateVersion is the one it was taken at,
   // only the avalanches since have changed the state, and settle() copies their boxes in.
   bool snapshotKept_ = false;
+  uint64_t snapshotsKept_ = 0;
   uint64_t snapshotVersion_ = 0;
   int staleY0_ = 0, staleY1_ = 0;  // the rows whose weights are out of date
   void keepSnapshotOfBox();

@@ -94,6 +94,9 @@ struct SeasonReport {
   double seconds = 0.0;
   std::vector<AvalancheRecord> avalanches;  // every avalanche released, and every user release that could not be
   uint64_t avalancheTries = 0;              // spontaneous release tries (most find nothing to release)
+  uint64_t avalancheTryCalls = 0;           // the tries with their retries at later state-change steps
+  uint64_t avalancheSnapshotsKept = 0;      // calls that found the runner's snapshot kept (AvalancheRun::trySpontaneous)
+  double avalancheTrySeconds = 0.0;         // wall time of the calls (within the avalanche's time)
   std::vector<SkierRecord> skiers;          // every skier's descent (path kept for user skiers only)
   // Wind bedforms: polling rounds run, slabs the wind lifted, slab moves of the repose
   // relaxation, steps without wind above the threshold (sintering only), and whether every

@@ -2,6 +2,7 @@
 // tries and the user and skier releases waiting for it.
 #include "rng.h"
 #include "season_run.h"
+#include "util.h"
 
 namespace snow {
 
@@ -36,7 +37,11 @@ void SeasonRun::trySpontaneousRelease(const EventContext& e, bool retry) {
   const RandomKey key{cfg_.seed};
   const Philox4x32 r = key.draw(e.eventIndex, 0, RngStream::Avalanche);
   if (!retry) ++report_.avalancheTries;
+  const auto t0 = WallClock::now();
   const bool released = avalanche_->trySpontaneous(uniformOpenDouble(r.v[0], r.v[1]), e.day, cfg_.weather.at(e.day).seaLevelTemperatureC);
+  report_.avalancheTrySeconds += elapsedSeconds(t0);
+  ++report_.avalancheTryCalls;
+  report_.avalancheSnapshotsKept = avalanche_->snapshotsKept();
   if (retry && released) --waitingReleases_;
   if (!retry && !released) ++waitingReleases_;
   if (waitingReleases_ > 0) scheduleWaitingRelease(e.day);
