@@ -36,11 +36,13 @@ AvalancheRun::AvalancheRun(SnowBackend& backend, const ModelParameters& params, 
       neighbourDistanceM_[3 * (dy + 1) + (dx + 1)] = std::hypot(dx * terrain.spec.cellSizeXM, dy * terrain.spec.cellSizeYM);
 }
 
+double AvalancheRun::surfaceBefore(size_t i) const { return surfaceAt(terrain_.bedrockM, i, before_, i); }
+
 void AvalancheRun::downloadBefore() {
   before_.x0 = before_.y0 = 0;
   before_.width = terrain_.spec.width, before_.height = terrain_.spec.height;
   backend_.downloadBox(before_, false);
-  snapshotKept_ = true;
+  haveSnapshot_ = true;
   snapshotVersion_ = backend_.stateVersion();
   rowWeights_.assign(static_cast<size_t>(terrain_.spec.height), 0.0);
   staleY0_ = 0, staleY1_ = terrain_.spec.height;
@@ -153,7 +155,7 @@ void AvalancheRun::weighRows(int r0, int r1) {
 bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC) {
   // Only the last avalanches' rows have changed since the snapshot when no other step has run
   // (settle copied their box in); a row's weights read the rows beside it.
-  if (!snapshotKept_ || backend_.stateVersion() != snapshotVersion_) downloadBefore();
+  if (!haveSnapshot_ || backend_.stateVersion() != snapshotVersion_) downloadBefore();
   else ++snapshotsKept_;
   const GridSpec& g = terrain_.spec;
   const int width = g.width;

@@ -142,16 +142,12 @@ class AvalancheRun {
   void weighRows(int r0, int r1);
   // The snapshot kept between tries: while the backend's stateVersion is the one it was taken at,
   // only the avalanches since have changed the state, and settle() copies their boxes in.
-  bool snapshotKept_ = false;
+  bool haveSnapshot_ = false;
   uint64_t snapshotsKept_ = 0;
   uint64_t snapshotVersion_ = 0;
   int staleY0_ = 0, staleY1_ = 0;  // the rows whose weights are out of date
   void keepSnapshotOfBox();
-  // A = B + C + S + U + P of the snapshot at cell i, in double.
-  double surfaceBefore(size_t i) const {
-    return static_cast<double>(terrain_.bedrockM.values()[i]) + before_.compacted.values()[i] + before_.stable.values()[i] +
-           before_.unstable.values()[i] + before_.powder.values()[i];
-  }
+  double surfaceBefore(size_t i) const;  // A = B + C + S + U + P of the snapshot at cell i, in double
   // hypot of the offsets to the neighbour (dx, dy) in metres, at 3 (dy + 1) + dx + 1: steepestDrop's
   // divisors, the same doubles at every call.
   double neighbourDistanceM_[9] = {};

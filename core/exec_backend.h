@@ -159,11 +159,9 @@ class ExecBackend final : public SnowBackend {
 
   void avalancheRelease(const std::vector<uint8_t>& moving, const AvalancheArgs& box) override {
     const bool wholeGrid = !avalancheFieldsReady_;
-    if (!avalancheFieldsReady_) {  // allocated on the first avalanche after an upload only
+    if (wholeGrid) {  // the fields allocated on the first avalanche after an upload only
       makeScratch(false);
       avalancheFieldsReady_ = true;
-    }
-    if (wholeGrid) {
       exec_.upload(snowMoving_, moving);
     } else {  // outside the last avalanche's box no flag is set: the release box's rows are enough
       putAvalancheAtRest(exec_, fieldsView(), avalancheTouched_);
