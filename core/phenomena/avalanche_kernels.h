@@ -18,6 +18,7 @@ struct AvalancheArgs {
   float alphaWet = 0.2f;             // the granular share left in wet snow
   float seaLevelTemperatureC = 0.f;  // T0 of the day
   float stopThicknessM = 0.f;        // h_stop: moving snow this thin or thinner does not flow
+  float pipeLengthM[4] = {};         // L of pipes east, south-east, south, south-west (avalanchePipeLengths)
   // The box the pass runs over: [x0, x1) x [y0, y1).
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   // The step's start: rows [spanY0, spanY1) whose statistics (set statsIn of rowStats) hold the
@@ -62,10 +63,22 @@ SNOW_HD SNOW_INLINE bool avalancheSource(const SnowFieldsView& v, const Avalanch
 SNOW_HD SNOW_INLINE int pipeDx(int d) { return d == 0 ? 1 : (d == 1 ? 1 : (d == 2 ? 0 : -1)); }
 SNOW_HD SNOW_INLINE int pipeDy(int d) { return d == 0 ? 0 : 1; }
 
+// The pipes' lengths, once a step rather than once a pipe a substep.
+SNOW_HD SNOW_INLINE void avalanchePipeLengths(const SnowFieldsView& v, AvalancheArgs& a) {
+  for (int d = 0; d < 4; ++d) {
+    const float lx = pipeDx(d) != 0 ? v.cellSizeXM : 0.f, ly = pipeDy(d) != 0 ? v.cellSizeYM : 0.f;
+    a.pipeLengthM[d] = sqrtf(lx * lx + ly * ly);
+  }
+}
+
 SNOW_HD SNOW_INLINE float avalancheAlpha(const AvalancheArgs& a, float temperatureC) {
-  const float dry = !(a.wetTemperatureC > a.dryTemperatureC)
-                        ? (temperatureC < a.wetTemperatureC ? 1.f : 0.f)
-                        : clampf((a.wetTemperatureC - temperatureC) / (a.wetTemperatureC - a.dryTemperatureC), 0.f, 1.f);
+  float dry;
+  if (!(a.wetTemperatureC > a.dryTemperatureC)) dry = temperatureC < a.wetTemperatureC ? 1.f : 0.f;
+  // Outside (T_dry, T_wet) the ratio below is at least 1 or at most 0 (rounding is monotonic), so
+  // its clamp is known without the division (a -0 it could give adds as 0 below).
+  else if (temperatureC <= a.dryTemperatureC) dry = 1.f;
+  else if (temperatureC >= a.wetTemperatureC) dry = 0.f;
+  else dry = clampf((a.wetTemperatureC - temperatureC) / (a.wetTemperatureC - a.dryTemperatureC), 0.f, 1.f);
   return a.alphaWet + (1.f - a.alphaWet) * dry;
 }
 
@@ -95,6 +108,17 @@ struct InRowSpans {
   }
 };
 
+// Pipe d of cell i = (x, y) as the last substep moved it: its flow times the outflow scale of
+// the cell it drains (AvalancheScaleKernel). The pipes keep their unscaled flows and every reader
+// scales them, the same float product a pass writing them back would store, so no pass does.
+// A pipe that flows has a valid neighbour (the flow pass zeroes the others).
+SNOW_HD SNOW_INLINE float movedPipe(const SnowFieldsView& v, int x, int y, int i, int d) {
+  const float f = v.flows[4 * static_cast<size_t>(i) + d];
+  if (f > 0.f) return f * v.scratchPowder[i];
+  if (f < 0.f) return f * v.scratchPowder[v.index(x + pipeDx(d), y + pipeDy(d))];
+  return f;
+}
+
 struct AvalancheFlowKernel {
   SnowFieldsView v;
   AvalancheArgs a;
@@ -121,9 +145,8 @@ struct AvalancheFlowKernel {
         f[d] = 0.f;
         continue;
       }
-      const float lx = pipeDx(d) != 0 ? v.cellSizeXM : 0.f, ly = pipeDy(d) != 0 ? v.cellSizeYM : 0.f;
-      const float length = sqrtf(lx * lx + ly * ly);
-      float phi = f[d] + a.dtS * c * a.gravity * (ap - v.surface(n)) / length;
+      const float length = a.pipeLengthM[d];
+      float phi = movedPipe(v, x, y, i, d) + a.dtS * c * a.gravity * (ap - v.surface(n)) / length;
       const int src = phi > 0.f ? i : n;
       if (!(phi != 0.f) || !(phi > 0.f ? here : there)) {
         f[d] = 0.f;
@@ -138,7 +161,8 @@ struct AvalancheFlowKernel {
         continue;
       }
       phi = phi > 0.f ? magnitude - friction : friction - magnitude;
-      phi = phi / (1.f + a.dtS * (1.f - alpha) * a.viscosity * v.unstable[src]);
+      if (1.f - alpha != 0.f)  // dry snow has no viscous share: the division would be by 1
+        phi = phi / (1.f + a.dtS * (1.f - alpha) * a.viscosity * v.unstable[src]);
       if (a.inverseDragMps2 > 0.f)  // implicit, like the viscosity: it only slows the flow
         phi = phi / (1.f + a.dtS * a.gravity * a.inverseDragMps2 * (fabsf(phi) / c) / maxf(v.unstable[src], 1e-3f));
       f[d] = phi;
@@ -166,21 +190,6 @@ struct AvalancheScaleKernel {
   }
 };
 
-struct AvalancheApplyScaleKernel {
-  SnowFieldsView v;
-  SNOW_HD void operator()(int x, int y) const {
-    const int i = v.index(x, y);
-    float* f = v.flows + 4 * static_cast<size_t>(i);
-    for (int d = 0; d < 4; ++d) {
-      if (f[d] > 0.f) {
-        f[d] *= v.scratchPowder[i];
-      } else if (f[d] < 0.f) {
-        f[d] *= v.scratchPowder[v.index(x + pipeDx(d), y + pipeDy(d))];
-      }
-    }
-  }
-};
-
 struct AvalancheHeightKernel {
   SnowFieldsView v;
   AvalancheArgs a;
@@ -191,12 +200,17 @@ struct AvalancheHeightKernel {
     // a deep cell does not lose the small inflows a float would round away at every substep
     // (a drift that grew to 1e-4 of the mass over 200 000 substeps in pits of deep snow).
     double in = 0.0, out = 0.0;
-    const float* f = v.flows + 4 * static_cast<size_t>(i);
+    float moved[8];  // the cell's own four pipes, then the four ending here (0 at the grid's edge)
     for (int d = 0; d < 4; ++d) {
-      if (f[d] > 0.f) out += f[d]; else in -= f[d];
+      moved[d] = movedPipe(v, x, y, i, d);
+      const int nx = x - pipeDx(d), ny = y - pipeDy(d);
+      moved[4 + d] = v.inside(nx, ny) ? movedPipe(v, nx, ny, v.index(nx, ny), d) : 0.f;
+    }
+    for (int d = 0; d < 4; ++d) {
+      if (moved[d] > 0.f) out += moved[d]; else in -= moved[d];
       const int nx = x - pipeDx(d), ny = y - pipeDy(d);
       if (!v.inside(nx, ny)) continue;
-      const float g = v.flows[4 * static_cast<size_t>(v.index(nx, ny)) + d];
+      const float g = moved[4 + d];
       if (g > 0.f) in += g; else out -= g;
     }
     v.avalancheFlowing[i] = in > 0.0 || out > 0.0;
@@ -218,9 +232,9 @@ struct AvalancheHeightKernel {
     v.unstable[i] = static_cast<float>(u);
     float speed = 0.f;  // the fastest of the cell's eight pipes, as the row statistics read them
     for (int d = 0; d < 4; ++d) {
-      speed = maxf(speed, fabsf(f[d]));
+      speed = maxf(speed, fabsf(moved[d]));
       const int nx = x - pipeDx(d), ny = y - pipeDy(d);
-      if (v.inside(nx, ny)) speed = maxf(speed, fabsf(v.flows[4 * static_cast<size_t>(v.index(nx, ny)) + d]));
+      if (v.inside(nx, ny)) speed = maxf(speed, fabsf(moved[4 + d]));
     }
     v.avalanchePeakSpeed[i] = maxf(v.avalanchePeakSpeed[i], speed / static_cast<float>(c));
     v.avalanchePeakThickness[i] = maxf(v.avalanchePeakThickness[i], v.unstable[i]);
@@ -246,7 +260,8 @@ struct AvalancheClearIdleKernel {
   }
 };
 
-// One thread per row of the box: the fastest pipe, the kinetic energy of the snow that can flow
+// One thread per row of the box, after the step's substeps: the idle pipes cleared
+// (AvalancheClearIdleKernel), then the fastest pipe, the kinetic energy of the snow that can flow
 // (the sum of c U s^2 / 2, s its fastest pipe) and its columns, for the host to pick the next
 // box and to tell when the avalanche is at rest.
 struct AvalancheRowStatsKernel {
@@ -261,10 +276,10 @@ struct AvalancheRowStatsKernel {
     int x0 = 0, x1 = -1;
     avalancheRowSpan(v, a, y, k, x0, x1);
     for (int x = x0; x <= x1; ++x) {
+      AvalancheClearIdleKernel{v, a}(x, y);  // the cell's own pipes, which are all it reads
       const int i = v.index(x, y);
-      const float* f = v.flows + 4 * static_cast<size_t>(i);
       float fastest = 0.f;
-      for (int d = 0; d < 4; ++d) fastest = maxf(fastest, fabsf(f[d]) / c);
+      for (int d = 0; d < 4; ++d) fastest = maxf(fastest, fabsf(movedPipe(v, x, y, i, d)) / c);
       speed = maxf(speed, fastest);
       if (avalancheSource(v, a, i)) {  // the box follows the snow that can still flow
         energy += 0.5f * c * v.unstable[i] * fastest * fastest;

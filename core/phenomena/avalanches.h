@@ -6,7 +6,7 @@
 // south-west), flows[4 i + d] in m^3/s, positive from the owner toward the neighbour. Each pipe
 // is written by its owner only; heights are updated by gathering the eight pipes. No atomics.
 //
-// One substep of length dt runs four per-cell passes over the active box:
+// One substep of length dt runs three per-cell passes over the active box:
 //   1. AvalancheFlowKernel: phi += dt c a, a = g (A_p - A_n) / L (rho cancels in dP / (rho dx));
 //      granular friction of norm dt c alpha g tan(theta_c) opposes the flow and sets it to zero
 //      rather than reversing it (static friction: snow on a slope below theta_c never starts);
@@ -18,8 +18,9 @@
 //      flowing down any slope, however gentle, for as long as it is simulated.
 //   2. AvalancheScaleKernel: the outflow of each cell is scaled so it never takes more than the
 //      unstable snow there (the paper's min(V_out, dx^2 U) / V_out, to all but a millionth).
-//   3. AvalancheApplyScaleKernel: each pipe takes the factor of the cell it drains.
-//   4. AvalancheHeightKernel: U += dt (inflow - outflow) / c, summed and kept in double through
+//      Each pipe takes the factor of the cell it drains where it is read (movedPipe), not in a
+//      pass of its own.
+//   3. AvalancheHeightKernel: U += dt (inflow - outflow) / c, summed and kept in double through
 //      the avalanche (avalancheU; the float layer holds its rounding, which the flow reads). A
 //      cell that receives snow starts moving and its own unstable snow and powder are entrained.
 // A flow may only leave a moving cell that holds snow, so flows never grow where there is
@@ -119,6 +120,7 @@ void runAvalancheRelease(Exec& exec, const SnowFieldsView& v, AvalancheTouched& 
 // of the grown box. Returns the grown box in `a`.
 template <class Exec>
 void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheTouched& touched, AvalancheArgs& a, int substeps) {
+  avalanchePipeLengths(v, a);
   for (int s = 0; s < substeps; ++s) {
     a.x0 = a.x0 > 0 ? a.x0 - 1 : 0;
     a.y0 = a.y0 > 0 ? a.y0 - 1 : 0;
@@ -132,11 +134,9 @@ void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheTouched&
     const int k = s + 1;
     exec.forEachCell(1, h, InRowSpans<AvalancheFlowKernel>{AvalancheFlowKernel{v, a}, v, a, k});
     exec.forEachCell(1, h, InRowSpans<AvalancheScaleKernel>{AvalancheScaleKernel{v, a}, v, a, k});
-    exec.forEachCell(1, h, InRowSpans<AvalancheApplyScaleKernel>{AvalancheApplyScaleKernel{v}, v, a, k});
     exec.forEachCell(1, h, InRowSpans<AvalancheHeightKernel>{AvalancheHeightKernel{v, a}, v, a, k});
   }
   if (a.x1 > a.x0 && a.y1 > a.y0) {
-    exec.forEachCell(1, a.y1 - a.y0, InRowSpans<AvalancheClearIdleKernel>{AvalancheClearIdleKernel{v, a}, v, a, substeps});
     exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a, substeps});
   }
 }
@@ -148,12 +148,14 @@ std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowSta
                                      const AvalancheArgs& args, int substeps) {
   AvalancheArgs a = args;
   runAvalancheSubsteps(exec, v, touched, a, substeps);
-  std::vector<float> stats;
-  exec.download(rowStats, stats);
+  // The grown box's rows only, both sets (8 floats a row, side by side): not the grid's rows.
+  const size_t rows = a.y1 > a.y0 ? static_cast<size_t>(a.y1 - a.y0) : 0;
+  std::vector<float> stats(8 * rows);
+  exec.downloadRange(rowStats, 8 * static_cast<size_t>(a.y0 > 0 ? a.y0 : 0), stats.size(), stats.data());
   std::vector<float> box;
-  box.reserve(4 * static_cast<size_t>(a.y1 - a.y0) + 4);
-  for (int y = a.y0; y < a.y1; ++y) {
-    const size_t at = 8 * static_cast<size_t>(y) + 4 * static_cast<size_t>(1 - a.statsIn);
+  box.reserve(4 * rows + 4);
+  for (size_t r = 0; r < rows; ++r) {
+    const size_t at = 8 * r + 4 * static_cast<size_t>(1 - a.statsIn);
     box.insert(box.end(), stats.begin() + at, stats.begin() + at + 4);
   }
   box.push_back(static_cast<float>(a.x0));
