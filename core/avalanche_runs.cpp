@@ -199,12 +199,14 @@ bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, dou
   downloadBefore();
   const SnowState& s = terrain_;
   const int w = s.spec.width;
-  std::vector<uint8_t> moving(s.spec.cellCount(), 0);
+  std::vector<uint8_t>& moving = movingCells();
+  CellBox box;
   int rx = -1, ry = -1;
   double highest = -std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < moving.size() && i < zone.size(); ++i) {
     if (!zone[i] || !s.validCell.values()[i] || before_.unstable.values()[i] < p_.avalancheMinUnstableM) continue;
     moving[i] = 1;
+    box.add(static_cast<int>(i % w), static_cast<int>(i / w));
     const double a = surfaceBefore(i);
     if (a > highest) highest = a, rx = static_cast<int>(i % w), ry = static_cast<int>(i / w);
   }
@@ -216,7 +218,7 @@ bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, dou
     return false;
   }
   beginRecord(rx, ry, day, user);
-  start(moving, seaLevelTemperatureC, t0);
+  start(box, seaLevelTemperatureC, t0);
   return true;
 }
 
@@ -238,13 +240,15 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
   }
   // Release zone: connected unstable snow within the reach of the rupture point.
   const double reach = p_.avalancheReachMPerM * unstable(rx, ry);
-  std::vector<uint8_t> moving(s.spec.cellCount(), 0);
+  std::vector<uint8_t>& moving = movingCells();
+  CellBox box;
   std::deque<int> queue;
   auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
   auto holds = [&](int x, int y) {
     return x >= 0 && y >= 0 && x < w && y < h && s.validCell(x, y) && unstable(x, y) >= minU;
   };
   moving[index(rx, ry)] = 1;
+  box.add(rx, ry);
   queue.push_back(ry * w + rx);
   while (!queue.empty()) {
     const int c = queue.front();
@@ -256,20 +260,27 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
         if (!holds(nx, ny) || moving[index(nx, ny)]) continue;
         if (std::hypot((nx - rx) * s.spec.cellSizeXM, (ny - ry) * s.spec.cellSizeYM) > reach) continue;
         moving[index(nx, ny)] = 1;
+        box.add(nx, ny);
         queue.push_back(ny * w + nx);
       }
   }
-  start(moving, seaLevelTemperatureC, t0);
+  start(box, seaLevelTemperatureC, t0);
   return true;
 }
 
-void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, WallClock::time_point t0) {
+std::vector<uint8_t>& AvalancheRun::movingCells() {
+  moving_.resize(terrain_.spec.cellCount(), 0);
+  return moving_;
+}
+
+void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, WallClock::time_point t0) {
   const SnowState& s = terrain_;
   const int w = s.spec.width, h = s.spec.height;
+  std::vector<uint8_t>& moving = moving_;
   auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
   int x0 = w, y0 = h, x1 = 0, y1 = 0;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
+  for (int y = released.y0; y < released.y1; ++y)  // row by row, as over the whole grid: the same sums
+    for (int x = released.x0; x < released.x1; ++x)
       if (moving[index(x, y)]) {
         ++record_.releaseCells;
         record_.releasedM3 += (static_cast<double>(before_.unstable(x, y)) + before_.powder(x, y)) * s.spec.cellAreaM2();
@@ -292,6 +303,7 @@ void AvalancheRun::start(std::vector<uint8_t>& moving, double seaLevelTemperatur
       nextFrameS_ = frameIntervalS_;
     }
   }
+  for (int y = y0; y < y1; ++y) std::fill_n(moving.begin() + static_cast<std::ptrdiff_t>(index(x0, y)), x1 - x0, uint8_t{0});
   active_ = true;
   lastSpeed_ = 0.f;
   peakEnergy_ = 0.0;

@@ -24,7 +24,9 @@
 // avalanche_max_duration_s of simulated time (reported), the moving snow is deposited as
 // stable snow and the records are kept.
 #pragma once
+#include <algorithm>
 #include <chrono>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -124,8 +126,20 @@ class AvalancheRun {
   // tan of the steepest drop of the snapshot's snow surface from (x, y) to a valid 8-neighbour.
   double steepestDrop(int x, int y) const;
   void beginRecord(int rx, int ry, double day, bool user);
-  // Sets the cells of `moving` in motion from the snapshot (records, box, substep arguments).
-  void start(std::vector<uint8_t>& moving, double seaLevelTemperatureC, std::chrono::steady_clock::time_point t0);
+  // The cells a release sets moving: a box around them, which start() scans instead of the grid.
+  struct CellBox {
+    int x0 = std::numeric_limits<int>::max(), y0 = std::numeric_limits<int>::max(), x1 = 0, y1 = 0;
+    void add(int x, int y) {
+      x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
+    }
+  };
+  // One byte a cell, 1 where a release sets snow moving; all zeros between releases (start()
+  // clears its box), so a release does not make and zero a grid-sized flag array of its own.
+  std::vector<uint8_t> moving_;
+  std::vector<uint8_t>& movingCells();
+  // Sets the cells of moving_ (all inside `released`) in motion from the snapshot (records, box,
+  // substep arguments), then clears them.
+  void start(const CellBox& released, double seaLevelTemperatureC, std::chrono::steady_clock::time_point t0);
   SnowBackend& backend_;
   bool rowSpans_ = true;
   const ModelParameters& p_;
