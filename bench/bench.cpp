@@ -37,6 +37,7 @@ namespace {
 std::string windBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string sunBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads);
+std::string seasonAvalancheCostBench(const BenchOptions& o, std::ostream& log, const std::string& backendName, int threads);
 std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads);
 std::string meshBench(const BenchOptions& o, std::ostream& log, int threads);
 
@@ -267,6 +268,54 @@ std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads
     log << "  avalanche on " << size << "² done\n";
   }
   writeCsvFile(o, "avalanche.csv", csv.str(), table);
+  return table.str() + "\n" + seasonAvalancheCostBench(o, log, backendName, threads);
+}
+
+// The avalanches of a season (the reference winter on the embedded range, spontaneous releases
+// at the default rate) grouped by their active box, the cells a step's passes may cover: the
+// time a step takes against that box, so that the cost can be seen to follow the avalanche.
+std::string seasonAvalancheCostBench(const BenchOptions& o, std::ostream& log, const std::string& backendName, int threads) {
+  const int size = o.avalancheSeasonSize;
+  SnowState s = referenceRangeState(size);
+  SeasonConfig c = referenceWinter(o.days);
+  computeTemperatureBase(s, c.params);
+  auto backend = backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
+  const SeasonReport report = runSeason(*backend, s, c);
+  struct Bin {
+    double below;
+    int avalanches = 0;
+    double steps = 0, boxCellSteps = 0, seconds = 0;
+  };
+  std::vector<Bin> bins = {{100}, {1000}, {10000}, {100000}, {1e300}};
+  Bin all{0};
+  for (const AvalancheRecord& r : report.avalanches) {
+    if (!r.released || r.steps == 0) continue;
+    const double meanBox = r.boxCellSteps / r.steps;
+    Bin& b = *std::find_if(bins.begin(), bins.end(), [&](const Bin& b) { return meanBox < b.below; });
+    for (Bin* x : {&b, &all}) ++x->avalanches, x->steps += r.steps, x->boxCellSteps += r.boxCellSteps, x->seconds += r.stepSeconds;
+  }
+  std::ostringstream table, csv;
+  table << "The avalanches of a season by their mean active box: the reference winter (" << o.days << " days) on the embedded range at "
+        << size << "² (" << format("%.0f", 10240.0 / size) << " m cells), spontaneous releases at the default rate; "
+        << (backendName == "cpu" ? benchMachineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
+        << ". The box is the cells a step's passes may cover (its rows' spans cover fewer).\n\n"
+        << "| mean box (cells) | avalanches | steps | mean box | ms per step | ns per box cell and step |\n|---|---|---|---|---|---|\n";
+  csv << "box_below,avalanches,steps,mean_box_cells,ms_per_step,ns_per_box_cell_step\n";
+  double lower = 0;
+  auto row = [&](const std::string& label, const Bin& b, double below) {
+    if (b.steps == 0) return;
+    table << "| " << label << " | " << b.avalanches << " | " << format("%.0f", b.steps) << " | " << format("%.0f", b.boxCellSteps / b.steps) << " | "
+          << format("%.4f", 1e3 * b.seconds / b.steps) << " | " << format("%.2f", 1e9 * b.seconds / b.boxCellSteps) << " |\n";
+    csv << below << "," << b.avalanches << "," << b.steps << "," << b.boxCellSteps / b.steps << "," << 1e3 * b.seconds / b.steps << ","
+        << 1e9 * b.seconds / b.boxCellSteps << "\n";
+  };
+  for (const Bin& b : bins) {
+    row(b.below > 1e299 ? format("%.0f or more", lower) : format("%.0f", lower) + "–" + format("%.0f", b.below), b, b.below);
+    lower = b.below;
+  }
+  row("all", all, 0);
+  log << "  the season's avalanches by box done\n";
+  writeCsvFile(o, "avalanche_season.csv", csv.str(), table);
   return table.str();
 }
 

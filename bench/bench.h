@@ -20,6 +20,7 @@ struct BenchOptions {
   int bandwidthReps = 10;
   int agreementSize = 1024;
   std::vector<int> avalancheSizes{512, 4096};  // the same avalanche on a small and a large terrain
+  int avalancheSeasonSize = 512;  // the grid of the season whose avalanches' cost per box is tabled
   double days = 120.0;
   std::string backend = "cpu";  // cpu | cuda | auto
   int threads = 0;              // 0 = all cores

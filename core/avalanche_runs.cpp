@@ -332,6 +332,7 @@ bool AvalancheRun::step() {
   unionBox_.x0 = std::min(unionBox_.x0, bx0), unionBox_.y0 = std::min(unionBox_.y0, by0);
   unionBox_.x1 = std::max(unionBox_.x1, bx1), unionBox_.y1 = std::max(unionBox_.y1, by1);
   record_.boxCellsMax = std::max(record_.boxCellsMax, (bx1 - bx0) * (by1 - by0));
+  record_.boxCellSteps += static_cast<double>(bx1 - bx0) * (by1 - by0);
   float speed = 0.f;
   double energy = 0.0;
   int x0 = terrain_.spec.width, y0 = terrain_.spec.height, x1 = 0, y1 = 0;

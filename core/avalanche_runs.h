@@ -72,6 +72,7 @@ struct AvalancheRecord {
   double secondsPerStep() const { return steps > 0 ? stepSeconds / steps : 0.0; }
   float maxSpeedMps = 0;     // fastest pipe seen (flow / cross-section)
   int boxCellsMax = 0;       // the largest active box, in cells
+  double boxCellSteps = 0;   // the active box's cells summed over the steps: the work the steps covered
   std::shared_ptr<AvalancheMaps> maps;  // when asked for (AvalancheRun::keepMaps)
 };
 

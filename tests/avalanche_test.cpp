@@ -416,6 +416,21 @@ TEST(Avalanche, RowSpansGiveTheSameBytesAsTheWholeBox) {
               spans.record.steps, spans.record.boxCellsMax, band, spans.record.runoutM);
 }
 
+// The record's box-cell steps (the bench's cost per box cell) sum each step's box: at least a
+// cell a step, at most the largest box every step, and more than the largest box once the run
+// has more than one step.
+TEST(Avalanche, BoxCellStepsSumEveryStepsBoxBetweenOneCellAndTheLargest) {
+  SnowState s = test::terrainFrom(64, 64, 5.0, -20.f, [](double x, double y) { return 2000.0 - 0.7 * y + 0.1 * x; });
+  for (int y = 4; y < 14; ++y)
+    for (int x = 20; x < 40; ++x) s.unstableM(x, y) = 1.5f;
+  const Outcome o = runAvalanche(s, 30, 8);
+  ASSERT_TRUE(o.record.released);
+  ASSERT_GT(o.record.steps, 1);
+  EXPECT_GE(o.record.boxCellSteps, o.record.steps);
+  EXPECT_LE(o.record.boxCellSteps, static_cast<double>(o.record.steps) * o.record.boxCellsMax);
+  EXPECT_GT(o.record.boxCellSteps, o.record.boxCellsMax);
+}
+
 // No unstable snow at the rupture point: nothing is released and the record says why.
 TEST(Avalanche, NoUnstableSnowNoRelease) {
   SnowState s = test::terrainFrom(10, 10, 5.0, -20.f, [](double, double y) { return 1000.0 - y; });
