@@ -1,4 +1,4 @@
-// The avalanche's arguments and kernels. The model, its storage and the four passes of a
+// The avalanche's arguments and kernels. The model, its storage and the three passes of a
 // substep are described in avalanches.h, where a reader starts.
 #pragma once
 #include "../hd.h"
