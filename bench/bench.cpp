@@ -241,6 +241,14 @@ std::string windBench(const BenchOptions& o, std::ostream& log, int threads) {
   return table.str();
 }
 
+// The avalanche stage's backend by name ("cpu" or "cuda"), and the words its tables name it by.
+std::unique_ptr<SnowBackend> avalancheBackend(const std::string& backendName) {
+  return backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
+}
+std::string avalancheBackendDescription(const std::string& backendName, int threads) {
+  return backendName == "cpu" ? benchMachineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description;
+}
+
 std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads) {
   std::string backendName = o.backend;
   if (backendName == "auto") backendName = cuda::probeDevice().available ? "cuda" : "cpu";
@@ -248,12 +256,12 @@ std::string avalancheBench(const BenchOptions& o, std::ostream& log, int threads
     throw InputError("--backend cuda: no usable CUDA device: " + cuda::probeDevice().reason);
   std::ostringstream table, csv;
   table << "Avalanche, one release on the embedded range at 5 m cells (core/reference_scenario.h), "
-        << (backendName == "cpu" ? benchMachineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
+        << avalancheBackendDescription(backendName, threads)
         << "\n\n| grid | steps | simulated (s) | ms per step | largest box (cells) | runout (m) | mass error |\n|---|---|---|---|---|---|---|\n";
   csv << "size,backend,steps,simulated_s,ms_per_step,box_cells,runout_m,mass_error\n";
   for (int size : o.avalancheSizes) {
     SnowState s = referenceAvalancheState(size);
-    auto backend = backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
+    auto backend = avalancheBackend(backendName);
     backend->upload(s);
     const double before = backend->totals().totalM3();
     const ModelParameters params;
@@ -279,7 +287,7 @@ std::string seasonAvalancheCostBench(const BenchOptions& o, std::ostream& log, c
   SnowState s = referenceRangeState(size);
   SeasonConfig c = referenceWinter(o.days);
   computeTemperatureBase(s, c.params);
-  auto backend = backendName == "cuda" ? cuda::createCudaBackend() : createCpuBackend();
+  auto backend = avalancheBackend(backendName);
   const SeasonReport report = runSeason(*backend, s, c);
   struct Bin {
     double below;
@@ -297,7 +305,7 @@ std::string seasonAvalancheCostBench(const BenchOptions& o, std::ostream& log, c
   std::ostringstream table, csv;
   table << "The avalanches of a season by their mean active box: the reference winter (" << o.days << " days) on the embedded range at "
         << size << "² (" << format("%.0f", 10240.0 / size) << " m cells), spontaneous releases at the default rate; "
-        << (backendName == "cpu" ? benchMachineDescription() + ", " + std::to_string(threads) + " threads" : cuda::probeDevice().description)
+        << avalancheBackendDescription(backendName, threads)
         << ". The box is the cells a step's passes may cover (its rows' spans cover fewer).\n\n"
         << "| mean box (cells) | avalanches | steps | mean box | ms per step | ns per box cell and step |\n|---|---|---|---|---|---|\n";
   csv << "box_below,avalanches,steps,mean_box_cells,ms_per_step,ns_per_box_cell_step\n";

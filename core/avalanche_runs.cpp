@@ -278,13 +278,12 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
   const int w = s.spec.width, h = s.spec.height;
   std::vector<uint8_t>& moving = moving_;
   auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
-  int x0 = w, y0 = h, x1 = 0, y1 = 0;
-  for (int y = released.y0; y < released.y1; ++y)  // row by row, as over the whole grid: the same sums
-    for (int x = released.x0; x < released.x1; ++x)
+  const int x0 = released.x0, y0 = released.y0, x1 = released.x1, y1 = released.y1;  // the released cells' bounds
+  for (int y = y0; y < y1; ++y)  // row by row, as over the whole grid: the same sums
+    for (int x = x0; x < x1; ++x)
       if (moving[index(x, y)]) {
         ++record_.releaseCells;
         record_.releasedM3 += (static_cast<double>(before_.unstable(x, y)) + before_.powder(x, y)) * s.spec.cellAreaM2();
-        x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
       }
   args_ = makeAvalancheArgs(p_, seaLevelTemperatureC);
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;

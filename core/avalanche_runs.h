@@ -127,7 +127,8 @@ class AvalancheRun {
   // tan of the steepest drop of the snapshot's snow surface from (x, y) to a valid 8-neighbour.
   double steepestDrop(int x, int y) const;
   void beginRecord(int rx, int ry, double day, bool user);
-  // The cells a release sets moving: a box around them, which start() scans instead of the grid.
+  // The bounds of the cells a release sets moving (add() is called for each): start() scans them
+  // instead of the grid, and they are the avalanche's first box.
   struct CellBox {
     int x0 = std::numeric_limits<int>::max(), y0 = std::numeric_limits<int>::max(), x1 = 0, y1 = 0;
     void add(int x, int y) {

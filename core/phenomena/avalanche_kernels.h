@@ -203,14 +203,11 @@ struct AvalancheHeightKernel {
     float moved[8];  // the cell's own four pipes, then the four ending here (0 at the grid's edge)
     for (int d = 0; d < 4; ++d) {
       moved[d] = movedPipe(v, x, y, i, d);
-      const int nx = x - pipeDx(d), ny = y - pipeDy(d);
-      moved[4 + d] = v.inside(nx, ny) ? movedPipe(v, nx, ny, v.index(nx, ny), d) : 0.f;
-    }
-    for (int d = 0; d < 4; ++d) {
       if (moved[d] > 0.f) out += moved[d]; else in -= moved[d];
+      moved[4 + d] = 0.f;
       const int nx = x - pipeDx(d), ny = y - pipeDy(d);
       if (!v.inside(nx, ny)) continue;
-      const float g = moved[4 + d];
+      const float g = moved[4 + d] = movedPipe(v, nx, ny, v.index(nx, ny), d);
       if (g > 0.f) in += g; else out -= g;
     }
     v.avalancheFlowing[i] = in > 0.0 || out > 0.0;
@@ -244,7 +241,8 @@ struct AvalancheHeightKernel {
 // After a step's substeps: zero the pipes neither of whose ends holds moving snow (what the flow
 // pass would do next). The host then shrinks the box to the moving snow; every cell more than
 // one cell outside it has only such pipes, so the cells the next box reads but does not write
-// carry no stale flows.
+// carry no stale flows. Run cell by cell by AvalancheRowStatsKernel, which reads only the cell's
+// own pipes after it.
 struct AvalancheClearIdleKernel {
   SnowFieldsView v;
   AvalancheArgs a;
