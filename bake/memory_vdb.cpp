@@ -13,10 +13,18 @@ namespace {
 // Snow assumed in a column where the scene's snow cannot be estimated (occlusion mode's cover,
 // initial snow, edits, a painted snowfall multiplier, a terrain not yet known): 3 m everywhere.
 constexpr double kVdbDepthM = 3.0;
-// Measured: the VDB writer's peak (the level set being built, or the six grids built) per leaf
-// slot (columns / 64 x leaf layers), every column snowed: heaptrack, occlusion mode at 1024²,
-// 207 MB over 32768 slots.
-constexpr double kVdbBytesPerLeafSlot = 6400.0;
+// Measured: the VDB writer's peak per leaf slot (columns / 64 x leaf layers). The level set built
+// whole, every column snowed: heaptrack, occlusion mode at 1024², 207 MB over 32768 slots. The
+// level set it returns: the default preset at 2048² (20 days, a day-10 frame) built in tiles of
+// 256 columns, 264 MiB against 539 MiB built whole (VmHWM against the same bake without a VDB).
+constexpr double kVdbBytesPerLeafSlot = 6400.0, kVdbLevelSetBytesPerLeafSlot = 3050.0;
+
+// The share of the whole construction's transient one tile of the level set holds
+// (vdb_level_set.h): its columns with their halo over the grid's, each way at most 1.
+double levelSetTileShare(double columnsI, double columnsJ) {
+  const double tile = VdbOptions{}.levelSetTileColumns + 2.0 * levelSetHaloColumns(kSnowLevelSetHalfWidth);
+  return std::min(1.0, tile / std::max(1.0, columnsI)) * std::min(1.0, tile / std::max(1.0, columnsJ));
+}
 
 double overlapDays(const std::vector<SnowfallPeriod>& periods, double day) {
   double d = 0;
@@ -79,7 +87,9 @@ double vdbWriterBytes(const Scene& s, const GridSpec& spec, const SnowReach& rea
     occupied = 1.0 - std::pow(1.0 - std::min(1.0, depth / vs), 64.0);
   }
   const double leafLayers = std::ceil(depth / vs / 8.0) + 1.0;
-  return columns / 64.0 * share * occupied * leafLayers * kVdbBytesPerLeafSlot;
+  const double tileShare = levelSetTileShare(spec.width * spec.cellSizeXM / vs, spec.height * spec.cellSizeYM / vs);
+  const double bytesPerSlot = kVdbLevelSetBytesPerLeafSlot + (kVdbBytesPerLeafSlot - kVdbLevelSetBytesPerLeafSlot) * tileShare;
+  return columns / 64.0 * share * occupied * leafLayers * bytesPerSlot;
 }
 
 }  // namespace snow

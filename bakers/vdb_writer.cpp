@@ -1,7 +1,6 @@
 #include "vdb_writer.h"
 
 #include <openvdb/openvdb.h>
-#include <openvdb/tools/TopologyToLevelSet.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +8,7 @@
 #include <vector>
 
 #include "vdb_file.h"
+#include "vdb_level_set.h"
 
 namespace snow {
 
@@ -23,13 +23,13 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
   transform->postTranslate(openvdb::Vec3d(0.5 * vs, 0.5 * vs, 0.5 * vs));
   VdbSummary summary;
   summary.path = path;
-  // Calls f(coord, layer) for every snow voxel, column by column.
+  // Calls f(coord, layer) for every snow voxel of columns [i0, i1) x [j0, j1), column by column.
   const int ni = static_cast<int>(std::ceil(w * dx / vs)), nj = static_cast<int>(std::ceil(h * dy / vs));
-  auto forEachSnowVoxel = [&](auto&& f) {
-    for (int j = 0; j < nj; ++j) {
+  auto forEachSnowVoxelIn = [&](int i0, int j0, int i1, int j1, auto&& f) {
+    for (int j = j0; j < j1; ++j) {
       const double yNorth = (j + 0.5) * vs;  // metres north of the south edge
       const int row = h - 1 - std::min(h - 1, static_cast<int>(yNorth / dy));
-      for (int i = 0; i < ni; ++i) {
+      for (int i = i0; i < i1; ++i) {
         const int col = std::min(w - 1, static_cast<int>((i + 0.5) * vs / dx));
         if (!s.validCell(col, row)) continue;
         const double bed = s.bedrockM(col, row);
@@ -48,9 +48,10 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
       }
     }
   };
+  auto forEachSnowVoxel = [&](auto&& f) { forEachSnowVoxelIn(0, 0, ni, nj, f); };
   // Each grid is made when the file reaches it and freed once written (vdb_file.h): the level
   // set's construction (its dilation and normalisation, the writer's largest transient) and the
-  // fog grids never stand side by side.
+  // fog grids never stand side by side; the level set is made tile by tile (vdb_level_set.h).
   auto finish = [&](openvdb::FloatGrid::Ptr g, const char* name, openvdb::GridClass cls) {
     g->setTransform(transform);
     g->setName(name);
@@ -59,14 +60,12 @@ VdbSummary writeSnowVdb(const std::string& path, const SnowState& s, const VdbOp
   };
   std::vector<VdbGridMaker> makers;
   makers.push_back([&]() -> openvdb::GridBase::Ptr {
-    auto topology = openvdb::BoolGrid::create(false);
-    auto acc = topology->getAccessor();
-    forEachSnowVoxel([&](const openvdb::Coord& c, int) {
-      acc.setValue(c, true);
-      ++summary.snowVoxels;
-    });
-    topology->setTransform(transform);  // the level set's distances in metres
-    auto sdf = summary.snowVoxels > 0 ? openvdb::tools::topologyToLevelSet(*topology, 3, 0) : openvdb::createLevelSet<openvdb::FloatGrid>(vs, 3.0);
+    forEachSnowVoxel([&](const openvdb::Coord&, int) { ++summary.snowVoxels; });
+    const TopologyFill fill = [&](openvdb::BoolGrid::Accessor& acc, int i0, int j0, int i1, int j1) {
+      forEachSnowVoxelIn(i0, j0, i1, j1, [&](const openvdb::Coord& c, int) { acc.setValue(c, true); });
+    };
+    auto sdf = summary.snowVoxels > 0 ? levelSetByTiles(fill, LevelSetTiling{ni, nj, o.levelSetTileColumns}, transform, kSnowLevelSetHalfWidth)
+                                      : openvdb::createLevelSet<openvdb::FloatGrid>(vs, kSnowLevelSetHalfWidth);
     return finish(sdf, "snow_sdf", openvdb::GRID_LEVEL_SET);
   });
   makers.push_back([&]() -> openvdb::GridBase::Ptr {

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/snow_state.h"
+#include "vdb_level_set_tiles.h"
 
 namespace snow {
 
@@ -17,6 +18,9 @@ struct VdbOptions {
   // Documented per-layer densities (kg/m^3): fresh powder, wind- or warmth-loosened unstable
   // snow, settled stable snow, compacted (skied or avalanche-packed) snow.
   double powderKgPerM3 = 100.0, unstableKgPerM3 = 250.0, stableKgPerM3 = 350.0, compactedKgPerM3 = 500.0;
+  // The level set's tiles, in voxel columns a side (a multiple of 128; vdb_level_set.h): the
+  // same bytes at any size, the writer's peak memory falls and its time rises as they shrink.
+  int levelSetTileColumns = LevelSetTiling{}.tileColumns;
 };
 
 struct VdbSummary {

@@ -159,6 +159,7 @@ TEST(MemoryModel, PeakIsTheLargestPhasePlusTheLibraries) {
   snow::Scene scene = snow::loadScene("preset:default");
   scene.params.skiersPerHour = 0;  // the records do not grow with the grid
   scene.outputs.displacementWidth = scene.outputs.displacementHeight = 0;  // nor a fixed-size map
+  scene.outputs.vdb = false;  // its level set is made in tiles: its term grows slower than the grid (MemoryModel.VdbTermFollowsTheSnowExpectedOnItsDay)
   snow::GridSpec spec;
   spec.width = spec.height = 1024;
   spec.cellSizeXM = spec.cellSizeYM = 10.0;
@@ -264,4 +265,9 @@ TEST(MemoryModel, VdbTermFollowsTheSnowExpectedOnItsDay) {
   // Initial snow: its depth is not the snowfall's, so every column is held snowed.
   scene.initialSnow[0].kind = snow::InitialSnowLayer::Kind::Constant;
   EXPECT_DOUBLE_EQ(snow::vdbWriterBytes(scene, spec, reach, 10.0), 512.0 * 512.0 / 64.0 * 2.0 * 6400.0);
+  // 2048 columns a side: the level set is made in tiles of 512 (and a halo of 32), which hold
+  // (576 / 2048)² of the whole construction's transient beside the level set made.
+  spec.width = spec.height = 2048;
+  const double share = (576.0 / 2048.0) * (576.0 / 2048.0);
+  EXPECT_DOUBLE_EQ(snow::vdbWriterBytes(scene, spec, reach, 10.0), 2048.0 * 2048.0 / 64.0 * 2.0 * (3050.0 + (6400.0 - 3050.0) * share));
 }

@@ -1,8 +1,11 @@
 // The OpenVDB baker, read back by OpenVDB: grid names, classes and voxel size, the level set's
 // zero crossing within one voxel of the snow surface, layer densities, same bytes twice, and the
-// grid-by-grid file writer giving io::File::write's bytes.
+// grid-by-grid file writer giving io::File::write's bytes; the level set made tile by tile giving
+// the whole construction's bytes.
 #include <gtest/gtest.h>
 #include <openvdb/openvdb.h>
+
+#include <openvdb/tools/TopologyToLevelSet.h>
 
 #include <cmath>
 #include <filesystem>
@@ -10,6 +13,7 @@
 #include <iterator>
 
 #include "bakers/vdb_file.h"
+#include "bakers/vdb_level_set.h"
 #include "bakers/vdb_writer.h"
 #include "temp_dir.h"
 
@@ -126,4 +130,105 @@ TEST(Vdb, GridByGridFileIsIoFileWriteBytesButItsTag) {
   EXPECT_NE(a.substr(at, 36), tag);  // the content's tag, not OpenVDB's random one
   a.replace(at, 36, tag);
   EXPECT_TRUE(a == b) << "the files differ outside their tags";
+}
+
+namespace {
+
+std::string fileBytes(const std::string& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A file holding one level set named snow_sdf.
+std::string levelSetFile(const fs::path& dir, const char* name, openvdb::FloatGrid::Ptr g) {
+  g->setName("snow_sdf");
+  const std::string path = (dir / name).string();
+  writeVdbGridsAtomically(path, {g});
+  return fileBytes(path);
+}
+
+}  // namespace
+
+// levelSetByTiles (bakers/vdb_level_set.h) against topologyToLevelSet over the whole topology,
+// tiles of 128 columns (the smallest) on topologies 300 x 260 columns wide: snow sheets on a
+// slope (thin, one voxel a column at most, and thick), holes, a lone column, a blob across a tile
+// corner, columns only in one tile, snow at the domain's edges. The files' bytes are equal.
+TEST(Vdb, LevelSetByTilesIsTopologyToLevelSetsFileBytes) {
+  openvdb::initialize();
+  const fs::path dir = test::uniqueTempDir("vdb_test");
+  const int ni = 300, nj = 260;
+  struct Case {
+    const char* name;
+    std::function<int(int, int)> depth;  // voxels of snow in column (i, j) above its bed
+    double voxel;
+  };
+  auto bed = [](int i, int j) { return 40 + (i * 7 + j * 3) / 16 + static_cast<int>(6 * std::sin(0.05 * i) * std::cos(0.07 * j)); };
+  const std::vector<Case> cases = {
+      {"thin sheet with holes", [](int i, int j) { return ((i * 31 + j * 17) % 11 < 4 || (i > 120 && i < 140)) ? 0 : 1; }, 1.0},
+      {"thick varying sheet", [](int i, int j) { return 3 + (i * j) % 9; }, 0.5},
+      {"lone column and a blob across a corner",
+       [](int i, int j) {
+         if (i == 5 && j == 250) return 12;
+         const double r = std::hypot(i - 128.0, j - 128.0);
+         return r < 20 ? static_cast<int>(20 - r) : 0;
+       },
+       2.0},
+      {"one tile only", [](int i, int j) { return i >= 140 && i < 250 && j >= 10 && j < 120 ? 2 : 0; }, 1.0},
+  };
+  for (const Case& c : cases) {
+    auto transform = openvdb::math::Transform::createLinearTransform(c.voxel);
+    const TopologyFill fill = [&](openvdb::BoolGrid::Accessor& acc, int i0, int j0, int i1, int j1) {
+      for (int j = j0; j < j1; ++j)
+        for (int i = i0; i < i1; ++i)
+          for (int k = 0; k < c.depth(i, j); ++k) acc.setValue(openvdb::Coord(i, j, bed(i, j) + k), true);
+    };
+    auto topology = openvdb::BoolGrid::create(false);
+    topology->setTransform(transform);
+    {
+      auto acc = topology->getAccessor();
+      fill(acc, 0, 0, ni, nj);
+    }
+    ASSERT_GT(topology->activeVoxelCount(), 0u) << c.name;
+    auto whole = openvdb::tools::topologyToLevelSet(*topology, kSnowLevelSetHalfWidth, 0);
+    whole->setTransform(transform);
+    const std::string expected = levelSetFile(dir, "whole.vdb", whole);
+    for (int tile : {128, 256, 512}) {
+      auto tiled = levelSetByTiles(fill, LevelSetTiling{ni, nj, tile}, transform, kSnowLevelSetHalfWidth);
+      EXPECT_EQ(tiled->tree().leafCount(), whole->tree().leafCount()) << c.name << ", tiles of " << tile;
+      EXPECT_TRUE(levelSetFile(dir, "tiled.vdb", tiled) == expected) << c.name << ", tiles of " << tile << ": the files differ";
+    }
+  }
+  EXPECT_THROW(levelSetByTiles([](openvdb::BoolGrid::Accessor&, int, int, int, int) {}, LevelSetTiling{ni, nj, 100},
+                               openvdb::math::Transform::createLinearTransform(1.0), kSnowLevelSetHalfWidth),
+               std::logic_error);
+  fs::remove_all(dir);
+}
+
+// The writer's tile size changes its memory, not its file: a 300 x 200 cell state at 1 m voxels
+// (2 x 2 m cells: 600 x 400 columns) written with tiles of 128 and as one tile.
+TEST(Vdb, SnowVdbIsTheSameBytesWhateverItsLevelSetTiles) {
+  SnowState s;
+  GridSpec spec;
+  spec.width = 300;
+  spec.height = 200;
+  spec.cellSizeXM = spec.cellSizeYM = 2.0;
+  s.allocate(spec);
+  for (int y = 0; y < spec.height; ++y)
+    for (int x = 0; x < spec.width; ++x) {
+      s.bedrockM(x, y) = 1000.f + 0.3f * x + 0.2f * y + 4.f * std::sin(0.1f * x);
+      s.stableM(x, y) = (x * 13 + y * 7) % 5 == 0 ? 0.f : 0.4f + 0.01f * (x % 50);
+      s.powderM(x, y) = 0.2f;
+      if (x > 200 && y < 40) s.validCell(x, y) = 0;
+    }
+  const fs::path dir = test::uniqueTempDir("vdb_test");
+  VdbOptions o;
+  o.voxelSizeM = 1.0;
+  o.levelSetTileColumns = 1024;
+  writeSnowVdb((dir / "one.vdb").string(), s, o);
+  o.levelSetTileColumns = 128;
+  writeSnowVdb((dir / "tiled.vdb").string(), s, o);
+  const std::string one = fileBytes((dir / "one.vdb").string()), tiled = fileBytes((dir / "tiled.vdb").string());
+  EXPECT_GT(one.size(), 100000u);
+  EXPECT_TRUE(one == tiled) << "the files differ";
+  fs::remove_all(dir);
 }
