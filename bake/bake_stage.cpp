@@ -3,6 +3,7 @@
 #include <atomic>
 #include <exception>
 
+#include "core/release_memory.h"
 #include "core/stop_request.h"
 #include "memory_trace.h"
 
@@ -23,6 +24,7 @@ BakeStage::~BakeStage() {
   if (std::uncaught_exceptions() != exceptions_) return;
   stage.store(previous_);
   noteStageMemory(name_);
+  releaseFreedMemory();  // the stage's working sets, before the next stage's
 }
 
 }  // namespace snow

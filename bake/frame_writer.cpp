@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/release_memory.h"
+
 namespace snow {
 
 FrameWriter::FrameWriter(OutputWriter& writer, const SkiTracks* skiTracks, int threads, bool beside)
@@ -33,6 +35,7 @@ void FrameWriter::write(double day, SnowState& s) {
     }
     state_ = SnowState();  // freed once written, not held until the next frame
     skiDepth_ = Grid<float>();
+    releaseFreedMemory();  // this thread's arena, which the season's threads never reuse
   });
 }
 

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/format.h"
+#include "core/release_memory.h"
 #include "core/stop_request.h"
 #include "grid_writer.h"
 #include "precompute/solar.h"
@@ -76,20 +77,24 @@ void OutputWriter::writeDay(const SnowState& s, double day, const Grid<float>* s
   }
   // The layers, the VDB and the meshes one after the other, so that only one of their working
   // sets is held at a time (side by side they were the bake's peak: the VDB's tree and the
-  // mesh's buffers beside every layer); each lists into its own sink, merged in a fixed order.
+  // mesh's buffers beside every layer), each handed back to the system when it ends (else each
+  // stood on the last one's); each lists into its own sink, merged in a fixed order.
   OutputSink layerSink, vdbSink, meshSink;
   {
     SinkScope scope(layerSink);
     writeLayers(d);
   }
+  releaseFreedMemory();
   {
     SinkScope scope(vdbSink);
     writeVdb(d);
   }
+  releaseFreedMemory();
   {
     SinkScope scope(meshSink);
     writeMeshes(d);
   }
+  releaseFreedMemory();
   parent.merge(layerSink);
   parent.merge(vdbSink);
   parent.merge(meshSink);
