@@ -86,6 +86,13 @@ struct OptionalFields {
   }
 };
 
+bool layersNeed(const Scene& s, LayerNeeds input) {
+  return std::any_of(s.outputs.layers.begin(), s.outputs.layers.end(), [&](const std::string& name) {
+    const LayerInfo* layer = findLayer(name);
+    return layer && (layer->needs & input);
+  });
+}
+
 bool hasLayer(const Scene& s, const char* name) {
   return std::find(s.outputs.layers.begin(), s.outputs.layers.end(), name) != s.outputs.layers.end();
 }
@@ -371,7 +378,9 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   if (!s.outputs.frameDays.empty()) {
     // One copy of the state (the season's download, which the frame writer takes) without the
     // static fields the host released, and two of the texture (the writer's and its layer).
-    season.owners.push_back({"frame in flight: state copy", state - (staticOnHost ? 0.0 : staticOwner.bytes), "outputs.frames_days", G::FramesInFlight});
+    // The copy leaves the record fields out when no layer reads them (SeasonConfig::framesNeedRecords).
+    const double records = layersNeed(s, kNeedsRecords) ? 0.0 : recordOwner.bytes;
+    season.owners.push_back({"frame in flight: state copy", state - (staticOnHost ? 0.0 : staticOwner.bytes) - records, "outputs.frames_days", G::FramesInFlight});
     if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::FramesInFlight});
     for (const auto& w : frameWriter) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
     season.owners.push_back({"frames held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size()), "outputs.ranges", G::FramesInFlight});

@@ -33,7 +33,7 @@ std::array<int, 2> eventCell(const Scene& scene, const TerrainInfo& ti, const Sn
   return {x, y};
 }
 
-// Whether a layer asked for is computed from `input` (the ski-track texture, the route map).
+// Whether a layer asked for is computed from `input` (the ski-track texture, the route map, the records).
 bool layersNeed(const std::vector<std::string>& layers, LayerNeeds input) {
   return std::any_of(layers.begin(), layers.end(), [&](const std::string& name) { return findLayer(name)->needs & input; });
 }
@@ -69,6 +69,7 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
     config.skiTracks = &*outputs.skiTracks;
   }
   config.frameDays = scene.outputs.frameDays;
+  config.framesNeedRecords = layersNeed(layers, kNeedsRecords);
   config.windTransport = pre.wind->hasWind();
   if (scene.bedforms.enabled) {
     config.bedforms = scene.bedforms.params;

@@ -47,9 +47,11 @@ class ExecBackend final : public SnowBackend {
     return runEdit(exec_, view(), editWeight_, a, weights);
   }
 
+  // The fields the state holds (a frame's copy may leave the record fields out).
   void download(SnowState& s) override {
 #define SNOW_DOWNLOAD(member, view, Element, role, access, fill) \
-  if constexpr (downloadedWithState(FieldRole::role)) exec_.download(member##_, s.member.values());
+  if constexpr (downloadedWithState(FieldRole::role))            \
+    if (s.member.size() > 0) exec_.download(member##_, s.member.values());
     SNOW_STATE_FIELDS(SNOW_DOWNLOAD)
 #undef SNOW_DOWNLOAD
     if (bed_.ready) {

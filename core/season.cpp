@@ -253,7 +253,9 @@ void SeasonRun::addFrames() {
     scheduler_.addAction(day, [this](double now) {
       SnowState frame = state_;  // the host's copies were released: terrain and host-only fields
       if (noSnow_) frame.validCell = terrainValid_;
-      frame.restoreFields(downloadedWithState);
+      // Without the record fields when no layer of the frame reads them (the download fills the
+      // fields the state holds).
+      frame.restoreFields([&](FieldRole r) { return downloadedWithState(r) && (r != FieldRole::Record || cfg_.framesNeedRecords); });
       backend_.download(frame);
       if (cfg_.skiTracks) cfg_.skiTracks->fade(frame);
       onFrame_(now, frame);

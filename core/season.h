@@ -63,6 +63,7 @@ struct SeasonConfig {
   bool avalancheMaps = false;                 // keep each avalanche's maps in its record
   double avalancheFrameIntervalS = 0.0;       // and frames of its motion (0: none)
   std::vector<double> frameDays;              // days at which to hand the state to onFrame
+  bool framesNeedRecords = true;              // a frame's state holds the record fields (else they are left out)
   // Per-day static fields: when set, called at the start of every season day (0, 1, 2, ...) to
   // refill the state's static fields for that day (temperature from that day's sun exposure,
   // the wind of that day); the backend's static fields are then replaced.

@@ -15,9 +15,18 @@ namespace snow {
 
 // Bit flags: which modes can make a layer.
 enum LayerModes : uint8_t { kSeasonMode = 1, kOcclusionMode = 2, kGridModes = kSeasonMode | kOcclusionMode };
-// Bit flags: what a layer is computed from beyond the snow state, so a writer fetches the day's
-// wind or sun only when a layer of that day needs it.
-enum LayerNeeds : uint8_t { kNeedsState = 0, kNeedsWind = 1, kNeedsSun = 2, kNeedsSkiTracks = 4, kNeedsRouteMap = 8, kNeedsOcclusion = 16 };
+// Bit flags: what a layer is computed from beyond the snow state's snow and terrain, so a writer
+// fetches the day's wind or sun only when a layer of that day needs it, and a frame's copy of the
+// state holds the record fields (FieldRole::Record) only when a layer reads them.
+enum LayerNeeds : uint8_t {
+  kNeedsState = 0,
+  kNeedsWind = 1,
+  kNeedsSun = 2,
+  kNeedsSkiTracks = 4,
+  kNeedsRouteMap = 8,
+  kNeedsOcclusion = 16,
+  kNeedsRecords = 32,
+};
 
 // mode = "occlusion"'s four fields (Foldes & Benes 2007), one value a cell.
 struct OcclusionGrids {

@@ -2,6 +2,7 @@
 // layer's smooth step checked cell by cell.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 #include <string>
 
@@ -44,6 +45,45 @@ TEST(Layers, SnowCoverageIsASmoothStepOfTheDepth) {
   EXPECT_EQ(c(3, 0), 1.f);  // at the covered depth
   EXPECT_EQ(c(4, 0), 1.f);  // deep snow
   EXPECT_EQ(c(5, 0), 0.f);  // NODATA
+}
+
+// A frame's copy of the state leaves the record fields out unless a layer asked for reads them
+// (kNeedsRecords; SeasonConfig::framesNeedRecords): every float layer not flagged so computes the
+// same from a state without its record fields as from the whole state (a missing flag reads an
+// empty grid here).
+TEST(Layers, EveryLayerNotNeedingRecordsIsTheSameWithoutTheRecordFields) {
+  const GridSpec spec{12, 9, 2.0, 2.0};
+  SnowState whole;
+  whole.allocate(spec);
+  float v = 0.1f;
+#define SNOW_FILL(member, view, Element, role, access, fill)                                     \
+  if (whole.member.size() == spec.cellCount())                                                   \
+    for (auto& x : whole.member.values()) x = static_cast<Element>(FieldRole::role == FieldRole::Terrain ? 1 : 0) + \
+                                              static_cast<Element>(std::fmod(v += 0.37f, 3.f));
+  SNOW_STATE_FIELDS(SNOW_FILL)
+#undef SNOW_FILL
+  for (int x = 0; x < spec.width; ++x) whole.bedrockM(x, 4) = 1000.f + x;
+  whole.validCell(3, 3) = 0;
+  SnowState lean = whole;
+  lean.releaseFields([](FieldRole r) { return r == FieldRole::Record; });
+  ASSERT_EQ(lean.meltedM.size(), 0u);
+  ModelParameters params;
+  OutputRequest outputs;
+  outputs.coverageDepthsM = {0.02, 0.15};
+  const Grid<float> windX(spec.width, spec.height, 3.f), windY(spec.width, spec.height, -2.f), windZ(spec.width, spec.height, 1002.f),
+      sun(spec.width, spec.height, 6.f), ski(spec.width * 2, spec.height * 2, 0.1f), route(spec.width, spec.height, 40.f);
+  OcclusionGrids occlusion{sun, sun, sun, sun};
+  int compared = 0;
+  for (const LayerInfo& l : layerTable()) {
+    if (l.kind != LayerKind::Float || (l.needs & kNeedsRecords)) continue;
+    auto compute = [&](const SnowState& s) {
+      LayerInputs in{&s, &params, &outputs, &windX, &windY, &windZ, &sun, -2.0, &ski, &route, &occlusion};
+      return l.compute(in);
+    };
+    EXPECT_TRUE(compute(whole).values() == compute(lean).values()) << l.name;
+    ++compared;
+  }
+  EXPECT_GT(compared, 20);
 }
 
 }  // namespace
