@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "bake/frame_timing.h"
 #include "core/season.h"
 #include "inputs/terrain_loader.h"
 
@@ -29,9 +30,9 @@ struct BakeOptions {
   bool useCache = true;                    // --no-cache: neither read nor write it
   // --verbose: the memory breakdown (the model's groups against the measured peak) in the log.
   bool verbose = false;
-  // Frame days' outputs written on their own thread while the season goes on (false: in place,
-  // the season waiting; the same files, for tests and timing comparisons).
-  bool framesBesideSeason = true;
+  // When frame days' outputs are written (frame_timing.h): beside the season unless only writing
+  // them after it fits the memory budget; the same files whichever.
+  FrameTiming frames = FrameTiming::Auto;
   // Where stages report progress and events (progress.h); null: the human bar on the log.
   ProgressSink* progressSink = nullptr;
   std::vector<std::string> commandLine;  // recorded in the manifest (argv of `snowbake bake`)

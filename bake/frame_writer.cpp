@@ -6,8 +6,8 @@
 
 namespace snow {
 
-FrameWriter::FrameWriter(OutputWriter& writer, const SkiTracks* skiTracks, int threads, bool beside)
-    : writer_(writer), skiTracks_(skiTracks), beside_(beside), arena_(std::max(1, threads)) {}
+FrameWriter::FrameWriter(OutputWriter& writer, const SkiTracks* skiTracks, int threads, FrameTiming timing)
+    : writer_(writer), skiTracks_(skiTracks), timing_(timing == FrameTiming::Auto ? FrameTiming::Beside : timing), arena_(std::max(1, threads)) {}
 
 FrameWriter::~FrameWriter() {
   if (thread_.joinable()) thread_.join();
@@ -22,7 +22,11 @@ void FrameWriter::join() {
 }
 
 void FrameWriter::write(double day, SnowState& s) {
-  if (!beside_) return writer_.writeDay(s, day, skiTracks_ ? &skiTracks_->depth() : nullptr);
+  if (timing_ == FrameTiming::InPlace) return writer_.writeDay(s, day, skiTracks_ ? &skiTracks_->depth() : nullptr);
+  if (timing_ == FrameTiming::AfterSeason) {
+    held_.push_back({day, std::move(s), skiTracks_ ? skiTracks_->depth() : Grid<float>()});
+    return;
+  }
   join();
   state_ = std::move(s);  // the season's frame copy, taken: one copy of the state in flight, not two
   if (skiTracks_) skiDepth_ = skiTracks_->depth();
@@ -37,6 +41,15 @@ void FrameWriter::write(double day, SnowState& s) {
     skiDepth_ = Grid<float>();
     releaseFreedMemory();  // this thread's arena, which the season's threads never reuse
   });
+}
+
+void FrameWriter::writeHeld() {
+  for (Held& h : held_) {
+    writer_.writeDay(h.state, h.day, skiTracks_ ? &h.skiDepth : nullptr);
+    h = Held{};
+    releaseFreedMemory();
+  }
+  held_.clear();
 }
 
 }  // namespace snow

@@ -276,7 +276,8 @@ std::string measuredMemoryBreakdown(const MemoryPrediction& p, double units, con
   return memoryBreakdownJson(p, measured, stage, units, unit);
 }
 
-MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach) {
+MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach,
+                                 bool framesAfterSeason) {
   using G = MemoryGroup;
   const double cells = static_cast<double>(spec.width) * spec.height;
   const OptionalFields present{s};
@@ -375,17 +376,35 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
     season.owners.push_back({"skier and avalanche records", (skiers + static_cast<double>(s.userAvalanches.size())) * kRecordBytes,
                              "parameters.skiers_per_hour", G::Records});
   }
-  if (!s.outputs.frameDays.empty()) {
-    // One copy of the state (the season's download, which the frame writer takes) without the
-    // static fields the host released, and two of the texture (the writer's and its layer).
-    // The copy leaves the record fields out when no layer reads them (SeasonConfig::framesNeedRecords).
-    const double records = layersNeed(s, kNeedsRecords) ? 0.0 : recordOwner.bytes;
-    season.owners.push_back({"frame in flight: state copy", state - (staticOnHost ? 0.0 : staticOwner.bytes) - records, "outputs.frames_days", G::FramesInFlight});
+  // A frame's copy of the state (the season's download, which the frame writer takes) without the
+  // static fields the host released, and without the record fields when no layer reads them
+  // (SeasonConfig::framesNeedRecords).
+  const double frames = static_cast<double>(s.outputs.frameDays.size());
+  const double copy = state - (staticOnHost ? 0.0 : staticOwner.bytes) - (layersNeed(s, kNeedsRecords) ? 0.0 : recordOwner.bytes);
+  const MemoryOwner heldCopies{"frames held: state copies", frames * copy, "outputs.frames_days", G::FramesInFlight};
+  const MemoryOwner heldTextures{"frames held: ski-track texture copies", frames * skiTexture.bytes, "outputs.frames_days", G::FramesInFlight};
+  const MemoryOwner heldForRange{"frames held for their season range", heldPerDay * frames, "outputs.ranges", G::FramesInFlight};
+  if (frames > 0 && framesAfterSeason) {
+    // Every frame's copies held through the season, written once the backend is freed.
+    season.owners.push_back(heldCopies);
+    if (skiTracks) season.owners.push_back(heldTextures);
+  } else if (frames > 0) {
+    // One frame in flight: its copy, two of the texture (the writer's and its layer), its writers.
+    season.owners.push_back({"frame in flight: state copy", copy, "outputs.frames_days", G::FramesInFlight});
     if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::FramesInFlight});
     for (const auto& w : frameWriter) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
-    season.owners.push_back({"frames held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size()), "outputs.ranges", G::FramesInFlight});
+    season.owners.push_back(heldForRange);
   }
   p.phases.push_back(season);
+  if (frames > 0 && framesAfterSeason) {
+    // The host's state whole again (the season's last download), the copies not yet written
+    // (counted whole), the frame's writers and the frames' layers held for their range.
+    MemoryPhase after{"frames after the season", {terrain, stateOwner, staticOwner, recordOwner, exposure, wind, heldCopies}};
+    if (skiTracks) after.owners.push_back(skiTexture), after.owners.push_back(heldTextures);
+    after.owners.insert(after.owners.end(), frameWriter.begin(), frameWriter.end());
+    after.owners.push_back(heldForRange);
+    p.phases.push_back(after);
+  }
 
   // The outputs: the backend is freed once the season ends; the state has its static fields again.
   MemoryPhase out{"outputs", {terrain, stateOwner, staticOwner, recordOwner, exposure, wind}};
@@ -394,6 +413,20 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   out.owners.push_back({"days held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size() + 1), "outputs.ranges", G::FramesInFlight});
   p.phases.push_back(out);
   return p;
+}
+
+GridMemoryPlan planGridMemory(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach, double budget,
+                              FrameTiming timing) {
+  GridMemoryPlan plan;
+  plan.framesAfterSeason = timing == FrameTiming::AfterSeason;
+  plan.prediction = predictGridBake(s, spec, occluderTriangles, reach, plan.framesAfterSeason);
+  if (timing != FrameTiming::Auto || s.outputs.frameDays.empty() || plan.prediction.peakBytes() <= budget) return plan;
+  MemoryPrediction after = predictGridBake(s, spec, occluderTriangles, reach, true);
+  if (after.peakBytes() > budget) return plan;  // refused as beside the season, the usual case
+  plan.besideBytes = plan.prediction.peakBytes();
+  plan.prediction = std::move(after);
+  plan.framesAfterSeason = true;
+  return plan;
 }
 
 MemoryPrediction predictMeshBake(const Scene& s, size_t triangles, const double extentM[3]) {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "frame_timing.h"
 #include "memory_vdb.h"
 #include "scene/scene.h"
 
@@ -69,7 +70,20 @@ std::string measuredMemoryBreakdown(const MemoryPrediction& p, double units, con
 // What a grid bake (mode = "season" or "occlusion") holds on a grid of `spec`, with
 // `occluderTriangles` triangles of occluder meshes; `reach` (the terrain's heights against the
 // rain-snow limit) sizes the VDB by the snow expected on its day, unknown: every column snowed.
-MemoryPrediction predictGridBake(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach = {});
+// `framesAfterSeason`: the frame days' outputs written after the season from copies held
+// through it (FrameTiming::AfterSeason), not beside it.
+MemoryPrediction predictGridBake(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach = {},
+                                 bool framesAfterSeason = false);
+// The prediction a grid bake runs by, and whether its frames are written after the season:
+// `timing` as asked, or for FrameTiming::Auto beside the season unless that passes `budgetBytes`
+// and after it does not (the season's peak then holds the frames' state copies, not their writers).
+struct GridMemoryPlan {
+  MemoryPrediction prediction;
+  bool framesAfterSeason = false;
+  double besideBytes = 0;  // the peak with the frames beside the season (when after it was chosen)
+};
+GridMemoryPlan planGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach,
+                              double budgetBytes, FrameTiming timing);
 // mode = "mesh": the lattice and the snow body over a mesh of `triangles` triangles whose
 // bounding box is `extentM` (x, y, z).
 MemoryPrediction predictMeshBake(const Scene& scene, size_t triangles, const double extentM[3]);

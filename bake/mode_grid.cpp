@@ -55,19 +55,22 @@ GeoFrame geoFrameOf(const TerrainInfo& ti) {
 namespace {
 
 // The memory model's prediction for the grid, logged; refused above the budget before any work.
-MemoryPrediction checkGridMemory(const Scene& scene, const BakeTerrain& terrain, std::ostream& log) {
+GridMemoryPlan checkGridMemory(const Scene& scene, const BakeTerrain& terrain, FrameTiming timing, std::ostream& log) {
   const GridSpec& spec = terrain.info().spec;
   refuseBeyondTheModel(scene, spec);
-  const MemoryPrediction p = predictGridBake(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain));
   const double budget = memoryBudgetBytes(scene);
-  refuseAboveBudget(scene, p, budget);
-  log << "memory: " << p.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
-  return p;
+  const GridMemoryPlan plan = planGridMemory(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain), budget, timing);
+  refuseAboveBudget(scene, plan.prediction, budget);
+  log << "memory: " << plan.prediction.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
+  if (plan.besideBytes > 0)
+    log << "frames: written after the season, from copies held through it (beside it the bake would need "
+        << fixed(plan.besideBytes / (1024.0 * 1024.0), 0) << " MiB)\n";
+  return plan;
 }
 
 }  // namespace
 
-void checkBuiltinMemory(const Scene& scene) {
+void checkBuiltinMemory(const Scene& scene, FrameTiming timing) {
   const TerrainSource& t = scene.terrain;
   if (!t.builtin || t.cropM || t.resampleCellSizeM || t.resampleSize) return;
   const DefaultTerrainOptions& b = t.builtinOptions;
@@ -75,7 +78,8 @@ void checkBuiltinMemory(const Scene& scene) {
   spec.width = spec.height = b.size;
   spec.cellSizeXM = spec.cellSizeYM = b.cellSizeM;
   refuseBeyondTheModel(scene, spec);
-  refuseAboveBudget(scene, predictGridBake(scene, spec, 0, builtinSnowReach(b, scene.params.rainSnowLimitM)), memoryBudgetBytes(scene));
+  const double budget = memoryBudgetBytes(scene);
+  refuseAboveBudget(scene, planGridMemory(scene, spec, 0, builtinSnowReach(b, scene.params.rainSnowLimitM), budget, timing).prediction, budget);
 }
 
 size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
@@ -115,11 +119,12 @@ void createOutputFolder(const std::string& dir) {
 }
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
-  checkBuiltinMemory(scene);
+  checkBuiltinMemory(scene, options.frames);
   std::optional<BakeStage> stage(std::in_place, "terrain");
   progress().stage("terrain", 0.0);
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
-  const MemoryPrediction memory = checkGridMemory(scene, terrain, log);
+  const GridMemoryPlan memoryPlan = checkGridMemory(scene, terrain, options.frames, log);
+  const MemoryPrediction& memory = memoryPlan.prediction;
   progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
@@ -161,8 +166,11 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   } else {
     stage.emplace("season");
     const SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
-    report = runSeasonStage(scene, options, threads, *backend, state, config, seasonOutputs, writer, log);
+    FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads,
+                       memoryPlan.framesAfterSeason ? FrameTiming::AfterSeason : options.frames);
+    report = runSeasonStage(scene, *backend, state, config, frames, log);
     backend.reset();  // its copies of the state and its scratch, freed before the outputs
+    frames.writeHeld();  // the frames held through the season (FrameTiming::AfterSeason)
   }
 
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.

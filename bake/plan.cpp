@@ -60,12 +60,13 @@ std::vector<PlannedStage> gridStages(const Scene& scene, const BakeTerrain& terr
 }
 
 void planGrid(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
-  checkBuiltinMemory(scene);
+  checkBuiltinMemory(scene, options.frames);
   const BakeTerrain terrain = loadBakeTerrain(scene, *std::make_unique<std::ostringstream>());
   const GridSpec& spec = terrain.info().spec;
   refuseBeyondTheModel(scene, spec);
-  plan.memory = predictGridBake(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain));
   plan.budgetBytes = memoryBudgetBytes(scene);
+  plan.memory = planGridMemory(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain), plan.budgetBytes, options.frames)
+                    .prediction;
   refuseAboveBudget(scene, plan.memory, plan.budgetBytes);
   const bool occlusion = scene.mode == SceneMode::Occlusion;
   checkBedformsSuitTheGrid(scene, spec);

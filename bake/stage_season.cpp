@@ -1,4 +1,4 @@
-// Stage 5: the season on the chosen backend, frame days written beside it.
+// Stage 5: the season on the chosen backend, its frame days handed to the frame writer.
 #include <iostream>
 
 #include "core/format.h"
@@ -9,10 +9,9 @@
 
 namespace snow {
 
-SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int threads, SnowBackend& backend, SnowState& state,
-                            const SeasonConfig& config, SeasonOutputs& outputs, OutputWriter& writer, std::ostream& log) {
+SeasonReport runSeasonStage(const Scene& scene, SnowBackend& backend, SnowState& state, const SeasonConfig& config, FrameWriter& frames,
+                            std::ostream& log) {
   progress().stage("season", 0.0);
-  FrameWriter frames(writer, outputs.skiTracks ? &*outputs.skiTracks : nullptr, threads, options.framesBesideSeason);
   SeasonReport report = runSeason(
       backend, state, config,
       [&](double f) {

@@ -16,6 +16,7 @@
 #include "core/backend.h"
 #include "core/season.h"
 #include "core/util.h"
+#include "frame_writer.h"
 #include "core/ski_runs.h"
 #include "precompute/cache.h"
 #include "precompute/exposure.h"
@@ -94,9 +95,10 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
 // the cells cannot hold), naming the key's file and line; nothing when bedforms are off.
 void checkBedformsSuitTheGrid(const Scene& scene, const GridSpec& spec);
 
-// stage_season.cpp: the season, with frame days written beside it (frame_writer.h); logs its report.
-SeasonReport runSeasonStage(const Scene& scene, const BakeOptions& options, int threads, SnowBackend& backend, SnowState& state,
-                            const SeasonConfig& config, SeasonOutputs& outputs, OutputWriter& writer, std::ostream& log);
+// stage_season.cpp: the season, its frame days handed to `frames` (frame_writer.h: written beside
+// it, in place, or held for writeHeld after it); logs its report.
+SeasonReport runSeasonStage(const Scene& scene, SnowBackend& backend, SnowState& state, const SeasonConfig& config, FrameWriter& frames,
+                            std::ostream& log);
 // season_log.cpp: the season's report as the log prints it.
 void logSeasonReport(const SeasonReport& report, const Scene& scene, const SeasonConfig& config, const std::string& backendName,
                      std::ostream& log);

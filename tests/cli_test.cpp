@@ -88,19 +88,21 @@ TEST(Cli, SameSeedSameBytesAndThreadCountDoesNotMatter) {
 }
 
 // Frame days are written on their own thread from a copy of the state (and of the ski-track
-// texture, which the season goes on stamping) while the season continues: the same files and
-// manifest as writing them in place, with three frames (one in flight at a time) and skiers.
-TEST(Cli, FramesWrittenBesideTheSeasonEqualFramesWrittenInPlace) {
+// texture, which the season goes on stamping) while the season continues, or after the season
+// from copies held through it: the same files and manifest as writing them in place, with three
+// frames (one in flight at a time) and skiers.
+TEST(Cli, FramesWrittenBesideOrAfterTheSeasonEqualFramesWrittenInPlace) {
   const fs::path dir = workDir();
-  std::map<std::string, std::string> files[2];
-  for (int beside = 0; beside < 2; ++beside) {
+  std::map<std::string, std::string> files[3];
+  const snow::FrameTiming timings[3] = {snow::FrameTiming::InPlace, snow::FrameTiming::Beside, snow::FrameTiming::AfterSeason};
+  for (int beside = 0; beside < 3; ++beside) {
     snow::BakeOptions o;
     o.scene = "preset:default";
-    o.outDir = (dir / (beside ? "beside" : "inplace")).string();
+    o.outDir = (dir / ("timing" + std::to_string(beside))).string();
     o.backend = "cpu";
     o.useCache = false;
     o.progress = false;
-    o.framesBesideSeason = beside == 1;
+    o.frames = timings[beside];
     o.sets = {"terrain.size=96", "terrain.cell_size_m=20", "season.days=40", "outputs.frames_days=[10,20,30]", "parameters.skiers_per_hour=5",
               "outputs.layers=[\"powder\",\"depth\",\"ski_tracks\",\"preview\"]", "outputs.meshes=[\"glb\"]"};
     std::ostringstream log;
@@ -111,10 +113,13 @@ TEST(Cli, FramesWrittenBesideTheSeasonEqualFramesWrittenInPlace) {
   EXPECT_TRUE(files[1].count("frames/snow_surface.0030.glb"));
   EXPECT_TRUE(files[1].count("contact_sheet.png"));
   EXPECT_FALSE(files[1].at("frames/ski_tracks.0010.exr") == files[1].at("ski_tracks.exr")) << "no skiing after day 10?";
-  ASSERT_EQ(files[0].size(), files[1].size());
-  for (const auto& [name, bytes] : files[0]) {
-    ASSERT_TRUE(files[1].count(name)) << name;
-    EXPECT_TRUE(bytes == files[1].at(name)) << name << " differs when frames are written beside the season";
+  for (int other = 1; other < 3; ++other) {
+    ASSERT_EQ(files[0].size(), files[other].size());
+    for (const auto& [name, bytes] : files[0]) {
+      ASSERT_TRUE(files[other].count(name)) << name;
+      EXPECT_TRUE(bytes == files[other].at(name)) << name << " differs when frames are written " << (other == 1 ? "beside" : "after")
+                                                  << " the season";
+    }
   }
   if (!HasFailure()) fs::remove_all(dir);
 }

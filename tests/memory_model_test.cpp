@@ -310,3 +310,36 @@ TEST(MemoryModel, SmallBlocksFreedOnAnotherThreadLeaveTheResidentSetWhenReleased
   if (freed < 100e6) GTEST_SKIP() << "this allocator handed the freed blocks back by itself";
   EXPECT_LT(after - before, 0.25 * freed);
 }
+
+// The frames are written after the season (from copies held through it, FrameTiming::AfterSeason)
+// only where beside the season the bake would pass the budget and after it would not; asked for
+// beside it, or without frames, they never are.
+TEST(MemoryModel, FramesGoAfterTheSeasonOnlyWhereBesideItPassesTheBudgetAndAfterItDoesNot) {
+  const snow::Scene scene = snow::loadScene("preset:default");
+  snow::GridSpec spec;
+  spec.width = spec.height = 2048;
+  spec.cellSizeXM = spec.cellSizeYM = 10.0;
+  snow::SnowReach reach;
+  reach.known = true, reach.share = 0.8, reach.meanExcessM = 700.0;
+  const double beside = snow::predictGridBake(scene, spec, 0, reach, false).peakBytes();
+  const snow::MemoryPrediction afterPrediction = snow::predictGridBake(scene, spec, 0, reach, true);
+  const double after = afterPrediction.peakBytes();
+  ASSERT_LT(after, beside);
+  bool hasAfterPhase = false;
+  for (const auto& phase : afterPrediction.phases) hasAfterPhase = hasAfterPhase || phase.name == "frames after the season";
+  EXPECT_TRUE(hasAfterPhase);
+  auto plan = [&](const snow::Scene& s, double budget, snow::FrameTiming timing) { return snow::planGridMemory(s, spec, 0, reach, budget, timing); };
+  EXPECT_FALSE(plan(scene, beside + 1, snow::FrameTiming::Auto).framesAfterSeason);
+  const snow::GridMemoryPlan squeezed = plan(scene, 0.5 * (after + beside), snow::FrameTiming::Auto);
+  EXPECT_TRUE(squeezed.framesAfterSeason);
+  EXPECT_DOUBLE_EQ(squeezed.prediction.peakBytes(), after);
+  EXPECT_DOUBLE_EQ(squeezed.besideBytes, beside);
+  EXPECT_FALSE(plan(scene, after - 1, snow::FrameTiming::Auto).framesAfterSeason);  // refused as beside it
+  EXPECT_FALSE(plan(scene, 0.5 * (after + beside), snow::FrameTiming::Beside).framesAfterSeason);
+  EXPECT_TRUE(plan(scene, beside + 1, snow::FrameTiming::AfterSeason).framesAfterSeason);
+  snow::Scene noFrames = scene;
+  noFrames.outputs.frameDays.clear();
+  EXPECT_FALSE(plan(noFrames, 1.0, snow::FrameTiming::Auto).framesAfterSeason);
+  std::printf("[ measure ] default preset at 2048²: %.0f MiB with its frame beside the season, %.0f MiB after it\n", beside / 1048576.0,
+              after / 1048576.0);
+}
