@@ -86,13 +86,6 @@ struct OptionalFields {
   }
 };
 
-bool layersNeed(const Scene& s, LayerNeeds input) {
-  return std::any_of(s.outputs.layers.begin(), s.outputs.layers.end(), [&](const std::string& name) {
-    const LayerInfo* layer = findLayer(name);
-    return layer && (layer->needs & input);
-  });
-}
-
 bool hasLayer(const Scene& s, const char* name) {
   return std::find(s.outputs.layers.begin(), s.outputs.layers.end(), name) != s.outputs.layers.end();
 }
@@ -113,9 +106,7 @@ double outputPixels(const OutputRequest& o, double cells) {
 // the engine maps' weights and pixels.
 std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
   const OutputRequest& o = s.outputs;
-  uint8_t needs = 0;
-  for (const auto& name : o.layers)
-    if (const LayerInfo* l = findLayer(name)) needs |= l->needs;
+  const uint8_t needs = layersNeeds(o.layers);
   std::vector<MemoryOwner> w;
   const double layers = static_cast<double>(o.layers.size());
   constexpr MemoryGroup W = MemoryGroup::Writers;
@@ -380,7 +371,7 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   // static fields the host released, and without the record fields when no layer reads them
   // (SeasonConfig::framesNeedRecords).
   const double frames = static_cast<double>(s.outputs.frameDays.size());
-  const double copy = state - (staticOnHost ? 0.0 : staticOwner.bytes) - (layersNeed(s, kNeedsRecords) ? 0.0 : recordOwner.bytes);
+  const double copy = state - (staticOnHost ? 0.0 : staticOwner.bytes) - ((layersNeeds(s.outputs.layers) & kNeedsRecords) ? 0.0 : recordOwner.bytes);
   const MemoryOwner heldCopies{"frames held: state copies", frames * copy, "outputs.frames_days", G::FramesInFlight};
   const MemoryOwner heldTextures{"frames held: ski-track texture copies", frames * skiTexture.bytes, "outputs.frames_days", G::FramesInFlight};
   const MemoryOwner heldForRange{"frames held for their season range", heldPerDay * frames, "outputs.ranges", G::FramesInFlight};

@@ -33,11 +33,6 @@ std::array<int, 2> eventCell(const Scene& scene, const TerrainInfo& ti, const Sn
   return {x, y};
 }
 
-// Whether a layer asked for is computed from `input` (the ski-track texture, the route map, the records).
-bool layersNeed(const std::vector<std::string>& layers, LayerNeeds input) {
-  return std::any_of(layers.begin(), layers.end(), [&](const std::string& name) { return findLayer(name)->needs & input; });
-}
-
 }  // namespace
 
 SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const ArtDirectionPlan& art,
@@ -63,13 +58,14 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
     const auto c = eventCell(scene, terrain.info(), state, a, "skier", "start point");
     config.userSkiers.push_back({a.day, c[0], c[1], a.count, nullptr});
   }
-  if (layersNeed(layers, kNeedsRouteMap)) outputs.routeMap = routeMap(state.bedrockM, state.validCell, state.spec);
-  if (layersNeed(layers, kNeedsSkiTracks)) {
+  const uint8_t needs = layersNeeds(layers);
+  if (needs & kNeedsRouteMap) outputs.routeMap = routeMap(state.bedrockM, state.validCell, state.spec);
+  if (needs & kNeedsSkiTracks) {
     outputs.skiTracks.emplace(state.spec, scene.outputs.skiTrackFactor);
     config.skiTracks = &*outputs.skiTracks;
   }
   config.frameDays = scene.outputs.frameDays;
-  config.framesNeedRecords = layersNeed(layers, kNeedsRecords);
+  config.framesNeedRecords = (needs & kNeedsRecords) != 0;
   config.windTransport = pre.wind->hasWind();
   if (scene.bedforms.enabled) {
     config.bedforms = scene.bedforms.params;

@@ -102,8 +102,7 @@ void OutputWriter::writeDay(const SnowState& s, double day, const Grid<float>* s
 
 void OutputWriter::writeLayers(const Day& d) {
   // The day's wind and sun, fetched once when a layer needs them.
-  uint8_t needs = 0;
-  for (const auto& name : src_.layers) needs |= findLayer(name)->needs;
+  uint8_t needs = layersNeeds(src_.layers);
   WindFieldsAtDay wind;
   Grid<float> sunHours;
   if (src_.plan) needs = 0;  // nothing computed

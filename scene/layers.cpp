@@ -201,4 +201,11 @@ const LayerInfo* findLayer(const std::string& name) {
   return nullptr;
 }
 
+uint8_t layersNeeds(const std::vector<std::string>& names) {
+  uint8_t needs = 0;
+  for (const std::string& name : names)
+    if (const LayerInfo* l = findLayer(name)) needs |= l->needs;
+  return needs;
+}
+
 }  // namespace snow

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "core/grid.h"
 #include "core/parameters.h"
@@ -67,5 +68,8 @@ struct LayerInfo {
 std::span<const LayerInfo> layerTable();
 // The row of `name`, or null.
 const LayerInfo* findLayer(const std::string& name);
+// What the layers `names` are computed from together: their LayerNeeds flags or'd (a name
+// without a row adds none).
+uint8_t layersNeeds(const std::vector<std::string>& names);
 
 }  // namespace snow
