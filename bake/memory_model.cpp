@@ -7,12 +7,14 @@
 #include "memory_vdb.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
 
 #include "core/errors.h"
+#include "core/season.h"
 #include "core/snow_fields.h"
 #include "bakers/value_range.h"
 #include "bakers/vdb_writer.h"
@@ -274,11 +276,13 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   const OptionalFields present{s};
   const bool occlusion = s.mode == SceneMode::Occlusion;
   auto bytesOf = [&](auto pick) { return cells * fieldBytes(pick, present); };
-  const double state = bytesOf([](FieldRole) { return true; });
+  const double state = bytesOf([](FieldRole r) { return r != FieldRole::Record; });  // and recordOwner's
   const MemoryOwner terrain{"terrain", cells * 5.0, "terrain.size", G::State};
   const MemoryOwner stateOwner{"snow state", bytesOf([](FieldRole r) { return r != FieldRole::Static && r != FieldRole::Record; }), "terrain.size", G::State};
   const MemoryOwner staticOwner{"snow state: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields};
-  const MemoryOwner recordOwner{"snow state: record fields", bytesOf([](FieldRole r) { return r == FieldRole::Record; }), "terrain.size", G::Records};
+  // Of the record fields (all floats), only those the layers read (SeasonConfig::recordFields).
+  const double keptRecords = std::popcount(recordFieldsToKeep(layersRecords(s.outputs.layers), s.outputs.avalancheMaps));
+  const MemoryOwner recordOwner{"snow state: record fields", cells * 4.0 * keptRecords, "outputs.layers", G::Records};
   MemoryPrediction p;
   p.libraryBytes = kLibraryBytes;
 
@@ -368,10 +372,9 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
                              "parameters.skiers_per_hour", G::Records});
   }
   // A frame's copy of the state (the season's download, which the frame writer takes) without the
-  // static fields the host released, and without the record fields when no layer reads them
-  // (SeasonConfig::framesNeedRecords).
+  // static fields the host released, with the record fields the season keeps.
   const double frames = static_cast<double>(s.outputs.frameDays.size());
-  const double copy = state - (staticOnHost ? 0.0 : staticOwner.bytes) - ((layersNeeds(s.outputs.layers) & kNeedsRecords) ? 0.0 : recordOwner.bytes);
+  const double copy = state + recordOwner.bytes - (staticOnHost ? 0.0 : staticOwner.bytes);
   const MemoryOwner heldCopies{"frames held: state copies", frames * copy, "outputs.frames_days", G::FramesInFlight};
   const MemoryOwner heldTextures{"frames held: ski-track texture copies", frames * skiTexture.bytes, "outputs.frames_days", G::FramesInFlight};
   const MemoryOwner heldForRange{"frames held for their season range", heldPerDay * frames, "outputs.ranges", G::FramesInFlight};

@@ -137,10 +137,12 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   checkBedformsSuitTheGrid(scene, state.spec);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
-  // The record fields stay zero until the season: not held through the precompute's peak.
+  // The record fields stay zero until the season: not held through the precompute's peak, and
+  // then only those an output reads.
   state.releaseFields([](FieldRole r) { return r == FieldRole::Record; });
   const Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
-  state.restoreFields([](FieldRole r) { return r == FieldRole::Record; });
+  const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
+  state.restoreFields([](FieldRole r) { return r == FieldRole::Record; }, recordFieldsToKeep(layersRecords(layers), scene.outputs.avalancheMaps));
 
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : chooseBackend(scene.backend, log);
   const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
@@ -148,7 +150,6 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
 
   OutputSink files;  // every file written, in order: the manifest's list
   const SinkScope filesScope(files);
-  const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   OcclusionResult occlusion;
   SeasonOutputs seasonOutputs;
   OutputSources sources{&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,

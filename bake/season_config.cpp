@@ -65,7 +65,7 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
     config.skiTracks = &*outputs.skiTracks;
   }
   config.frameDays = scene.outputs.frameDays;
-  config.framesNeedRecords = (needs & kNeedsRecords) != 0;
+  config.recordFields = recordFieldsToKeep(layersRecords(layers), scene.outputs.avalancheMaps);
   config.windTransport = pre.wind->hasWind();
   if (scene.bedforms.enabled) {
     config.bedforms = scene.bedforms.params;

@@ -5,6 +5,7 @@
 // headers.
 #pragma once
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -47,11 +48,11 @@ class ExecBackend final : public SnowBackend {
     return runEdit(exec_, view(), editWeight_, a, weights);
   }
 
-  // The fields the state holds (a frame's copy may leave the record fields out).
+  // The fields both the state and the backend hold (a season may keep only some record fields).
   void download(SnowState& s) override {
 #define SNOW_DOWNLOAD(member, view, Element, role, access, fill) \
   if constexpr (downloadedWithState(FieldRole::role))            \
-    if (s.member.size() > 0) exec_.download(member##_, s.member.values());
+    if (s.member.size() > 0 && member##_.size() > 0) exec_.download(member##_, s.member.values());
     SNOW_STATE_FIELDS(SNOW_DOWNLOAD)
 #undef SNOW_DOWNLOAD
     if (bed_.ready) {
@@ -66,7 +67,8 @@ class ExecBackend final : public SnowBackend {
   if constexpr (downloadedWithState(FieldRole::role)) {                        \
     std::vector<Element> values;                                               \
     exec_.downloadGiving(member##_, values);                                   \
-    s.member.adopt(spec_.width, spec_.height, std::move(values));              \
+    if (values.empty()) s.member = Grid<Element>(); /* a record not kept */    \
+    else s.member.adopt(spec_.width, spec_.height, std::move(values));         \
   }
     SNOW_STATE_FIELDS(SNOW_DOWNLOAD_GIVING)
 #undef SNOW_DOWNLOAD_GIVING
@@ -109,6 +111,8 @@ class ExecBackend final : public SnowBackend {
   }
 
   void downloadBox(SnowBox& box, bool peaks) override {
+    if (peaks && avalanchePeakThicknessM_.size() == 0)
+      throw std::logic_error("downloadBox: the season does not keep the avalanche's peak fields (SeasonConfig::recordFields)");
     std::pair<Buffer<float>*, Grid<float>*> fields[] = {{&compactedM_, &box.compacted}, {&stableM_, &box.stable}, {&unstableM_, &box.unstable},
                                                         {&powderM_, &box.powder}, {&avalanchePeakThicknessM_, &box.peakThickness},
                                                         {&avalanchePeakSpeedMps_, &box.peakSpeed}};
@@ -232,7 +236,7 @@ class ExecBackend final : public SnowBackend {
     v.cellSizeXM = static_cast<float>(spec_.cellSizeXM);
     v.cellSizeYM = static_cast<float>(spec_.cellSizeYM);
 #define SNOW_VIEW_OF_FIELD(member, view, Element, role, access, fill) \
-  SNOW_IF_VIEW(access, v.view = optionalField(FieldRole::role) ? dataIfPresent(member##_) : member##_.data();)
+  SNOW_IF_VIEW(access, v.view = mayBeAbsent(FieldRole::role) ? dataIfPresent(member##_) : member##_.data();)
     SNOW_STATE_FIELDS(SNOW_VIEW_OF_FIELD)
 #undef SNOW_VIEW_OF_FIELD
     v.bedformActive = bed_.ready ? bed_.active.data() : nullptr;

@@ -15,6 +15,14 @@ double SeasonReport::massBalanceRelativeError() const {
   return std::abs(final.totalM3() - expected) / scale;
 }
 
+SnowFieldSet recordFieldsToKeep(SnowFieldSet read, bool avalancheMaps) {
+  const SnowFieldSet seasonPeaks = fieldBit(SnowField::avalancheSeasonPeakThicknessM) | fieldBit(SnowField::avalancheSeasonPeakSpeedMps);
+  const SnowFieldSet peaks = fieldBit(SnowField::avalanchePeakThicknessM) | fieldBit(SnowField::avalanchePeakSpeedMps);
+  SnowFieldSet kept = read & kAllRecordFields;
+  if ((kept & (seasonPeaks | peaks)) || avalancheMaps) kept |= peaks;
+  return kept;
+}
+
 void computeTemperatureBase(SnowState& s, const ModelParameters& p) {
   s.temperatureBaseC.resize(s.spec.width, s.spec.height);
   for (size_t i = 0; i < s.bedrockM.size(); ++i)
@@ -25,6 +33,7 @@ SeasonReport SeasonRun::run() {
   const auto t0 = WallClock::now();
   if (cfg_.updateStaticFields) cfg_.updateStaticFields(0, state_);
   leaveNoSnowCells();
+  state_.keepRecordFields(cfg_.recordFields);
   backend_.uploadTaking(state_);  // the host's copies of what the backend evolves handed over
   releaseHostCopies();
   report_.initial = backend_.totals();
@@ -253,9 +262,8 @@ void SeasonRun::addFrames() {
     scheduler_.addAction(day, [this](double now) {
       SnowState frame = state_;  // the host's copies were released: terrain and host-only fields
       if (noSnow_) frame.validCell = terrainValid_;
-      // Without the record fields when no layer of the frame reads them (the download fills the
-      // fields the state holds).
-      frame.restoreFields([&](FieldRole r) { return downloadedWithState(r) && (r != FieldRole::Record || cfg_.framesNeedRecords); });
+      // With the record fields the season keeps only (the download fills the fields the state holds).
+      frame.restoreFields(downloadedWithState, cfg_.recordFields);
       backend_.download(frame);
       if (cfg_.skiTracks) cfg_.skiTracks->fade(frame);
       onFrame_(now, frame);

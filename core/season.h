@@ -63,7 +63,9 @@ struct SeasonConfig {
   bool avalancheMaps = false;                 // keep each avalanche's maps in its record
   double avalancheFrameIntervalS = 0.0;       // and frames of its motion (0: none)
   std::vector<double> frameDays;              // days at which to hand the state to onFrame
-  bool framesNeedRecords = true;              // a frame's state holds the record fields (else they are left out)
+  // The record fields (scour, deposit, melt, avalanche peaks) the season keeps: the others are
+  // freed at its start and never written, so neither the backend nor a frame holds them.
+  SnowFieldSet recordFields = kAllRecordFields;
   // Per-day static fields: when set, called at the start of every season day (0, 1, 2, ...) to
   // refill the state's static fields for that day (temperature from that day's sun exposure,
   // the wind of that day); the backend's static fields are then replaced.
@@ -114,6 +116,11 @@ struct SeasonReport {
 using FrameCallback = std::function<void(double day, SnowState& state)>;
 using ProgressCallback = std::function<void(double fraction)>;
 // Each avalanche's record when it comes to rest (or fails to release), while the season runs.
+// The record fields a season must keep for outputs that read `read` (a layer's records) and, with
+// `avalancheMaps`, each avalanche's peak maps: the season peaks are made from the current
+// avalanche's, and the current peaks' two fields are kept together.
+SnowFieldSet recordFieldsToKeep(SnowFieldSet read, bool avalancheMaps);
+
 using AvalancheCallback = std::function<void(const AvalancheRecord& avalanche)>;
 
 // Runs the season on `backend`, starting from `state` (uploaded here), and leaves the final

@@ -34,6 +34,9 @@ constexpr bool heldByBackend(FieldRole r) { return uploadedWithState(r) || uploa
 constexpr bool optionalField(FieldRole r) {
   return r == FieldRole::ArtDirection || r == FieldRole::HostOnly || r == FieldRole::BedformResult;
 }
+// The backend's buffer may be empty and the kernels' pointer null: an optional field, or a record
+// field the season does not keep (SeasonConfig::recordFields), which the kernels then skip.
+constexpr bool mayBeAbsent(FieldRole r) { return optionalField(r) || r == FieldRole::Record; }
 
 // SNOW_STATE_FIELDS(X) calls X(member, view, Element, role, access, fill) for each field of
 // SnowState, in declaration order:

@@ -24,6 +24,24 @@ inline const char* snowLayerName(SnowLayer l) {
   return "?";
 }
 
+// Each field of SnowState by its member's name, in declaration order, and sets of them (a bit
+// each): which record fields a season keeps (SeasonConfig::recordFields) and a layer reads.
+enum class SnowField : int {
+#define SNOW_FIELD_ID(member, view, Element, role, access, fill) member,
+  SNOW_STATE_FIELDS(SNOW_FIELD_ID)
+#undef SNOW_FIELD_ID
+  Count
+};
+using SnowFieldSet = uint64_t;
+static_assert(static_cast<int>(SnowField::Count) <= 64, "SnowFieldSet holds a bit a field");
+constexpr SnowFieldSet fieldBit(SnowField f) { return SnowFieldSet(1) << static_cast<int>(f); }
+// Every record field (FieldRole::Record): what a season keeps unless told otherwise.
+constexpr SnowFieldSet kAllRecordFields = SnowFieldSet(0)
+#define SNOW_RECORD_BIT(member, view, Element, role, access, fill) | (FieldRole::role == FieldRole::Record ? fieldBit(SnowField::member) : 0)
+    SNOW_STATE_FIELDS(SNOW_RECORD_BIT)
+#undef SNOW_RECORD_BIT
+    ;
+
 // Host-side state of one terrain: what the season evolves and what the bakers read. The grids
 // are declared in snow_fields.h (SNOW_STATE_FIELDS), each with its role and its comment.
 struct SnowState {
@@ -50,12 +68,22 @@ struct SnowState {
     SNOW_STATE_FIELDS(SNOW_RELEASE)
 #undef SNOW_RELEASE
   }
+  // (of the record fields, only those in `records`: the ones a season keeps).
   template <class Pick>
-  void restoreFields(Pick pick) {
-#define SNOW_RESTORE(member, view, Element, role, access, fill) \
-  if (pick(FieldRole::role) && member.size() != spec.cellCount()) member.resize(spec.width, spec.height);
+  void restoreFields(Pick pick, SnowFieldSet records = kAllRecordFields) {
+#define SNOW_RESTORE(member, view, Element, role, access, fill)                                                    \
+  if (pick(FieldRole::role) && (FieldRole::role != FieldRole::Record || (records & fieldBit(SnowField::member))) && \
+      member.size() != spec.cellCount())                                                                          \
+    member.resize(spec.width, spec.height);
     SNOW_STATE_FIELDS(SNOW_RESTORE)
 #undef SNOW_RESTORE
+  }
+  // Frees the record fields not in `kept`: a season keeps only those its outputs read.
+  void keepRecordFields(SnowFieldSet kept) {
+#define SNOW_KEEP_RECORD(member, view, Element, role, access, fill) \
+  if (FieldRole::role == FieldRole::Record && !(kept & fieldBit(SnowField::member))) member = Grid<Element>();
+    SNOW_STATE_FIELDS(SNOW_KEEP_RECORD)
+#undef SNOW_KEEP_RECORD
   }
   // Bytes the grids hold now.
   template <class Pick>

@@ -87,6 +87,7 @@ Grid<float> engineWeight(const LayerInputs& in, int which) {  // 0 snow, 1 rock,
 }
 
 constexpr uint8_t S = kSeasonMode, G = kGridModes, O = kOcclusionMode;
+#define R(member) fieldBit(SnowField::member)  // a record field the layer reads
 
 const LayerInfo kLayers[] = {
     {"compacted", "m", "snow layer: compacted", G, kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.compactedM(x, y))},
@@ -128,21 +129,22 @@ const LayerInfo kLayers[] = {
      LayerKind::Float, [](const LayerInputs& in) { return sunLayer(in, false); }},
     {"temperature", "degC", "air temperature at the surface, T = T0 + k_t A + k_i I (§4.1)", S, kNeedsSun, LayerKind::Float,
      [](const LayerInputs& in) { return sunLayer(in, true); }},
-    {"wind_scour", "m", "snow removed by wind transport since the season start (m)", S, kNeedsRecords, LayerKind::Float,
-     SNOW_STATE_LAYER(s.windScourM(x, y))},
-    {"wind_deposit", "m", "snow deposited by wind transport since the season start (m)", S, kNeedsRecords, LayerKind::Float,
-     SNOW_STATE_LAYER(s.windDepositM(x, y))},
-    {"melt", "m", "snow melted since the season start (m)", S, kNeedsRecords, LayerKind::Float, SNOW_STATE_LAYER(s.meltedM(x, y))},
-    {"avalanche_scour", "m", "snow taken away by avalanches since the season start, net per avalanche (m)", S, kNeedsRecords,
-     LayerKind::Float, SNOW_STATE_LAYER(s.avalancheScourM(x, y))},
-    {"avalanche_deposit", "m", "snow left by avalanches since the season start, net per avalanche (m)", S, kNeedsRecords,
-     LayerKind::Float, SNOW_STATE_LAYER(s.avalancheDepositM(x, y))},
+    {"wind_scour", "m", "snow removed by wind transport since the season start (m)", S, kNeedsState, LayerKind::Float,
+     SNOW_STATE_LAYER(s.windScourM(x, y)), R(windScourM)},
+    {"wind_deposit", "m", "snow deposited by wind transport since the season start (m)", S, kNeedsState, LayerKind::Float,
+     SNOW_STATE_LAYER(s.windDepositM(x, y)), R(windDepositM)},
+    {"melt", "m", "snow melted since the season start (m)", S, kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.meltedM(x, y)),
+     R(meltedM)},
+    {"avalanche_scour", "m", "snow taken away by avalanches since the season start, net per avalanche (m)", S, kNeedsState,
+     LayerKind::Float, SNOW_STATE_LAYER(s.avalancheScourM(x, y)), R(avalancheScourM)},
+    {"avalanche_deposit", "m", "snow left by avalanches since the season start, net per avalanche (m)", S, kNeedsState,
+     LayerKind::Float, SNOW_STATE_LAYER(s.avalancheDepositM(x, y)), R(avalancheDepositM)},
     {"avalanche_peak_thickness", "m", "the deepest moving snow of any avalanche since the season start (peak flowing thickness, m)", S,
-     kNeedsRecords, LayerKind::Float, SNOW_STATE_LAYER(s.avalancheSeasonPeakThicknessM(x, y))},
-    {"avalanche_peak_speed", "m/s", "the fastest pipe speed of any avalanche since the season start (peak speed, m/s)", S, kNeedsRecords,
-     LayerKind::Float, SNOW_STATE_LAYER(s.avalancheSeasonPeakSpeedMps(x, y))},
+     kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.avalancheSeasonPeakThicknessM(x, y)), R(avalancheSeasonPeakThicknessM)},
+    {"avalanche_peak_speed", "m/s", "the fastest pipe speed of any avalanche since the season start (peak speed, m/s)", S, kNeedsState,
+     LayerKind::Float, SNOW_STATE_LAYER(s.avalancheSeasonPeakSpeedMps(x, y)), R(avalancheSeasonPeakSpeedMps)},
     {"avalanche_preview", "sRGB", "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)", S,
-     kNeedsRecords, LayerKind::Preview, nullptr},
+     kNeedsState, LayerKind::Preview, nullptr, R(avalancheScourM) | R(avalancheDepositM)},
     {"preview", "sRGB",
      "preview: shaded relief of the snow-covered terrain, sun at solar noon of the day; snow by top layer (powder white, "
      "unstable pale blue, stable cream, compacted grey)",
@@ -188,6 +190,7 @@ const LayerInfo kLayers[] = {
      "tangent-space normal map of the snow surface (u east, v north, 8-bit RGB = 0.5 + 0.5 n; outputs.normal_map_convention: opengl, or directx with G flipped)",
      G, kNeedsState, LayerKind::Preview, nullptr},
 };
+#undef R
 
 #undef SNOW_STATE_LAYER
 
@@ -206,6 +209,13 @@ uint8_t layersNeeds(const std::vector<std::string>& names) {
   for (const std::string& name : names)
     if (const LayerInfo* l = findLayer(name)) needs |= l->needs;
   return needs;
+}
+
+SnowFieldSet layersRecords(const std::vector<std::string>& names) {
+  SnowFieldSet records = 0;
+  for (const std::string& name : names)
+    if (const LayerInfo* l = findLayer(name)) records |= l->records;
+  return records;
 }
 
 }  // namespace snow

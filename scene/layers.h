@@ -16,9 +16,8 @@ namespace snow {
 
 // Bit flags: which modes can make a layer.
 enum LayerModes : uint8_t { kSeasonMode = 1, kOcclusionMode = 2, kGridModes = kSeasonMode | kOcclusionMode };
-// Bit flags: what a layer is computed from beyond the snow state's snow and terrain, so a writer
-// fetches the day's wind or sun only when a layer of that day needs it, and a frame's copy of the
-// state holds the record fields (FieldRole::Record) only when a layer reads them.
+// Bit flags: what a layer is computed from beyond the snow state's fields, so a writer fetches
+// the day's wind or sun only when a layer of that day needs it.
 enum LayerNeeds : uint8_t {
   kNeedsState = 0,
   kNeedsWind = 1,
@@ -26,7 +25,6 @@ enum LayerNeeds : uint8_t {
   kNeedsSkiTracks = 4,
   kNeedsRouteMap = 8,
   kNeedsOcclusion = 16,
-  kNeedsRecords = 32,
 };
 
 // mode = "occlusion"'s four fields (Foldes & Benes 2007), one value a cell.
@@ -62,6 +60,9 @@ struct LayerInfo {
   uint8_t needs;        // LayerNeeds
   LayerKind kind;
   Grid<float> (*compute)(const LayerInputs&);  // null for previews
+  // The record fields (FieldRole::Record) the layer reads: the season keeps only the fields some
+  // layer of the bake reads (SeasonConfig::recordFields), the others are never allocated.
+  SnowFieldSet records = 0;
 };
 
 // Every layer, in the order the scene reference lists them.
@@ -71,5 +72,7 @@ const LayerInfo* findLayer(const std::string& name);
 // What the layers `names` are computed from together: their LayerNeeds flags or'd (a name
 // without a row adds none).
 uint8_t layersNeeds(const std::vector<std::string>& names);
+// The record fields the layers `names` read together.
+SnowFieldSet layersRecords(const std::vector<std::string>& names);
 
 }  // namespace snow

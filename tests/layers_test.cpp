@@ -2,10 +2,12 @@
 // layer's smooth step checked cell by cell.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <set>
 #include <string>
 
+#include "core/season.h"
 #include "scene/layers.h"
 #include "scene/scene.h"
 
@@ -47,11 +49,10 @@ TEST(Layers, SnowCoverageIsASmoothStepOfTheDepth) {
   EXPECT_EQ(c(5, 0), 0.f);  // NODATA
 }
 
-// A frame's copy of the state leaves the record fields out unless a layer asked for reads them
-// (kNeedsRecords; SeasonConfig::framesNeedRecords): every float layer not flagged so computes the
-// same from a state without its record fields as from the whole state (a missing flag reads an
-// empty grid here).
-TEST(Layers, EveryLayerNotNeedingRecordsIsTheSameWithoutTheRecordFields) {
+// A season keeps only the record fields its layers declare (LayerInfo::records;
+// SeasonConfig::recordFields): every float layer computes the same from a state holding only the
+// record fields it declares as from the whole state (a missing declaration reads an empty grid).
+TEST(Layers, EveryLayerIsTheSameFromAStateHoldingOnlyTheRecordFieldsItDeclares) {
   const GridSpec spec{12, 9, 2.0, 2.0};
   SnowState whole;
   whole.allocate(spec);
@@ -64,18 +65,19 @@ TEST(Layers, EveryLayerNotNeedingRecordsIsTheSameWithoutTheRecordFields) {
 #undef SNOW_FILL
   for (int x = 0; x < spec.width; ++x) whole.bedrockM(x, 4) = 1000.f + x;
   whole.validCell(3, 3) = 0;
-  SnowState lean = whole;
-  lean.releaseFields([](FieldRole r) { return r == FieldRole::Record; });
-  ASSERT_EQ(lean.meltedM.size(), 0u);
   ModelParameters params;
   OutputRequest outputs;
   outputs.coverageDepthsM = {0.02, 0.15};
   const Grid<float> windX(spec.width, spec.height, 3.f), windY(spec.width, spec.height, -2.f), windZ(spec.width, spec.height, 1002.f),
       sun(spec.width, spec.height, 6.f), ski(spec.width * 2, spec.height * 2, 0.1f), route(spec.width, spec.height, 40.f);
   OcclusionGrids occlusion{sun, sun, sun, sun};
-  int compared = 0;
+  int compared = 0, readingRecords = 0;
   for (const LayerInfo& l : layerTable()) {
-    if (l.kind != LayerKind::Float || (l.needs & kNeedsRecords)) continue;
+    if (l.kind != LayerKind::Float) continue;
+    SnowState lean = whole;
+    lean.keepRecordFields(l.records);
+    ASSERT_EQ(lean.bytes([](FieldRole r) { return r == FieldRole::Record; }), std::popcount(l.records) * spec.cellCount() * sizeof(float)) << l.name;
+    readingRecords += l.records != 0;
     auto compute = [&](const SnowState& s) {
       LayerInputs in{&s, &params, &outputs, &windX, &windY, &windZ, &sun, -2.0, &ski, &route, &occlusion};
       return l.compute(in);
@@ -84,6 +86,21 @@ TEST(Layers, EveryLayerNotNeedingRecordsIsTheSameWithoutTheRecordFields) {
     ++compared;
   }
   EXPECT_GT(compared, 20);
+  EXPECT_EQ(readingRecords, 7);  // wind scour and deposit, melt, avalanche scour, deposit, peak thickness and speed
+}
+
+// What a season keeps of its record fields: what its layers read, and the current avalanche's
+// peaks where the season peaks or the per-avalanche maps are made from them.
+TEST(Layers, SeasonKeepsTheRecordFieldsItsLayersReadAndThePeaksTheirsAreMadeFrom) {
+  const auto bit = [](SnowField f) { return fieldBit(f); };
+  const SnowFieldSet peaks = bit(SnowField::avalanchePeakThicknessM) | bit(SnowField::avalanchePeakSpeedMps);
+  EXPECT_EQ(recordFieldsToKeep(layersRecords({"depth", "preview", "surface"}), false), 0u);
+  EXPECT_EQ(recordFieldsToKeep(layersRecords({"melt", "wind_scour"}), false), bit(SnowField::meltedM) | bit(SnowField::windScourM));
+  EXPECT_EQ(recordFieldsToKeep(layersRecords({"avalanche_peak_speed"}), false), bit(SnowField::avalancheSeasonPeakSpeedMps) | peaks);
+  EXPECT_EQ(recordFieldsToKeep(layersRecords({"avalanche_preview"}), false),
+            bit(SnowField::avalancheScourM) | bit(SnowField::avalancheDepositM));
+  EXPECT_EQ(recordFieldsToKeep(0, true), peaks);
+  EXPECT_EQ(std::popcount(kAllRecordFields), 9);
 }
 
 }  // namespace

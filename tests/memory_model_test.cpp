@@ -343,3 +343,29 @@ TEST(MemoryModel, FramesGoAfterTheSeasonOnlyWhereBesideItPassesTheBudgetAndAfter
   std::printf("[ measure ] default preset at 2048²: %.0f MiB with its frame beside the season, %.0f MiB after it\n", beside / 1048576.0,
               after / 1048576.0);
 }
+
+// The record fields count only where a layer reads them (SeasonConfig::recordFields): none for
+// the default preset's layers, 4 bytes a cell a field read, and the current avalanche's two peak
+// fields with the season's peaks.
+TEST(MemoryModel, RecordFieldsCountFourBytesACellForEachFieldTheLayersRead) {
+  snow::Scene scene = snow::loadScene("preset:default");
+  snow::GridSpec spec;
+  spec.width = spec.height = 512;
+  spec.cellSizeXM = spec.cellSizeYM = 10.0;
+  const double cells = 512.0 * 512.0;
+  auto records = [&](const std::vector<std::string>& layers) {
+    scene.outputs.layers = layers;
+    double backend = -1;
+    for (const auto& phase : snow::predictGridBake(scene, spec, 0, snow::SnowReach{}, false).phases)
+      for (const auto& o : phase.owners)
+        if (phase.name == "season" && o.name == "backend: record fields") backend = o.bytes;
+    return backend / cells;
+  };
+  EXPECT_EQ(records(scene.outputs.layers), 0.0);
+  EXPECT_EQ(records({"depth", "melt"}), 4.0);
+  EXPECT_EQ(records({"melt", "wind_scour", "avalanche_preview"}), 16.0);
+  EXPECT_EQ(records({"avalanche_peak_speed"}), 12.0);
+  EXPECT_EQ(records({"wind_scour", "wind_deposit", "melt", "avalanche_scour", "avalanche_deposit", "avalanche_peak_thickness",
+                     "avalanche_peak_speed"}),
+            36.0);
+}

@@ -208,3 +208,59 @@ TEST(Season, WindScoursRidgesLoadsLeesAndConservesMass) {
   EXPECT_GT(scourZ / scour, depositZ / deposit);
   EXPECT_GT(depositShadow / deposit, scourShadow / scour);
 }
+
+// The record fields are written by the kernels only where the season keeps them
+// (SeasonConfig::recordFields): leaving any of them out changes no byte of the snow, of the
+// records kept, or of a frame, and frees the others in the state and its frames.
+TEST(Season, RecordFieldsLeftOutChangeNoByteOfTheSnowOrOfTheRecordsKept) {
+  struct Run {
+    SnowState end, frame;
+    size_t avalanches = 0;
+  };
+  auto run = [](SnowFieldSet kept) {
+    Run r;
+    r.end = windyRange(64, 20.0, 10.0);
+    SeasonConfig c = winter(40, 10.0);  // melt on the low slopes
+    c.windTransport = true;
+    c.params.avalancheRatePerKm2PerDay = 20.0;
+    c.userAvalanches = {{5.0, 20, 30, false, nullptr}, {25.0, 40, 12, false, nullptr}};
+    c.frameDays = {30.0};
+    c.recordFields = kept;
+    computeTemperatureBase(r.end, c.params);
+    auto backend = createCpuBackend();
+    const SeasonReport report = runSeason(*backend, r.end, c, {}, [&](double, const SnowState& f) { r.frame = f; });
+    r.avalanches = report.avalanches.size();
+    return r;
+  };
+  const Run whole = run(kAllRecordFields);
+  ASSERT_GT(whole.avalanches, 2u);
+  double melted = 0, scoured = 0, avalancheScoured = 0, peak = 0;
+  for (size_t i = 0; i < whole.end.meltedM.size(); ++i)
+    melted += whole.end.meltedM.values()[i], scoured += whole.end.windScourM.values()[i],
+        avalancheScoured += whole.end.avalancheScourM.values()[i], peak = std::max<double>(peak, whole.end.avalancheSeasonPeakSpeedMps.values()[i]);
+  ASSERT_GT(melted, 0.0);
+  ASSERT_GT(scoured, 0.0);
+  ASSERT_GT(avalancheScoured, 0.0);
+  ASSERT_GT(peak, 0.0);
+  const auto bit = [](SnowField f) { return fieldBit(f); };
+  const SnowFieldSet peaks = bit(SnowField::avalanchePeakThicknessM) | bit(SnowField::avalanchePeakSpeedMps);
+  for (SnowFieldSet kept : {SnowFieldSet(0), bit(SnowField::meltedM), bit(SnowField::windScourM),
+                            bit(SnowField::avalancheDepositM) | bit(SnowField::windDepositM), peaks | bit(SnowField::avalancheSeasonPeakSpeedMps)}) {
+    const Run lean = run(kept);
+    EXPECT_EQ(lean.avalanches, whole.avalanches);
+    for (const auto* pair : {&lean.end, &lean.frame}) {
+      const SnowState& a = *pair;
+      const SnowState& b = pair == &lean.end ? whole.end : whole.frame;
+#define SNOW_COMPARE(member, view, Element, role, access, fill)                                                         \
+  if (FieldRole::role == FieldRole::Evolved) {                                                                         \
+    EXPECT_TRUE(a.member.values() == b.member.values()) << #member << " kept " << kept;                                \
+  } else if (FieldRole::role == FieldRole::Record && (kept & bit(SnowField::member))) {                                \
+    EXPECT_TRUE(a.member.values() == b.member.values()) << #member << " kept " << kept;                                \
+  } else if (FieldRole::role == FieldRole::Record) {                                                                   \
+    EXPECT_EQ(a.member.size(), 0u) << #member << " kept " << kept;                                                     \
+  }
+      SNOW_STATE_FIELDS(SNOW_COMPARE)
+#undef SNOW_COMPARE
+    }
+  }
+}

@@ -227,6 +227,7 @@ struct AvalancheHeightKernel {
     }
     v.avalancheU[i] = u;
     v.unstable[i] = static_cast<float>(u);
+    if (!v.avalanchePeakSpeed) return;  // the peak fields are kept only where an output reads them
     float speed = 0.f;  // the fastest of the cell's eight pipes, as the row statistics read them
     for (int d = 0; d < 4; ++d) {
       speed = maxf(speed, fabsf(moved[d]));
@@ -307,8 +308,10 @@ struct AvalancheReleaseKernel {
       v.powder[i] = 0.f;
     }
     v.avalancheU[i] = v.unstable[i];
-    v.avalanchePeakSpeed[i] = 0.f;
-    v.avalanchePeakThickness[i] = v.moving[i] && v.valid[i] ? v.unstable[i] : 0.f;
+    if (v.avalanchePeakSpeed) {
+      v.avalanchePeakSpeed[i] = 0.f;
+      v.avalanchePeakThickness[i] = v.moving[i] && v.valid[i] ? v.unstable[i] : 0.f;
+    }
     v.avalancheFlowing[i] = 0;
   }
 };
@@ -321,8 +324,7 @@ struct AvalancheRestKernel {
     const int i = v.index(x, y);
     float* f = v.flows + 4 * static_cast<size_t>(i);
     f[0] = f[1] = f[2] = f[3] = 0.f;
-    v.avalanchePeakSpeed[i] = 0.f;
-    v.avalanchePeakThickness[i] = 0.f;
+    if (v.avalanchePeakSpeed) v.avalanchePeakSpeed[i] = 0.f, v.avalanchePeakThickness[i] = 0.f;
     v.avalancheFlowing[i] = 0;
     v.moving[i] = 0;
   }
@@ -338,10 +340,11 @@ struct AvalancheSettleKernel {
     f[0] = f[1] = f[2] = f[3] = 0.f;
     if (!v.valid[i]) return;
     const float net = (v.unstable[i] + v.powder[i]) - v.avalancheBefore[i];
-    if (net > 0.f) v.avalancheDeposit[i] = v.avalancheDeposit[i] + net;
-    if (net < 0.f) v.avalancheScour[i] = v.avalancheScour[i] - net;
-    v.avalancheSeasonPeakThickness[i] = maxf(v.avalancheSeasonPeakThickness[i], v.avalanchePeakThickness[i]);
-    v.avalancheSeasonPeakSpeed[i] = maxf(v.avalancheSeasonPeakSpeed[i], v.avalanchePeakSpeed[i]);
+    // Each record only where the season keeps it (null otherwise).
+    if (net > 0.f && v.avalancheDeposit) v.avalancheDeposit[i] = v.avalancheDeposit[i] + net;
+    if (net < 0.f && v.avalancheScour) v.avalancheScour[i] = v.avalancheScour[i] - net;
+    if (v.avalancheSeasonPeakThickness) v.avalancheSeasonPeakThickness[i] = maxf(v.avalancheSeasonPeakThickness[i], v.avalanchePeakThickness[i]);
+    if (v.avalancheSeasonPeakSpeed) v.avalancheSeasonPeakSpeed[i] = maxf(v.avalancheSeasonPeakSpeed[i], v.avalanchePeakSpeed[i]);
     if (v.moving[i]) {
       v.stable[i] = v.stable[i] + v.unstable[i];
       v.unstable[i] = 0.f;

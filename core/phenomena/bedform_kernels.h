@@ -400,8 +400,8 @@ struct BedformFinishKernel {
     }
     else if (f.exported[i] > 0) after = before + static_cast<float>(f.exported[i]) * a.slabM;
     v.powder[i] = after;
-    if (after < before) v.windScour[i] += before - after;
-    else if (after > before) v.windDeposit[i] += after - before;
+    if (after < before && v.windScour) v.windScour[i] += before - after;  // records: null when not kept
+    else if (after > before && v.windDeposit) v.windDeposit[i] += after - before;
     f.lastPowder[i] = after;
   }
 };

@@ -53,7 +53,7 @@ struct MeltKernel {
     v.stable[i] = s;
     v.compacted[i] = c;
     v.delta[i] = -removed;
-    v.melted[i] = v.melted[i] + removed;
+    if (v.melted) v.melted[i] = v.melted[i] + removed;  // null when no output reads it
   }
 };
 

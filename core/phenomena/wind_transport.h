@@ -71,10 +71,12 @@ struct WindTransportKernel {
     // giveTo (powder_diffusion.h): the source gives exactly what each receiver gained.
     const float start = v.powder[i];
     float remaining = start;
-    if (rx) remaining = giveTo(v.powder[v.index(nx, y)], toX, remaining, &v.windDeposit[v.index(nx, y)]);
-    if (ry) remaining = giveTo(v.powder[v.index(x, ny)], toY, remaining, &v.windDeposit[v.index(x, ny)]);
+    // The records are null when no output reads them (SeasonConfig::recordFields).
+    float* deposit = v.windDeposit;
+    if (rx) remaining = giveTo(v.powder[v.index(nx, y)], toX, remaining, deposit ? &deposit[v.index(nx, y)] : nullptr);
+    if (ry) remaining = giveTo(v.powder[v.index(x, ny)], toY, remaining, deposit ? &deposit[v.index(x, ny)] : nullptr);
     v.powder[i] = remaining;
-    v.windScour[i] = v.windScour[i] + (start - remaining);
+    if (v.windScour) v.windScour[i] = v.windScour[i] + (start - remaining);
   }
 };
 
