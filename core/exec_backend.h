@@ -266,8 +266,12 @@ class ExecBackend final : public SnowBackend {
   template <class B>
   static auto dataIfPresent(B& b) -> decltype(b.data()) { return b.size() > 0 ? b.data() : nullptr; }
   // A static field as it is; an art-direction one when the scene paints it (else an empty buffer).
+  // A static field the host released (SeasonRun::releaseHostCopies: a day's refill replaces some of
+  // them, the constant wind not) keeps the backend's values: uploaded, its buffer would be emptied
+  // (on CUDA, freed).
   template <FieldRole role, class T>
   void uploadField(Buffer<T>& buffer, const Grid<T>& grid) {
+    if (!optionalField(role) && grid.size() == 0 && buffer.size() == spec_.cellCount()) return;
     const bool present = !optionalField(role) || (grid.size() == spec_.cellCount() && grid.size() > 0);
     if (present) exec_.upload(buffer, grid.values());
     else exec_.upload(buffer, std::vector<T>());

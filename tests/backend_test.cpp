@@ -8,6 +8,9 @@
 #include <string>
 
 #include "core/cpu_backend.h"
+#include "core/exec_backend.h"
+#include "core/season.h"
+#include "core/serial_exec.h"
 #include "core/kernel_registry.h"
 #include "core/phenomena/powder_diffusion_rows.h"
 #include "gpu/backend_parity.h"
@@ -149,4 +152,46 @@ TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
       }
     }
   }
+}
+
+namespace {
+// Host storage whose upload of nothing frees the buffer, as CUDA's does (CudaBuffer::resize(0)).
+struct FreeingEmptyUploads : SerialExec {
+  template <class T>
+  void upload(Buffer<T>& b, const std::vector<T>& host) {
+    b.values() = host;
+    b.values().shrink_to_fit();
+  }
+};
+}  // namespace
+
+// The bake's daily refill of the temperature with a constant wind: the season releases the host's
+// static fields and refills the exposure and temperature only; the wind the backend holds must stay
+// (it was uploaded empty, and freed on CUDA). The same bytes as a season refilling the wind too.
+TEST(Backend, StaticFieldsTheHostReleasedKeepTheBackendsValuesThroughADailyRefill) {
+  const SnowState initial = test::makeRoughState(40, 32, 5);
+  auto season = [&](SnowBackend& backend, bool refillWind) {
+    SnowState s = initial;
+    const SnowState wind = initial;
+    SeasonConfig c;
+    c.days = 4;
+    c.seed = 3;
+    c.windTransport = true;
+    c.params = testParameters();
+    c.updateStaticFields = [&wind, refillWind](int day, SnowState& st) {
+      st.exposureHours = Grid<float>(st.spec.width, st.spec.height, 2.f + static_cast<float>(day));
+      st.temperatureBaseC = wind.temperatureBaseC;
+      if (refillWind) st.windXMps = wind.windXMps, st.windYMps = wind.windYMps, st.windEffectZM = wind.windEffectZM, st.windLoadingMps2 = wind.windLoadingMps2;
+    };
+    const SeasonReport r = runSeason(backend, s, c);
+    EXPECT_GT(r.phenomena.size(), 0u);
+    return s;
+  };
+  ExecBackend<FreeingEmptyUploads> freeing, reference;
+  const SnowState kept = season(freeing, false);
+  const SnowState refilled = season(reference, true);
+  test::expectSameBytes(kept, refilled);
+  double scour = 0;
+  for (float v : kept.windScourM.values()) scour += v;
+  EXPECT_GT(scour, 0.0);  // the wind moved snow after the first day
 }
