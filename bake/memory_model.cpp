@@ -307,6 +307,13 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
     windStates = occlusion ? 0 : seen.size();
   }
   const MemoryOwner wind{"wind fields", cells * 20.0 * static_cast<double>(windStates), "weather.keyframe", G::WindFields};
+  // After the precompute a constant wind's fields are the state's copy unless a layer reads the
+  // wind; after the season the exposure samples go unless a layer reads the sun, and the state's
+  // static fields go (no writer reads them): bake/mode_grid.cpp.
+  const uint8_t needs = layersNeeds(s.outputs.layers);
+  const bool windVaries = windStates > 1 || (windStates > 0 && calmKeyframe);
+  const MemoryOwner windKept = (windVaries || (needs & kNeedsWind)) ? wind : MemoryOwner{wind.name, 0.0, wind.key, wind.group};
+  const MemoryOwner exposureAfter = (needs & kNeedsSun) ? exposure : MemoryOwner{exposure.name, 0.0, exposure.key, exposure.group};
   const double rayScene = cells * kEmbreeGridBytesPerCell + static_cast<double>(occluderTriangles) * kEmbreeBytesPerTriangle;
   MemoryPhase pre{"precompute", {terrain, stateOwner, staticOwner}};  // the record fields are made after it
   if (samples > 0) {
@@ -349,10 +356,9 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   // The season: the backend holds the state's fields (the host keeps the terrain and, unless
   // they are refilled daily, the static fields: SeasonRun::releaseHostCopies), its scratch, the
   // avalanche runner's layers at release and scratch, the route map, a frame in flight.
-  const bool windVaries = windStates > 1 || (windStates > 0 && calmKeyframe);
   const bool staticOnHost = !((samples > 0 || windVaries) && !s.bedforms.enabled);
   MemoryPhase season{"season", {terrain, {"snow state: terrain on the host", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || optionalField(r); }), "terrain.size", G::State},
-                                exposure, wind,
+                                exposure, windKept,
                                 {"backend: state", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || r == FieldRole::Evolved || r == FieldRole::ArtDirection; }), "terrain.size", G::State},
                                 {"backend: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields},
                                 {"backend: record fields", recordOwner.bytes, "terrain.size", G::Records},
@@ -393,15 +399,15 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   if (frames > 0 && framesAfterSeason) {
     // The host's state whole again (the season's last download), the copies not yet written
     // (counted whole), the frame's writers and the frames' layers held for their range.
-    MemoryPhase after{"frames after the season", {terrain, stateOwner, staticOwner, recordOwner, exposure, wind, heldCopies}};
+    MemoryPhase after{"frames after the season", {terrain, stateOwner, recordOwner, exposureAfter, windKept, heldCopies}};
     if (skiTracks) after.owners.push_back(skiTexture), after.owners.push_back(heldTextures);
     after.owners.insert(after.owners.end(), frameWriter.begin(), frameWriter.end());
     after.owners.push_back(heldForRange);
     p.phases.push_back(after);
   }
 
-  // The outputs: the backend is freed once the season ends; the state has its static fields again.
-  MemoryPhase out{"outputs", {terrain, stateOwner, staticOwner, recordOwner, exposure, wind}};
+  // The outputs: the backend is freed once the season ends, and the state's static fields.
+  MemoryPhase out{"outputs", {terrain, stateOwner, recordOwner, exposureAfter, windKept}};
   if (skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::Records});
   out.owners.insert(out.owners.end(), writer.begin(), writer.end());
   out.owners.push_back({"days held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size() + 1), "outputs.ranges", G::FramesInFlight});

@@ -140,9 +140,12 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   // The record fields stay zero until the season: not held through the precompute's peak, and
   // then only those an output reads.
   state.releaseFields([](FieldRole r) { return r == FieldRole::Record; });
-  const Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
+  Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   state.restoreFields([](FieldRole r) { return r == FieldRole::Record; }, recordFieldsToKeep(layersRecords(layers), scene.outputs.avalancheMaps));
+  // A constant wind's fields are the state's copy from here on, unless a layer reads the wind.
+  const uint8_t needs = layersNeeds(layers);
+  if (!pre.wind->varies() && !(needs & kNeedsWind)) pre.wind->releaseFields();
 
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : chooseBackend(scene.backend, log);
   const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
@@ -171,6 +174,9 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
                        memoryPlan.framesAfterSeason ? FrameTiming::AfterSeason : options.frames);
     report = runSeasonStage(scene, *backend, state, config, frames, log);
     backend.reset();  // its copies of the state and its scratch, freed before the outputs
+    // No writer reads the state's static fields, nor the exposure samples unless a layer reads the sun.
+    state.releaseFields([](FieldRole r) { return r == FieldRole::Static; });
+    if (pre.exposure && !(needs & kNeedsSun)) pre.exposure->release();
     frames.writeHeld();  // the frames held through the season (FrameTiming::AfterSeason)
   }
 

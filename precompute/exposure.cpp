@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/bracket.h"
 #include "core/errors.h"
@@ -202,7 +203,14 @@ Grid<float> computeIndirectSun(const Grid<float>& sun, const Grid<float>& height
   return std::move(computeIndirectSunForDays({&sun}, heights, valid, spec, directions, rings, radiusM, kIndOverKSun)[0]);
 }
 
+void Exposure::release() {
+  skyHours = Grid<float>();
+  days = std::vector<DailyExposure>();
+  released = true;
+}
+
 Grid<float> Exposure::totalAt(double seasonDay) const {
+  if (released) throw std::logic_error("Exposure::totalAt: the exposure was released");
   Grid<float> total = skyHours;
   if (days.empty()) return total;
   const Bracket br = bracketOf(days.size(), seasonDay, [&](size_t i) { return days[i].seasonDay; });

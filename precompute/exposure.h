@@ -60,6 +60,10 @@ struct Exposure {
   // (in float, as totalAt adds them) and indirectHours is freed; totalAt gives the same bytes.
   void foldIndirect();
   bool folded = false;
+  // Frees the grids once nothing will read them (a bake whose outputs read no sun, after its
+  // season); totalAt then throws.
+  void release();
+  bool released = false;
 };
 
 // Unit surface normals (x east, y north, z up) from central differences that skip NODATA.

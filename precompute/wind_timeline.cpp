@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/bracket.h"
 #include "core/hash.h"
@@ -83,7 +84,14 @@ Grid<float> windLoading(const WindField& f, const Grid<uint8_t>& valid, const Gr
   return out;
 }
 
+void WindTimeline::releaseFields() {
+  fields_ = std::vector<WindField>();
+  loading_ = std::vector<Grid<float>>();
+  released_ = true;
+}
+
 WindFieldsAtDay WindTimeline::at(double day) const {
+  if (released_ && !states_.empty()) throw std::logic_error("WindTimeline::at: the wind fields were released");
   WindFieldsAtDay out;
   const int w = altitude_.width(), h = altitude_.height();
   out.windXMps.resize(w, h, 0.f);

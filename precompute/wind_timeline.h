@@ -40,6 +40,9 @@ class WindTimeline {
   const WindField& field(size_t state) const { return fields_[state]; }
   // The fields in force on `day`; zero wind and W_z = A when the season has no wind.
   WindFieldsAtDay at(double day) const;
+  // Frees the fields once nothing will read them (a constant wind the state holds, no output
+  // reading wind); at() then throws.
+  void releaseFields();
 
  private:
   const Grid<float>& altitude_;
@@ -49,6 +52,7 @@ class WindTimeline {
   std::vector<Grid<float>> loading_;
   std::vector<int> keyframeState_;  // per keyframe: index into states_, -1 for calm
   size_t computed_ = 0, cached_ = 0;
+  bool released_ = false;
 };
 
 }  // namespace snow
