@@ -312,8 +312,12 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   // static fields go (no writer reads them): bake/mode_grid.cpp.
   const uint8_t needs = layersNeeds(s.outputs.layers);
   const bool windVaries = windStates > 1 || (windStates > 0 && calmKeyframe);
-  const MemoryOwner windKept = (windVaries || (needs & kNeedsWind)) ? wind : MemoryOwner{wind.name, 0.0, wind.key, wind.group};
-  const MemoryOwner exposureAfter = (needs & kNeedsSun) ? exposure : MemoryOwner{exposure.name, 0.0, exposure.key, exposure.group};
+  auto heldIf = [](bool held, MemoryOwner o) {
+    if (!held) o.bytes = 0.0;
+    return o;
+  };
+  const MemoryOwner windKept = heldIf(windVaries || (needs & kNeedsWind), wind);
+  const MemoryOwner exposureAfter = heldIf(needs & kNeedsSun, exposure);
   const double rayScene = cells * kEmbreeGridBytesPerCell + static_cast<double>(occluderTriangles) * kEmbreeBytesPerTriangle;
   MemoryPhase pre{"precompute", {terrain, stateOwner, staticOwner}};  // the record fields are made after it
   if (samples > 0) {
@@ -361,7 +365,7 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
                                 exposure, windKept,
                                 {"backend: state", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || r == FieldRole::Evolved || r == FieldRole::ArtDirection; }), "terrain.size", G::State},
                                 {"backend: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields},
-                                {"backend: record fields", recordOwner.bytes, "terrain.size", G::Records},
+                                {"backend: record fields", recordOwner.bytes, recordOwner.key, G::Records},
                                 {"backend scratch", cells * (scratchBytes(true, true) + 16.0), "terrain.size", G::Scratch}}};
   // The avalanche runner and the route map exist only where the season can have avalanches and skiers.
   const bool skiing = (s.params.skiersPerHour > 0.0 && s.params.skiHoursPerDay > 0.0) || !s.userSkiers.empty();

@@ -137,12 +137,11 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   checkBedformsSuitTheGrid(scene, state.spec);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
-  // The record fields stay zero until the season: not held through the precompute's peak, and
-  // then only those an output reads.
+  // The record fields stay zero until the season, which makes those an output reads
+  // (SeasonConfig::recordFields): not held through the precompute's peak.
   state.releaseFields([](FieldRole r) { return r == FieldRole::Record; });
   Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
-  state.restoreFields([](FieldRole r) { return r == FieldRole::Record; }, recordFieldsToKeep(layersRecords(layers), scene.outputs.avalancheMaps));
   // A constant wind's fields are the state's copy from here on, unless a layer reads the wind.
   const uint8_t needs = layersNeeds(layers);
   if (!pre.wind->varies() && !(needs & kNeedsWind)) pre.wind->releaseFields();

@@ -33,6 +33,8 @@ SeasonReport SeasonRun::run() {
   const auto t0 = WallClock::now();
   if (cfg_.updateStaticFields) cfg_.updateStaticFields(0, state_);
   leaveNoSnowCells();
+  // The record fields the season keeps, zero where the state has none yet; the others freed.
+  state_.restoreFields([](FieldRole r) { return r == FieldRole::Record; }, cfg_.recordFields);
   state_.keepRecordFields(cfg_.recordFields);
   backend_.uploadTaking(state_);  // the host's copies of what the backend evolves handed over
   releaseHostCopies();
