@@ -7,7 +7,7 @@
 namespace snow {
 
 FrameWriter::FrameWriter(OutputWriter& writer, const SkiTracks* skiTracks, int threads, FrameTiming timing)
-    : writer_(writer), skiTracks_(skiTracks), timing_(timing == FrameTiming::Auto ? FrameTiming::Beside : timing), arena_(std::max(1, threads)) {}
+    : writer_(writer), skiTracks_(skiTracks), timing_(timing == FrameTiming::Auto ? FrameTiming::Paused : timing), arena_(std::max(1, threads)) {}
 
 FrameWriter::~FrameWriter() {
   if (thread_.joinable()) thread_.join();
@@ -22,7 +22,11 @@ void FrameWriter::join() {
 }
 
 void FrameWriter::write(double day, SnowState& s) {
-  if (timing_ == FrameTiming::InPlace) return writer_.writeDay(s, day, skiTracks_ ? &skiTracks_->depth() : nullptr);
+  if (timing_ == FrameTiming::InPlace || timing_ == FrameTiming::Paused) {
+    writer_.writeDay(s, day, skiTracks_ ? &skiTracks_->depth() : nullptr);
+    if (timing_ == FrameTiming::Paused) releaseFreedMemory();  // the writers' memory, before the season's scratch comes back
+    return;
+  }
   if (timing_ == FrameTiming::AfterSeason) {
     held_.push_back({day, std::move(s), skiTracks_ ? skiTracks_->depth() : Grid<float>()});
     return;

@@ -140,22 +140,22 @@ std::vector<MemoryOwner> writerOwners(const Scene& s, double cells) {
   return w;
 }
 
-// Encodings on a "season" range wait for the season's end: each day's layer (at the output size)
-// and its mask are held until then, once for each encoding but r32 (floats need no range); the
-// ski-track texture (`skiTextureBytes`, its own size) without a mask. The bytes of one day.
-double seasonRangeBytesPerDay(const Scene& s, double cells, double skiTextureBytes) {
+// Encodings on a "season" range wait for the season's end on disk (OutputWriter's spill file):
+// each day's layer (at the output size) and its mask, or the ski-track texture (`skiTextureBytes`,
+// its own size); the outputs stage reads them back one at a time. The largest of them.
+double seasonRangeReadBackBytes(const Scene& s, double cells, double skiTextureBytes) {
   const OutputRequest& o = s.outputs;
-  const double encodings = static_cast<double>(std::count_if(o.encodings.begin(), o.encodings.end(), [](const std::string& e) { return e != "r32"; }));
-  double perDay = 0.0;
+  if (std::none_of(o.encodings.begin(), o.encodings.end(), [](const std::string& e) { return e != "r32"; })) return 0.0;
+  double largest = 0.0;
   for (const auto& name : o.layers)
-    if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
-      perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : outputPixels(o, cells) * 5.0;
-  // [outputs.tiles] resize: the tile set's layers wait too.
-  if (o.tiles.convention != TileConvention::None && o.tiles.resizeWidth > 0)
-    for (const auto& name : o.layers)
-      if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season)
-        perDay += (l->needs & kNeedsSkiTracks) ? skiTextureBytes : static_cast<double>(o.tiles.resizeWidth) * o.tiles.resizeHeight * 5.0;
-  return perDay * encodings;
+    if (const LayerInfo* l = findLayer(name); l && l->kind == LayerKind::Float && rangeOf(o, *l).mode == RangeMode::Season) {
+      const bool texture = l->needs & kNeedsSkiTracks;
+      largest = std::max(largest, texture ? skiTextureBytes : outputPixels(o, cells) * 5.0);
+      // [outputs.tiles] resize: the tile set's layers wait too.
+      if (o.tiles.convention != TileConvention::None && o.tiles.resizeWidth > 0 && !texture)
+        largest = std::max(largest, static_cast<double>(o.tiles.resizeWidth) * o.tiles.resizeHeight * 5.0);
+    }
+  return largest;
 }
 
 // A day's writers run one after another (OutputWriter::writeDay): the layers (with their
@@ -270,7 +270,8 @@ std::string measuredMemoryBreakdown(const MemoryPrediction& p, double units, con
 }
 
 MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach,
-                                 bool framesAfterSeason) {
+                                 FrameTiming timing) {
+  if (timing == FrameTiming::Auto) timing = frameTimingOf(s);
   using G = MemoryGroup;
   const double cells = static_cast<double>(spec.width) * spec.height;
   const OptionalFields present{s};
@@ -343,8 +344,9 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   const double track = s.outputs.skiTrackFactor;
   const bool skiTracks = hasLayer(s, "ski_tracks");
   const MemoryOwner skiTexture{"ski-track texture", skiTracks ? cells * track * track * 4.0 : 0.0, "outputs.ski_track_factor", G::Records};
-  // The frames (and, once written, the season's end) whose encodings wait for a "season" range.
-  const double heldPerDay = seasonRangeBytesPerDay(s, cells, skiTexture.bytes);
+  // The layers whose encodings wait for a "season" range wait on disk; the outputs read them back
+  // one at a time.
+  const double readBack = seasonRangeReadBackBytes(s, cells, skiTexture.bytes);
   if (occlusion) {
     MemoryPhase occ{"occlusion", {terrain, stateOwner, staticOwner, recordOwner,
                                   {"ray scene (Embree)", rayScene, "terrain.size", G::PrecomputeWork},
@@ -361,12 +363,17 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   // they are refilled daily, the static fields: SeasonRun::releaseHostCopies), its scratch, the
   // avalanche runner's layers at release and scratch, the route map, a frame in flight.
   const bool staticOnHost = !((samples > 0 || windVaries) && !s.bedforms.enabled);
-  MemoryPhase season{"season", {terrain, {"snow state: terrain on the host", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || optionalField(r); }), "terrain.size", G::State},
-                                exposure, windKept,
-                                {"backend: state", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || r == FieldRole::Evolved || r == FieldRole::ArtDirection; }), "terrain.size", G::State},
-                                {"backend: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields},
-                                {"backend: record fields", recordOwner.bytes, recordOwner.key, G::Records},
-                                {"backend scratch", cells * (scratchBytes(true, true) + 16.0), "terrain.size", G::Scratch}}};
+  // What the season holds whether it runs or waits for a frame (FrameTiming::Paused).
+  const std::vector<MemoryOwner> held{
+      terrain,
+      {"snow state: terrain on the host", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || optionalField(r); }), "terrain.size", G::State},
+      exposure,
+      windKept,
+      {"backend: state", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || r == FieldRole::Evolved || r == FieldRole::ArtDirection; }), "terrain.size", G::State},
+      {"backend: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields},
+      {"backend: record fields", recordOwner.bytes, recordOwner.key, G::Records}};
+  MemoryPhase season{"season", held};
+  season.owners.push_back({"backend scratch", cells * (scratchBytes(true, true) + 16.0), "terrain.size", G::Scratch});
   // The avalanche runner and the route map exist only where the season can have avalanches and skiers.
   const bool skiing = (s.params.skiersPerHour > 0.0 && s.params.skiHoursPerDay > 0.0) || !s.userSkiers.empty();
   if (s.params.avalancheRatePerKm2PerDay > 0.0 || !s.userAvalanches.empty() || (skiing && s.params.skiTriggerFactor > 0.0))
@@ -374,39 +381,49 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   if (skiing) season.owners.push_back({"ski route map", cells * 20.0, "parameters.skiers_per_hour", G::Scratch});
   if (staticOnHost) season.owners.push_back({"snow state: static fields on the host", staticOwner.bytes, "terrain.size", G::StaticFields});
   if (skiTracks) season.owners.push_back(skiTexture);
-  {
-    // Each skier's record (its refined track, about 4 KiB) and each scene avalanche's.
-    double skiers = s.params.skiersPerHour * s.params.skiHoursPerDay * s.days;
-    for (const auto& e : s.userSkiers) skiers += e.count;
-    season.owners.push_back({"skier and avalanche records", (skiers + static_cast<double>(s.userAvalanches.size())) * kRecordBytes,
-                             "parameters.skiers_per_hour", G::Records});
-  }
-  // A frame's copy of the state (the season's download, which the frame writer takes) without the
-  // static fields the host released, with the record fields the season keeps.
+  // Each skier's record (its refined track, about 4 KiB) and each scene avalanche's.
+  double skiers = s.params.skiersPerHour * s.params.skiHoursPerDay * s.days;
+  for (const auto& e : s.userSkiers) skiers += e.count;
+  const MemoryOwner records{"skier and avalanche records", (skiers + static_cast<double>(s.userAvalanches.size())) * kRecordBytes,
+                            "parameters.skiers_per_hour", G::Records};
+  season.owners.push_back(records);
+  // A frame's copy of the state (the season's download) without the static fields the host
+  // released, with the record fields the season keeps.
   const double frames = static_cast<double>(s.outputs.frameDays.size());
+  const bool framesAfterSeason = frames > 0 && timing == FrameTiming::AfterSeason;
   const double copy = state + recordOwner.bytes - (staticOnHost ? 0.0 : staticOwner.bytes);
   const MemoryOwner heldCopies{"frames held: state copies", frames * copy, "outputs.frames_days", G::FramesInFlight};
   const MemoryOwner heldTextures{"frames held: ski-track texture copies", frames * skiTexture.bytes, "outputs.frames_days", G::FramesInFlight};
-  const MemoryOwner heldForRange{"frames held for their season range", heldPerDay * frames, "outputs.ranges", G::FramesInFlight};
-  if (frames > 0 && framesAfterSeason) {
+  if (framesAfterSeason) {
     // Every frame's copies held through the season, written once the backend is freed.
     season.owners.push_back(heldCopies);
     if (skiTracks) season.owners.push_back(heldTextures);
-  } else if (frames > 0) {
+  } else if (frames > 0 && timing != FrameTiming::Paused) {
     // One frame in flight: its copy, two of the texture (the writer's and its layer), its writers.
     season.owners.push_back({"frame in flight: state copy", copy, "outputs.frames_days", G::FramesInFlight});
     if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::FramesInFlight});
     for (const auto& w : frameWriter) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
-    season.owners.push_back(heldForRange);
   }
   p.phases.push_back(season);
-  if (frames > 0 && framesAfterSeason) {
+  if (frames > 0 && timing == FrameTiming::Paused) {
+    // The season waiting: its scratch freed (the backend's, the avalanche runner's, the skiers'
+    // but the host's route map), its fields lent to the writers. Counted with a copy read back, as
+    // for a frame whose instant fell inside an avalanche (set aside on disk until it settled).
+    MemoryPhase paused{"frame (the season paused)", held};
+    paused.owners.push_back({"frame set aside: state copy", copy, "outputs.frames_days", G::FramesInFlight});
+    if (skiing) paused.owners.push_back({"ski route map on the host", cells * 4.0, "parameters.skiers_per_hour", G::Scratch});
+    if (staticOnHost) paused.owners.push_back({"snow state: static fields on the host", staticOwner.bytes, "terrain.size", G::StaticFields});
+    if (skiTracks) paused.owners.push_back(skiTexture), paused.owners.push_back({"frame set aside: ski-track texture", skiTexture.bytes, "outputs.frames_days", G::FramesInFlight});
+    paused.owners.push_back(records);
+    paused.owners.insert(paused.owners.end(), frameWriter.begin(), frameWriter.end());
+    p.phases.push_back(paused);
+  }
+  if (framesAfterSeason) {
     // The host's state whole again (the season's last download), the copies not yet written
-    // (counted whole), the frame's writers and the frames' layers held for their range.
+    // (counted whole), the frame's writers.
     MemoryPhase after{"frames after the season", {terrain, stateOwner, recordOwner, exposureAfter, windKept, heldCopies}};
     if (skiTracks) after.owners.push_back(skiTexture), after.owners.push_back(heldTextures);
     after.owners.insert(after.owners.end(), frameWriter.begin(), frameWriter.end());
-    after.owners.push_back(heldForRange);
     p.phases.push_back(after);
   }
 
@@ -414,23 +431,37 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   MemoryPhase out{"outputs", {terrain, stateOwner, recordOwner, exposureAfter, windKept}};
   if (skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::Records});
   out.owners.insert(out.owners.end(), writer.begin(), writer.end());
-  out.owners.push_back({"days held for their season range", heldPerDay * static_cast<double>(s.outputs.frameDays.size() + 1), "outputs.ranges", G::FramesInFlight});
+  if (readBack > 0) out.owners.push_back({"a layer read back for its season range", readBack, "outputs.ranges", G::Writers});
   p.phases.push_back(out);
   return p;
+}
+
+FrameTiming frameTimingOf(const Scene& s) {
+  switch (s.frameWriting) {
+    case FrameWriting::Beside: return FrameTiming::Beside;
+    case FrameWriting::AfterSeason: return FrameTiming::AfterSeason;
+    case FrameWriting::Paused: break;
+  }
+  return FrameTiming::Paused;
 }
 
 GridMemoryPlan planGridMemory(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach, double budget,
                               FrameTiming timing) {
   GridMemoryPlan plan;
-  plan.framesAfterSeason = timing == FrameTiming::AfterSeason;
-  plan.prediction = predictGridBake(s, spec, occluderTriangles, reach, plan.framesAfterSeason);
+  plan.timing = timing == FrameTiming::Auto ? frameTimingOf(s) : timing;
+  plan.prediction = predictGridBake(s, spec, occluderTriangles, reach, plan.timing);
   if (timing != FrameTiming::Auto || s.outputs.frameDays.empty() || plan.prediction.peakBytes() <= budget) return plan;
-  MemoryPrediction after = predictGridBake(s, spec, occluderTriangles, reach, true);
-  if (after.peakBytes() > budget) return plan;  // refused as beside the season, the usual case
-  plan.besideBytes = plan.prediction.peakBytes();
-  plan.prediction = std::move(after);
-  plan.framesAfterSeason = true;
-  return plan;
+  // Over the budget as the scene asks: the other ways that fit, the leaner first.
+  for (FrameTiming other : {FrameTiming::Paused, FrameTiming::AfterSeason}) {
+    if (other == plan.timing) continue;
+    MemoryPrediction p = predictGridBake(s, spec, occluderTriangles, reach, other);
+    if (p.peakBytes() > budget) continue;
+    plan.askedBytes = plan.prediction.peakBytes();
+    plan.prediction = std::move(p);
+    plan.timing = other;
+    return plan;
+  }
+  return plan;  // refused as the scene asks
 }
 
 MemoryPrediction predictMeshBake(const Scene& s, size_t triangles, const double extentM[3]) {

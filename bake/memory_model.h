@@ -70,17 +70,19 @@ std::string measuredMemoryBreakdown(const MemoryPrediction& p, double units, con
 // What a grid bake (mode = "season" or "occlusion") holds on a grid of `spec`, with
 // `occluderTriangles` triangles of occluder meshes; `reach` (the terrain's heights against the
 // rain-snow limit) sizes the VDB by the snow expected on its day, unknown: every column snowed.
-// `framesAfterSeason`: the frame days' outputs written after the season from copies held
-// through it (FrameTiming::AfterSeason), not beside it.
+// `timing`: when the frame days' outputs are written (frame_timing.h; Auto: as the scene's
+// run.frame_writing asks).
 MemoryPrediction predictGridBake(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach = {},
-                                 bool framesAfterSeason = false);
-// The prediction a grid bake runs by, and whether its frames are written after the season:
-// `timing` as asked, or for FrameTiming::Auto beside the season unless that passes `budgetBytes`
-// and after it does not (the season's peak then holds the frames' state copies, not their writers).
+                                 FrameTiming timing = FrameTiming::Auto);
+// The FrameTiming of the scene's run.frame_writing.
+FrameTiming frameTimingOf(const Scene& scene);
+// The prediction a grid bake runs by, and when its frames are written: `timing` as asked, or for
+// FrameTiming::Auto as the scene asks unless that passes `budgetBytes` and another way does not
+// (paused, then after the season).
 struct GridMemoryPlan {
   MemoryPrediction prediction;
-  bool framesAfterSeason = false;
-  double besideBytes = 0;  // the peak with the frames beside the season (when after it was chosen)
+  FrameTiming timing = FrameTiming::Paused;
+  double askedBytes = 0;  // the peak the way the scene asked (when another was chosen)
 };
 GridMemoryPlan planGridMemory(const Scene& scene, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach,
                               double budgetBytes, FrameTiming timing);

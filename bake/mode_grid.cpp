@@ -62,9 +62,9 @@ GridMemoryPlan checkGridMemory(const Scene& scene, const BakeTerrain& terrain, F
   const GridMemoryPlan plan = planGridMemory(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain), budget, timing);
   refuseAboveBudget(scene, plan.prediction, budget);
   log << "memory: " << plan.prediction.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
-  if (plan.besideBytes > 0)
-    log << "frames: written after the season, from copies held through it (beside it the bake would need "
-        << fixed(plan.besideBytes / (1024.0 * 1024.0), 0) << " MiB)\n";
+  if (plan.askedBytes > 0)
+    log << "frames: written " << (plan.timing == FrameTiming::Paused ? "while the season waits" : "after the season, from copies held through it")
+        << " (as run.frame_writing asks the bake would need " << fixed(plan.askedBytes / (1024.0 * 1024.0), 0) << " MiB)\n";
   return plan;
 }
 
@@ -168,9 +168,10 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
     report = occlusion.report;
   } else {
     stage.emplace("season");
-    const SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
-    FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads,
-                       memoryPlan.framesAfterSeason ? FrameTiming::AfterSeason : options.frames);
+    SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
+    FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, memoryPlan.timing);
+    config.lendFrames = frames.lendsFrames();
+    config.spillFolder = options.outDir;
     report = runSeasonStage(scene, *backend, state, config, frames, log);
     backend.reset();  // its copies of the state and its scratch, freed before the outputs
     // No writer reads the state's static fields, nor the exposure samples unless a layer reads the sun.

@@ -154,7 +154,10 @@ void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const Laye
     if (now) continue;
     const std::lock_guard lock(seasonMutex_);
     const bool masked = valid->width() == grid.width() && valid->height() == grid.height();
-    seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid, masked ? *valid : Grid<uint8_t>(), set});
+    if (!spill_) spill_ = std::make_unique<SpillFile>(src_.outDir);
+    const SpillFile::Extent values = spill_->put(grid.values());
+    const SpillFile::Extent mask = masked ? spill_->put(valid->values()) : SpillFile::Extent{};
+    seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid.width(), grid.height(), values, mask, set});
   }
 }
 
@@ -168,7 +171,11 @@ void OutputWriter::writeSeasonEncodings() {
         return (fs::path(outDir) / (e.frame ? "frames" : "") / (stem + e.dayTag)).string();
       };
       const ValueMapping m = seasonRanges_[e.layer].mapping(RangeMode::Season);
-      writeEncodedRaster(e.set, base, e.day, e.layer, e.encoding, e.grid, e.valid.empty() ? nullptr : &e.valid, m, e.content, e.unit, true);
+      Grid<float> grid;
+      grid.adopt(e.width, e.height, spill_->get<float>(e.grid));
+      Grid<uint8_t> valid;
+      if (e.valid.bytes > 0) valid.adopt(e.width, e.height, spill_->get<uint8_t>(e.valid));
+      writeEncodedRaster(e.set, base, e.day, e.layer, e.encoding, grid, e.valid.bytes > 0 ? &valid : nullptr, m, e.content, e.unit, true);
     }
   }
   // The entries listed on the day, in the manifest's order, take the season's mapping.
@@ -179,6 +186,7 @@ void OutputWriter::writeSeasonEncodings() {
     if (const auto it = byPath.find(f.path); it != byPath.end()) f = *it->second;
   for (const auto& [kind, seconds] : written.seconds) sink.addSeconds(kind, seconds);
   seasonEncodings_.clear();
+  spill_.reset();
 }
 
 }  // namespace snow

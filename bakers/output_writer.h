@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <ostream>
 #include <string>
@@ -13,6 +14,7 @@
 
 #include "core/avalanche_runs.h"
 #include "core/snow_state.h"
+#include "core/spill_file.h"
 #include "georeference.h"
 #include "output_sink.h"
 #include "raster_tiles.h"
@@ -137,15 +139,17 @@ class OutputWriter {
   std::string floatImageFormat_;  // the manifest's format line of every float image
   std::string occluderNotes_;
   std::vector<RasterSet> sets_;  // rasterSets(outputs): every raster output is written in each
-  // Encodings with "season" ranges, written after the last day (writeSeasonEncodings).
+  // Encodings with "season" ranges, written after the last day (writeSeasonEncodings): the layer
+  // and its mask wait on disk (5 bytes a pixel a layer were held through the season).
   struct SeasonEncoding {
     bool frame;
     std::string dayTag, layer, encoding, content, unit;
     double day;
-    Grid<float> grid;
-    Grid<uint8_t> valid;
+    int width, height;
+    SpillFile::Extent grid, valid;  // valid: empty where the layer has no mask
     RasterSet set;
   };
+  std::unique_ptr<SpillFile> spill_;
   std::mutex seasonMutex_;
   std::vector<SeasonEncoding> seasonEncodings_;
   std::map<std::string, SeenRange> seasonRanges_;  // by layer

@@ -268,6 +268,15 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
   return true;
 }
 
+void AvalancheRun::releaseScratch() {
+  if (active_) return;
+  before_ = SnowBox{};
+  after_ = SnowBox{};
+  haveSnapshot_ = false;
+  moving_ = std::vector<uint8_t>();  // all zeros between releases: made again at the next one
+  weights_ = std::vector<double>();
+}
+
 std::vector<uint8_t>& AvalancheRun::movingCells() {
   moving_.resize(terrain_.spec.cellCount(), 0);
   return moving_;

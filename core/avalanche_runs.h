@@ -102,6 +102,9 @@ class AvalancheRun {
   // and thread count.
   bool trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC);
   uint64_t snapshotsKept() const { return snapshotsKept_; }  // tries that found the snapshot kept
+  // Frees the snapshot and the release flags between avalanches (a frame written while the season
+  // waits): the next try downloads the state again. Nothing while an avalanche is in motion.
+  void releaseScratch();
   bool active() const { return active_; }
   bool atRest() const { return atRest_; }
   // One step of avalanche_step_s. Returns true when the snow has come to rest (or the duration

@@ -53,6 +53,14 @@ class SnowBackend {
     state.restoreFields(downloadedWithState);  // uploadTaking left them without a size
     download(state);
   }
+  // A frame written while the season waits (SeasonConfig::lendFrames): downloadGiving lends the
+  // fields to the host's state, returnState takes them back as they were; nothing else of the
+  // backend changes in between.
+  virtual void returnState(SnowState& state) { uploadTaking(state); }
+  // Frees the scratch that no step holds between events: the fields made with the state, the
+  // skiers' storage (uploadRouteMap again before the next batch) and, with `avalancheFields`
+  // (no avalanche in motion), the avalanche's, made again at the next release.
+  virtual void releaseScratch(bool avalancheFields) { (void)avalancheFields; }
   // Host work of the runners cut into independent chunks [a, b) of [0, n) (the spontaneous
   // release weights, band by band): on the backend's host threads where it has them, else in
   // order. Each chunk writes only its own output, so the result is the same on any split.

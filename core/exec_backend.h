@@ -78,6 +78,28 @@ class ExecBackend final : public SnowBackend {
     }
   }
 
+  void returnState(SnowState& s) override {
+    ++stateVersion_;
+#define SNOW_RETURN_STATE(member, view, Element, role, access, fill) \
+  if constexpr (downloadedWithState(FieldRole::role)) {              \
+    exec_.uploadTaking(member##_, s.member.values());                \
+    s.member = Grid<Element>();                                      \
+  }
+    SNOW_STATE_FIELDS(SNOW_RETURN_STATE)
+#undef SNOW_RETURN_STATE
+  }
+
+  // The scratch made with the state comes back, zeroed, with the next kernel's view.
+  void releaseScratch(bool avalancheFields) override {
+#define SNOW_RELEASE_SCRATCH(view, Element, extent) \
+  if (madeWithState(ScratchExtent::extent) || avalancheFields) freeBuffer(view##_);
+    SNOW_SCRATCH_FIELDS(SNOW_RELEASE_SCRATCH)
+#undef SNOW_RELEASE_SCRATCH
+    scratchReleased_ = true;
+    if (avalancheFields) avalancheFieldsReady_ = false;  // made again, zeroed, at the next release
+    freeBuffer(skiers_.route), freeBuffer(skiers_.claim), freeBuffer(skiers_.agents), freeBuffer(skiers_.path);
+  }
+
   void forEachHostChunk(int n, int chunk, const std::function<void(int, int)>& f) override {
     if constexpr (HasHostChunks<Exec>::value) exec_.forEachHostChunk(n, chunk, f);
     else SnowBackend::forEachHostChunk(n, chunk, f);
@@ -230,6 +252,8 @@ class ExecBackend final : public SnowBackend {
     return fieldsView();
   }
   SnowFieldsView fieldsView() {
+    if (scratchReleased_) makeScratch(true);  // freed for a frame (releaseScratch)
+    scratchReleased_ = false;
     SnowFieldsView v;
     v.width = spec_.width;
     v.height = spec_.height;
@@ -263,6 +287,12 @@ class ExecBackend final : public SnowBackend {
   template <FieldRole role, class T>
   using StateBuffer = std::conditional_t<heldByBackend(role), Buffer<T>, NoBuffer>;
 
+  // Empty, its memory freed (an upload of nothing keeps a host vector's capacity).
+  template <class T>
+  void freeBuffer(Buffer<T>& b) {
+    std::vector<T> none;
+    exec_.uploadTaking(b, none);
+  }
   template <class B>
   static auto dataIfPresent(B& b) -> decltype(b.data()) { return b.size() > 0 ? b.data() : nullptr; }
   // A static field as it is; an art-direction one when the scene paints it (else an empty buffer).
@@ -287,6 +317,7 @@ class ExecBackend final : public SnowBackend {
 #undef SNOW_SCRATCH_BUFFER
   Buffer<float> editWeight_;
   bool avalancheFieldsReady_ = false;
+  bool scratchReleased_ = false;
   uint64_t stateVersion_ = 0;
   AvalancheTouched avalancheTouched_;  // phenomena/avalanches.h
   BedformStorage<Exec> bed_;

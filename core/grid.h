@@ -57,6 +57,7 @@ struct GridView {
 template <class T>
 class Grid {
  public:
+  using value_type = T;
   Grid() = default;
   Grid(int width, int height, T fill = T{}) { resize(width, height, fill); }
 

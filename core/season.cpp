@@ -5,6 +5,7 @@
 #include <memory>
 #include <utility>
 
+#include "release_memory.h"
 #include "season_run.h"
 
 namespace snow {
@@ -262,15 +263,93 @@ void SeasonRun::addFrames() {
   for (double day : cfg_.frameDays) {
     if (!frameDayInSeason(day, cfg_.days) || !onFrame_) continue;
     scheduler_.addAction(day, [this](double now) {
-      SnowState frame = state_;  // the host's copies were released: terrain and host-only fields
-      if (noSnow_) frame.validCell = terrainValid_;
-      // With the record fields the season keeps only (the download fills the fields the state holds).
-      frame.restoreFields(downloadedWithState, cfg_.recordFields);
-      backend_.download(frame);
-      if (cfg_.skiTracks) cfg_.skiTracks->fade(frame);
-      onFrame_(now, frame);
+      if (!cfg_.lendFrames) {
+        SnowState frame = frameCopy();
+        return onFrame_(now, frame);
+      }
+      if (avalanche_ && avalanche_->active()) return setFrameAside(now);
+      writeLentFrame(now);
     });
   }
+}
+
+// The state now, on the host: the host's own fields (terrain and host-only; its copies of the
+// backend's were released) and a download of the rest, with the record fields the season keeps
+// only; the ski-track texture faded to it.
+SnowState SeasonRun::frameCopy() {
+  SnowState frame = state_;
+  if (noSnow_) frame.validCell = terrainValid_;
+  frame.restoreFields(downloadedWithState, cfg_.recordFields);
+  backend_.download(frame);
+  if (cfg_.skiTracks) cfg_.skiTracks->fade(frame);
+  return frame;
+}
+
+// Between events no step holds the backend's scratch, the avalanche runner's snapshot (none in
+// motion) or the skiers' storage: freed for a frame, made again as the season goes on.
+void SeasonRun::releaseScratch() {
+  backend_.releaseScratch(true);
+  if (avalanche_) avalanche_->releaseScratch();
+  releaseFreedMemory();  // back to the system, not kept in this thread's arena for the writers' threads to miss
+}
+
+// A frame from the backend's own fields, lent to the host's state and taken back as they were.
+void SeasonRun::writeLentFrame(double day) {
+  releaseScratch();
+  const Grid<float> hostCohesion = state_.bedformCohesion;  // a download replaces it once bedforms ran
+  if (noSnow_) std::swap(state_.validCell, terrainValid_);
+  backend_.downloadGiving(state_);
+  if (cfg_.skiTracks) cfg_.skiTracks->fade(state_);
+  onFrame_(day, state_);
+  backend_.returnState(state_);
+  if (noSnow_) std::swap(state_.validCell, terrainValid_);
+  state_.bedformCohesion = hostCohesion;
+  if (ski_) ski_->uploadRouteMap();
+}
+
+// A frame whose instant falls inside an avalanche (whose fields the backend holds until it
+// settles): its copy set aside on disk, written by writeFramesSetAside.
+void SeasonRun::setFrameAside(double day) {
+  SnowState frame = frameCopy();
+  if (!spill_) spill_ = std::make_unique<SpillFile>(cfg_.spillFolder);
+  FrameSetAside f;
+  f.day = day;
+  forEachSnowField(frame, [&](const SnowFieldInfo& info, auto& grid) {
+    if (downloadedWithState(info.role) || info.role == FieldRole::BedformResult) f.fields.push_back(spill_->put(grid.values()));
+  });
+  if (cfg_.skiTracks) f.skiDepth = spill_->put(cfg_.skiTracks->depth().values());
+  framesSetAside_.push_back(std::move(f));
+  ++report_.framesSetAside;
+}
+
+// The frames set aside, in order, once no avalanche is in motion (or at the season's end, beside
+// one still in motion).
+void SeasonRun::writeFramesSetAside(bool seasonEnd) {
+  const bool moving = avalanche_ && avalanche_->active();
+  if (framesSetAside_.empty() || (moving && !seasonEnd)) return;
+  if (!moving) releaseScratch();
+  for (const FrameSetAside& f : framesSetAside_) {
+    SnowState frame = state_;
+    if (noSnow_) frame.validCell = terrainValid_;
+    size_t k = 0;
+    forEachSnowField(frame, [&](const SnowFieldInfo& info, auto& grid) {
+      if (!downloadedWithState(info.role) && info.role != FieldRole::BedformResult) return;
+      using Element = typename std::decay_t<decltype(grid)>::value_type;
+      const SpillFile::Extent& e = f.fields[k++];
+      if (e.bytes == 0) grid = std::decay_t<decltype(grid)>();
+      else grid.adopt(state_.spec.width, state_.spec.height, spill_->get<Element>(e));
+    });
+    Grid<float> skiDepth;
+    if (cfg_.skiTracks) {
+      skiDepth.adopt(cfg_.skiTracks->depth().width(), cfg_.skiTracks->depth().height(), spill_->get<float>(f.skiDepth));
+      cfg_.skiTracks->swapDepth(skiDepth);
+    }
+    onFrame_(f.day, frame);
+    if (cfg_.skiTracks) cfg_.skiTracks->swapDepth(skiDepth);
+  }
+  framesSetAside_.clear();
+  spill_.reset();
+  if (ski_) ski_->uploadRouteMap();
 }
 
 // The event loop: events drawn and fired to the season's last day (progress once a day), then
@@ -289,6 +368,7 @@ void SeasonRun::runEvents() {
 
 // The final state (with the terrain's own valid cells and faded ski tracks) and the report.
 void SeasonRun::finish() {
+  writeFramesSetAside(true);
   report_.final = backend_.totals();  // before the download hands the backend's fields over
   backend_.downloadGiving(state_);
   if (staticReleased_) cfg_.updateStaticFields(staticDay_, state_);  // the last day's, as they were

@@ -63,6 +63,12 @@ struct SeasonConfig {
   bool avalancheMaps = false;                 // keep each avalanche's maps in its record
   double avalancheFrameIntervalS = 0.0;       // and frames of its motion (0: none)
   std::vector<double> frameDays;              // days at which to hand the state to onFrame
+  // onFrame writes the frame before it returns and leaves the state as it was: the season waits,
+  // frees its scratch and lends the backend's fields to its host state instead of copying them.
+  // A frame whose instant falls inside an avalanche is copied, set aside on disk in spillFolder
+  // (empty: the system's temporary folder) and written once the avalanche has settled.
+  bool lendFrames = false;
+  std::string spillFolder;
   // The record fields (scour, deposit, melt, avalanche peaks) the season keeps: the others are
   // freed at its start and never written, so neither the backend nor a frame holds them.
   SnowFieldSet recordFields = kAllRecordFields;
@@ -101,6 +107,7 @@ struct SeasonReport {
   uint64_t avalancheSnapshotsKept = 0;      // calls that found the runner's snapshot kept (AvalancheRun::trySpontaneous)
   double avalancheTrySeconds = 0.0;         // wall time of the calls (within the avalanche's time)
   std::vector<SkierRecord> skiers;          // every skier's descent (path kept for user skiers only)
+  int framesSetAside = 0;                   // frames whose instant fell inside an avalanche (SeasonConfig::lendFrames)
   // Wind bedforms: polling rounds run, slabs the wind lifted, slab moves of the repose
   // relaxation, steps without wind above the threshold (sintering only), and whether every
   // step ended with the domain at rest (within the repose angle).

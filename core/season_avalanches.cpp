@@ -76,6 +76,7 @@ void SeasonRun::stopAvalanche(int slot) {
       recordAvalanche(avalanche_->runToRest());
     });
   }
+  writeFramesSetAside(false);
 }
 
 // Avalanches (§6.1): spontaneous releases at about one a week per km^2, each at a cell drawn

@@ -7,11 +7,13 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "scheduler.h"
 #include "season.h"
+#include "spill_file.h"
 #include "util.h"
 
 namespace snow {
@@ -66,6 +68,11 @@ class SeasonRun {
   // season.cpp again
   void addStaticFieldRefresh();
   void addFrames();
+  SnowState frameCopy();
+  void writeLentFrame(double day);
+  void setFrameAside(double day);
+  void writeFramesSetAside(bool seasonEnd);
+  void releaseScratch();
   void runEvents();
   void finish();
 
@@ -102,6 +109,15 @@ class SeasonRun {
   bool skiing_ = false;
   std::optional<SkiRun> ski_;
   uint64_t skierId_ = 0;
+  // Frames whose instant fell inside an avalanche (SeasonConfig::lendFrames): their downloaded
+  // fields and ski-track texture on disk until it settles.
+  struct FrameSetAside {
+    double day = 0;
+    std::vector<SpillFile::Extent> fields;  // the downloaded fields', in forEachSnowField's order
+    SpillFile::Extent skiDepth;
+  };
+  std::vector<FrameSetAside> framesSetAside_;
+  std::unique_ptr<SpillFile> spill_;
 };
 
 template <class Body>

@@ -83,6 +83,8 @@ class SkiTracks {
   SkiTracks(const GridSpec& spec, int factor);
   int factor() const { return factor_; }
   const Grid<float>& depth() const { return depth_; }
+  // Swaps the texture with `other` (a frame set aside writes the texture of its own instant).
+  void swapDepth(Grid<float>& other) { std::swap(depth_, other); }
   // Grooves along a refined track; `surface(cell)` is the snow surface of a cell now.
   void stamp(const Path2& track, double depthM, double widthM, const std::function<float(int cell)>& surface);
   // Fades every cell with tracks by the rise of its snow surface since it was last looked at.
@@ -122,6 +124,8 @@ class SkiRun {
  public:
   SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& state, SkiTracks* tracks);
   const Grid<float>& routeMap() const { return route_; }
+  // The route map on the backend again, after SnowBackend::releaseScratch freed its copy.
+  void uploadRouteMap() { backend_.uploadRouteMap(route_); }
   // A start cell drawn with probability proportional to the route map (cells where a route
   // starts) times the scene's skier_spawn multiplier; false when no cell has one.
   bool pickStart(double draw, int& x, int& y) const;

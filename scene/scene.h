@@ -155,6 +155,7 @@ struct Scene {
   BackendChoice backend = BackendChoice::Auto;
   int threads = 0;               // 0 = all cores
   std::optional<double> maxMemoryGb;  // run.max_memory_gb; none: 80 % of MemAvailable (bake/memory_model.h)
+  FrameWriting frameWriting = FrameWriting::Paused;  // run.frame_writing
   std::map<std::string, std::string> keyLocations;  // "scene.toml:12" of every key given, by dotted path, for messages
   std::string canonicalToml;     // the merged, validated document (hashed into the manifest)
 

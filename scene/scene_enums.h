@@ -24,6 +24,7 @@ enum class TerrainCoordinates { Auto, Geographic, Metres };  // terrain.coordina
 enum class ByteOrder { Little, Big };                         // terrain.byte_order
 enum class EventType { Snowfall, Avalanche, Skier };          // events.type
 enum class UpAxis { Z, Y };                                   // terrain.up_axis, occluders.up_axis: a mesh's up
+enum class FrameWriting { Paused, Beside, AfterSeason };     // run.frame_writing (bake/frame_timing.h)
 
 // EnumNames<E>::table: every value of E with its name, in the order the reference lists them.
 template <class E>
@@ -72,6 +73,11 @@ struct EnumNames<ByteOrder> {
 template <>
 struct EnumNames<UpAxis> {
   static constexpr std::array<std::pair<UpAxis, std::string_view>, 2> table{{{UpAxis::Z, "z"}, {UpAxis::Y, "y"}}};
+};
+template <>
+struct EnumNames<FrameWriting> {
+  static constexpr std::array<std::pair<FrameWriting, std::string_view>, 3> table{
+      {{FrameWriting::Paused, "paused"}, {FrameWriting::Beside, "beside"}, {FrameWriting::AfterSeason, "after_season"}}};
 };
 template <>
 struct EnumNames<EventType> {

@@ -563,6 +563,9 @@ void outputRules(std::vector<Rule>& r) {  // [parameters], [precompute], [output
   r.push_back({"run.seed", Kind::Integer, 0, 9.007199254740992e15, {}, "", "random seed", at<S>(&S::seed)});
   r.push_back({"run.backend", Kind::String, -kInf, kInf, enumNames<BackendChoice>(), "", "compute backend (auto: CUDA when a device works)", at<S>(&S::backend)});
   r.push_back({"run.threads", Kind::Integer, 0, 4096, {}, "", "CPU threads (0: all cores)", at<S>(&S::threads)});
+  r.push_back({"run.frame_writing", Kind::String, -kInf, kInf, enumNames<FrameWriting>(), "",
+       "when outputs.frames_days' outputs are written (the same files whichever): paused, the season waiting with its working memory freed (the least memory); beside, on a thread of their own while the season goes on (faster by about the frame's writing time, with its writers and a copy of the state beside the season); after_season, from copies held through the season (docs/memory.md)",
+       at<S>(&S::frameWriting)});
   r.push_back({"run.max_memory_gb", Kind::Number, 0.001, 1e6, {}, "GiB", "refuse the bake before any work when its predicted peak memory is above this (docs/memory.md)", at<S>(&S::maxMemoryGb), "80 % of the memory available"});
   // clang-format on
 }

@@ -88,14 +88,15 @@ TEST(Cli, SameSeedSameBytesAndThreadCountDoesNotMatter) {
 }
 
 // Frame days are written on their own thread from a copy of the state (and of the ski-track
-// texture, which the season goes on stamping) while the season continues, or after the season
-// from copies held through it: the same files and manifest as writing them in place, with three
-// frames (one in flight at a time) and skiers.
-TEST(Cli, FramesWrittenBesideOrAfterTheSeasonEqualFramesWrittenInPlace) {
+// texture, which the season goes on stamping) while the season continues, after the season from
+// copies held through it, or while the season waits with its fields lent to the writers: the same
+// files and manifest as writing them in place, with three frames (one in flight at a time) and skiers.
+TEST(Cli, FramesWrittenBesideAfterOrPausingTheSeasonEqualFramesWrittenInPlace) {
   const fs::path dir = workDir();
-  std::map<std::string, std::string> files[3];
-  const snow::FrameTiming timings[3] = {snow::FrameTiming::InPlace, snow::FrameTiming::Beside, snow::FrameTiming::AfterSeason};
-  for (int beside = 0; beside < 3; ++beside) {
+  std::map<std::string, std::string> files[4];
+  const snow::FrameTiming timings[4] = {snow::FrameTiming::InPlace, snow::FrameTiming::Beside, snow::FrameTiming::AfterSeason,
+                                        snow::FrameTiming::Paused};
+  for (int beside = 0; beside < 4; ++beside) {
     snow::BakeOptions o;
     o.scene = "preset:default";
     o.outDir = (dir / ("timing" + std::to_string(beside))).string();
@@ -113,11 +114,11 @@ TEST(Cli, FramesWrittenBesideOrAfterTheSeasonEqualFramesWrittenInPlace) {
   EXPECT_TRUE(files[1].count("frames/snow_surface.0030.glb"));
   EXPECT_TRUE(files[1].count("contact_sheet.png"));
   EXPECT_FALSE(files[1].at("frames/ski_tracks.0010.exr") == files[1].at("ski_tracks.exr")) << "no skiing after day 10?";
-  for (int other = 1; other < 3; ++other) {
+  for (int other = 1; other < 4; ++other) {
     ASSERT_EQ(files[0].size(), files[other].size());
     for (const auto& [name, bytes] : files[0]) {
       ASSERT_TRUE(files[other].count(name)) << name;
-      EXPECT_TRUE(bytes == files[other].at(name)) << name << " differs when frames are written " << (other == 1 ? "beside" : "after")
+      EXPECT_TRUE(bytes == files[other].at(name)) << name << " differs when frames are written " << (other == 1 ? "beside" : other == 2 ? "after" : "pausing")
                                                   << " the season";
     }
   }

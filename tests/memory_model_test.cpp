@@ -311,37 +311,44 @@ TEST(MemoryModel, SmallBlocksFreedOnAnotherThreadLeaveTheResidentSetWhenReleased
   EXPECT_LT(after - before, 0.25 * freed);
 }
 
-// The frames are written after the season (from copies held through it, FrameTiming::AfterSeason)
-// only where beside the season the bake would pass the budget and after it would not; asked for
-// beside it, or without frames, they never are.
-TEST(MemoryModel, FramesGoAfterTheSeasonOnlyWhereBesideItPassesTheBudgetAndAfterItDoesNot) {
+// The frames are written as run.frame_writing asks (paused by default: the leanest), unless that
+// passes the budget and another way does not; asked for explicitly, or without frames, as asked.
+TEST(MemoryModel, FramesAreWrittenAsTheSceneAsksUnlessOnlyAnotherWayFitsTheBudget) {
   const snow::Scene scene = snow::loadScene("preset:default");
   snow::GridSpec spec;
   spec.width = spec.height = 2048;
   spec.cellSizeXM = spec.cellSizeYM = 10.0;
   snow::SnowReach reach;
   reach.known = true, reach.share = 0.8, reach.meanExcessM = 700.0;
-  const double beside = snow::predictGridBake(scene, spec, 0, reach, false).peakBytes();
-  const snow::MemoryPrediction afterPrediction = snow::predictGridBake(scene, spec, 0, reach, true);
-  const double after = afterPrediction.peakBytes();
+  using snow::FrameTiming;
+  auto predict = [&](FrameTiming t) { return snow::predictGridBake(scene, spec, 0, reach, t); };
+  auto hasPhase = [](const snow::MemoryPrediction& p, const std::string& name) {
+    return std::any_of(p.phases.begin(), p.phases.end(), [&](const snow::MemoryPhase& ph) { return ph.name == name; });
+  };
+  const double paused = predict(FrameTiming::Paused).peakBytes(), beside = predict(FrameTiming::Beside).peakBytes();
+  const double after = predict(FrameTiming::AfterSeason).peakBytes();
+  EXPECT_EQ(predict(FrameTiming::Auto).peakBytes(), paused);  // the default preset asks for paused
+  EXPECT_TRUE(hasPhase(predict(FrameTiming::Paused), "frame (the season paused)"));
+  EXPECT_TRUE(hasPhase(predict(FrameTiming::AfterSeason), "frames after the season"));
+  ASSERT_LT(paused, after);
   ASSERT_LT(after, beside);
-  bool hasAfterPhase = false;
-  for (const auto& phase : afterPrediction.phases) hasAfterPhase = hasAfterPhase || phase.name == "frames after the season";
-  EXPECT_TRUE(hasAfterPhase);
-  auto plan = [&](const snow::Scene& s, double budget, snow::FrameTiming timing) { return snow::planGridMemory(s, spec, 0, reach, budget, timing); };
-  EXPECT_FALSE(plan(scene, beside + 1, snow::FrameTiming::Auto).framesAfterSeason);
-  const snow::GridMemoryPlan squeezed = plan(scene, 0.5 * (after + beside), snow::FrameTiming::Auto);
-  EXPECT_TRUE(squeezed.framesAfterSeason);
-  EXPECT_DOUBLE_EQ(squeezed.prediction.peakBytes(), after);
-  EXPECT_DOUBLE_EQ(squeezed.besideBytes, beside);
-  EXPECT_FALSE(plan(scene, after - 1, snow::FrameTiming::Auto).framesAfterSeason);  // refused as beside it
-  EXPECT_FALSE(plan(scene, 0.5 * (after + beside), snow::FrameTiming::Beside).framesAfterSeason);
-  EXPECT_TRUE(plan(scene, beside + 1, snow::FrameTiming::AfterSeason).framesAfterSeason);
-  snow::Scene noFrames = scene;
+  auto plan = [&](const snow::Scene& s, double budget, FrameTiming timing) { return snow::planGridMemory(s, spec, 0, reach, budget, timing); };
+  EXPECT_EQ(plan(scene, beside + 1, FrameTiming::Auto).timing, FrameTiming::Paused);
+  snow::Scene besideScene = scene;
+  besideScene.frameWriting = snow::FrameWriting::Beside;
+  EXPECT_EQ(plan(besideScene, beside + 1, FrameTiming::Auto).timing, FrameTiming::Beside);
+  const snow::GridMemoryPlan squeezed = plan(besideScene, 0.5 * (paused + beside), FrameTiming::Auto);
+  EXPECT_EQ(squeezed.timing, FrameTiming::Paused);
+  EXPECT_DOUBLE_EQ(squeezed.prediction.peakBytes(), paused);
+  EXPECT_DOUBLE_EQ(squeezed.askedBytes, beside);
+  EXPECT_EQ(plan(besideScene, paused - 1, FrameTiming::Auto).timing, FrameTiming::Beside);  // refused as asked
+  EXPECT_EQ(plan(scene, 0.5 * (paused + beside), FrameTiming::Beside).timing, FrameTiming::Beside);
+  EXPECT_EQ(plan(scene, 1.0, FrameTiming::AfterSeason).timing, FrameTiming::AfterSeason);
+  snow::Scene noFrames = besideScene;
   noFrames.outputs.frameDays.clear();
-  EXPECT_FALSE(plan(noFrames, 1.0, snow::FrameTiming::Auto).framesAfterSeason);
-  std::printf("[ measure ] default preset at 2048²: %.0f MiB with its frame beside the season, %.0f MiB after it\n", beside / 1048576.0,
-              after / 1048576.0);
+  EXPECT_EQ(plan(noFrames, 1.0, FrameTiming::Auto).timing, FrameTiming::Beside);
+  std::printf("[ measure ] default preset at 2048²: %.0f MiB with its frame written while the season waits, %.0f MiB beside it, %.0f MiB after it\n",
+              paused / 1048576.0, beside / 1048576.0, after / 1048576.0);
 }
 
 // The record fields count only where a layer reads them (SeasonConfig::recordFields): none for
@@ -356,7 +363,7 @@ TEST(MemoryModel, RecordFieldsCountFourBytesACellForEachFieldTheLayersRead) {
   auto records = [&](const std::vector<std::string>& layers) {
     scene.outputs.layers = layers;
     double backend = -1;
-    for (const auto& phase : snow::predictGridBake(scene, spec, 0, snow::SnowReach{}, false).phases)
+    for (const auto& phase : snow::predictGridBake(scene, spec, 0, snow::SnowReach{}).phases)
       for (const auto& o : phase.owners)
         if (phase.name == "season" && o.name == "backend: record fields") backend = o.bytes;
     return backend / cells;

@@ -212,6 +212,58 @@ TEST(Season, WindScoursRidgesLoadsLeesAndConservesMass) {
 // The record fields are written by the kernels only where the season keeps them
 // (SeasonConfig::recordFields): leaving any of them out changes no byte of the snow, of the
 // records kept, or of a frame, and frees the others in the state and its frames.
+// Frames written while the season waits (SeasonConfig::lendFrames: the backend's scratch, the
+// avalanche runner's snapshot and the skiers' storage freed, the backend's fields lent to the
+// host's state) are the bytes of frames copied from a season that goes on, and so is the season
+// after them; a frame whose instant falls inside an avalanche is set aside on disk and written
+// once it has settled, with the same bytes.
+TEST(Season, FramesLentWhileTheSeasonWaitsAreTheBytesOfFramesCopied) {
+  struct Run {
+    SnowState end;
+    std::vector<std::pair<double, SnowState>> frames;
+    SeasonReport report;
+  };
+  auto run = [](bool lend, const std::vector<double>& frameDays) {
+    Run r;
+    r.end = windyRange(64, 20.0, 10.0);
+    SeasonConfig c = winter(40, 10.0);
+    c.windTransport = true;
+    c.params.avalancheRatePerKm2PerDay = 20.0;
+    c.params.skiersPerHour = 4.0;
+    c.userAvalanches = {{25.0, 0, 0, false, std::make_shared<std::vector<uint8_t>>(64 * 64, uint8_t{1})}};
+    c.frameDays = frameDays;
+    c.recordFields = fieldBit(SnowField::meltedM) | fieldBit(SnowField::avalancheDepositM);
+    c.lendFrames = lend;
+    computeTemperatureBase(r.end, c.params);
+    auto backend = createCpuBackend();
+    r.report = runSeason(*backend, r.end, c, {}, [&](double day, const SnowState& f) { r.frames.emplace_back(day, f); });
+    return r;
+  };
+  // Two frames 0.2 s and 0.9 s into an avalanche released over the whole terrain on day 25.
+  const std::vector<double> days = {10.0, 25.0 + 2e-6, 25.0 + 1e-5, 30.0};
+  const Run copied = run(false, days), lent = run(true, days);
+  ASSERT_GT(copied.report.avalanches.size(), 2u);
+  ASSERT_GT(copied.report.skiers.size(), 10u);
+  EXPECT_EQ(copied.report.framesSetAside, 0);
+  EXPECT_EQ(lent.report.framesSetAside, 2) << "the day-25 avalanche was no longer in motion at its frames' instants";
+  EXPECT_EQ(lent.report.avalanches.size(), copied.report.avalanches.size());
+  EXPECT_EQ(lent.report.skiers.size(), copied.report.skiers.size());
+  ASSERT_EQ(lent.frames.size(), 4u);
+  ASSERT_EQ(copied.frames.size(), 4u);
+  for (size_t k = 0; k <= lent.frames.size(); ++k) {
+    const SnowState& a = k < lent.frames.size() ? lent.frames[k].second : lent.end;
+    const SnowState& b = k < copied.frames.size() ? copied.frames[k].second : copied.end;
+    if (k < lent.frames.size()) EXPECT_EQ(lent.frames[k].first, copied.frames[k].first);
+#define SNOW_COMPARE(member, view, Element, role, access, fill) \
+  EXPECT_TRUE(a.member.values() == b.member.values()) << #member << " of " << (k < lent.frames.size() ? "frame " + std::to_string(k) : "the end");
+    SNOW_STATE_FIELDS(SNOW_COMPARE)
+#undef SNOW_COMPARE
+  }
+  double moving = 0;
+  for (uint8_t m : lent.frames[1].second.snowMoving.values()) moving += m;
+  EXPECT_GT(moving, 0.0) << "the frame inside the avalanche holds snow in motion";
+}
+
 TEST(Season, RecordFieldsLeftOutChangeNoByteOfTheSnowOrOfTheRecordsKept) {
   struct Run {
     SnowState end, frame;
