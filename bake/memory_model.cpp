@@ -30,11 +30,12 @@ constexpr double kGiB = 1024.0 * kMiB;
 // Measured: the resident set of the program and its libraries (TBB, Embree, OpenVDB, GDAL, OIIO)
 // once a bake has touched them, on a 64 x 64 bake (tools/measure-memory.sh).
 constexpr double kLibraryBytes = 140.0 * kMiB;
-// Measured: bytes a cell the horizon sweep's per-thread line buffers and the wind solver's
-// temporaries hold beside the counted grids; Embree's terrain (a grid geometry: 12 bytes of
-// vertex a cell and its BVH) a cell, and its BVH bytes per occluder triangle.
+// Measured: bytes a cell the horizon sweep's per-thread line buffers hold beside the counted
+// grids; Embree's terrain (a grid geometry: 12 bytes of vertex a cell and its BVH) a cell, and its
+// BVH bytes per occluder triangle. Counted: the wind solver's upwind links (24), ground speed (8),
+// W_z and W_sz in double (16) and free stream (8), beside the wind fields.
 constexpr double kSweepScratchPerCell = 16.0;
-constexpr double kWindSolverPerCell = 20.0;
+constexpr double kWindSolverPerCell = 56.0;
 constexpr double kEmbreeGridBytesPerCell = 28.0;
 constexpr double kEmbreeBytesPerTriangle = 120.0;
 // Mesh mode's snow body: three grids of float leaves (2 KiB and their masks) per leaf slot.
@@ -320,7 +321,9 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   const MemoryOwner windKept = heldIf(windVaries || (needs & kNeedsWind), wind);
   const MemoryOwner exposureAfter = heldIf(needs & kNeedsSun, exposure);
   const double rayScene = cells * kEmbreeGridBytesPerCell + static_cast<double>(occluderTriangles) * kEmbreeBytesPerTriangle;
-  MemoryPhase pre{"precompute", {terrain, stateOwner, staticOwner}};  // the record fields are made after it
+  // The sun exposure, then the wind (the sun's working set freed between them); the record fields
+  // are made after both.
+  MemoryPhase pre{"precompute: sun exposure", {terrain, stateOwner, staticOwner}};
   if (samples > 0) {
     // The sky's horizon grids (one an azimuth), or the shadows' sweep (three grids, the normals,
     // a bit a cell for each sun position above the horizon: precompute/horizon.h).
@@ -332,9 +335,13 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
       pre.owners.push_back({"ray scene (Embree)", rayScene, "precompute.sun_method", G::PrecomputeWork});
     pre.owners.push_back(computedExposure);
   }
-  if (windStates > 0) pre.owners.push_back({"wind solver", cells * kWindSolverPerCell, "weather.keyframe", G::PrecomputeWork});
-  if (windStates > 0) pre.owners.push_back(wind);
   p.phases.push_back(pre);
+  if (windStates > 0) {
+    MemoryPhase windPhase{"precompute: wind", {terrain, stateOwner, staticOwner, computedExposure, wind,
+                                               {"wind solver", cells * kWindSolverPerCell, "weather.keyframe", G::PrecomputeWork}}};
+    if (samples <= 0) windPhase.owners[3].bytes = 0.0;
+    p.phases.push_back(windPhase);
+  }
 
   // The season's end's writers, and the latest frame's (the most snow a frame writes).
   const std::vector<MemoryOwner> writer = dayWriters(s, spec, cells, reach, s.days);

@@ -36,26 +36,33 @@ AvalancheRun::AvalancheRun(SnowBackend& backend, const ModelParameters& params, 
       neighbourDistanceM_[3 * (dy + 1) + (dx + 1)] = std::hypot(dx * terrain.spec.cellSizeXM, dy * terrain.spec.cellSizeYM);
 }
 
-double AvalancheRun::surfaceBefore(size_t i) const { return surfaceAt(terrain_.bedrockM, i, before_, i); }
+double AvalancheRun::layersSurface(size_t i) const {
+  return static_cast<double>(terrain_.bedrockM.values()[i]) + layers_[0][i] + layers_[1][i] + layers_[2][i] + layers_[3][i];
+}
 
-void AvalancheRun::downloadBefore() {
-  before_.x0 = before_.y0 = 0;
-  before_.width = terrain_.spec.width, before_.height = terrain_.spec.height;
-  backend_.downloadBox(before_, false);
+void AvalancheRun::takeSnapshot() {
+  if (!backend_.hostSnowLayers(layers_)) {
+    snapshot_.x0 = snapshot_.y0 = 0;
+    snapshot_.width = terrain_.spec.width, snapshot_.height = terrain_.spec.height;
+    backend_.downloadBox(snapshot_, false);
+    const Grid<float>* g[4] = {&snapshot_.compacted, &snapshot_.stable, &snapshot_.unstable, &snapshot_.powder};
+    for (int l = 0; l < 4; ++l) layers_[l] = g[l]->data();
+  }
   haveSnapshot_ = true;
   snapshotVersion_ = backend_.stateVersion();
   rowWeights_.assign(static_cast<size_t>(terrain_.spec.height), 0.0);
   staleY0_ = 0, staleY1_ = terrain_.spec.height;
 }
 
-// The settled box into the snapshot, so that it holds the state again: its rows' weights are stale.
+// The settled box into the snapshot (where one is held), so that it holds the state again: its
+// rows' weights are stale.
 void AvalancheRun::keepSnapshotOfBox() {
   const int w = terrain_.spec.width;
-  for (int y = unionBox_.y0; y < unionBox_.y1; ++y) {
+  for (int y = unionBox_.y0; y < unionBox_.y1 && layers_[0] == snapshot_.compacted.data(); ++y) {
     const size_t i = static_cast<size_t>(y) * w + unionBox_.x0, j = after_.index(unionBox_.x0, y);
     const size_t n = static_cast<size_t>(unionBox_.x1 - unionBox_.x0);
-    for (auto [to, from] : {std::pair{&before_.compacted, &after_.compacted}, {&before_.stable, &after_.stable},
-                            {&before_.unstable, &after_.unstable}, {&before_.powder, &after_.powder}})
+    for (auto [to, from] : {std::pair{&snapshot_.compacted, &after_.compacted}, {&snapshot_.stable, &after_.stable},
+                            {&snapshot_.unstable, &after_.unstable}, {&snapshot_.powder, &after_.powder}})
       std::copy_n(from->values().data() + j, n, to->values().data() + i);
   }
   if (unionBox_.y1 > unionBox_.y0) {
@@ -65,19 +72,19 @@ void AvalancheRun::keepSnapshotOfBox() {
 }
 
 bool AvalancheRun::release(int x, int y, double day, double seaLevelTemperatureC, bool user) {
-  downloadBefore();
+  takeSnapshot();
   return releaseFromSnapshot(x, y, day, seaLevelTemperatureC, user);
 }
 
 double AvalancheRun::steepestDrop(int x, int y) const {
   const GridSpec& g = terrain_.spec;
-  const double a = surfaceBefore(static_cast<size_t>(y) * g.width + x);
+  const double a = layersSurface(static_cast<size_t>(y) * g.width + x);
   double slope = 0.0;
   for (int ny = std::max(0, y - 1); ny < std::min(g.height, y + 2); ++ny)
     for (int nx = std::max(0, x - 1); nx < std::min(g.width, x + 2); ++nx) {
       if ((nx == x && ny == y) || !terrain_.validCell(nx, ny)) continue;
       const double dist = neighbourDistanceM_[3 * (ny - y + 1) + (nx - x + 1)];
-      slope = std::max(slope, (a - surfaceBefore(static_cast<size_t>(ny) * g.width + nx)) / dist);
+      slope = std::max(slope, (a - layersSurface(static_cast<size_t>(ny) * g.width + nx)) / dist);
     }
   return slope;
 }
@@ -95,7 +102,7 @@ void AvalancheRun::releaseWeights(int y0, int y1, double* w) const {
   const bool factors = terrain_.avalancheReleaseFactor.size() == g.cellCount();
   const double lx = neighbourDistanceM_[5], ly = neighbourDistanceM_[7], ld = neighbourDistanceM_[8];
   const uint8_t* valid = terrain_.validCell.values().data();
-  const float* u = before_.unstable.values().data();
+  const float* u = layers_[2];
   const float* factor = factors ? terrain_.avalancheReleaseFactor.values().data() : nullptr;
   std::vector<double> ring(3 * static_cast<size_t>(width + 2), inf);
   auto rowOf = [&](int y) { return &ring[static_cast<size_t>((y + 3) % 3) * (width + 2)]; };
@@ -103,9 +110,9 @@ void AvalancheRun::releaseWeights(int y0, int y1, double* w) const {
     double* r = rowOf(y) + 1;
     if (y < 0 || y >= g.height) return std::fill(r, r + width, inf);
     const size_t i0 = static_cast<size_t>(y) * width;
-    const float *b = terrain_.bedrockM.values().data() + i0, *c = before_.compacted.values().data() + i0;
-    const float *st = before_.stable.values().data() + i0, *un = u + i0, *p = before_.powder.values().data() + i0;
-    for (int x = 0; x < width; ++x) r[x] = static_cast<double>(b[x]) + c[x] + st[x] + un[x] + p[x];  // surfaceBefore's sum
+    const float *b = terrain_.bedrockM.values().data() + i0, *c = layers_[0] + i0;
+    const float *st = layers_[1] + i0, *un = u + i0, *p = layers_[3] + i0;
+    for (int x = 0; x < width; ++x) r[x] = static_cast<double>(b[x]) + c[x] + st[x] + un[x] + p[x];  // layersSurface's sum
     for (int x = 0; x < width; ++x)
       if (!valid[i0 + x]) r[x] = inf;
   };
@@ -155,7 +162,7 @@ void AvalancheRun::weighRows(int r0, int r1) {
 bool AvalancheRun::trySpontaneous(double cellDraw, double day, double seaLevelTemperatureC) {
   // Only the last avalanches' rows have changed since the snapshot when no other step has run
   // (settle copied their box in); a row's weights read the rows beside it.
-  if (!haveSnapshot_ || backend_.stateVersion() != snapshotVersion_) downloadBefore();
+  if (!haveSnapshot_ || backend_.stateVersion() != snapshotVersion_) takeSnapshot();
   else ++snapshotsKept_;
   const GridSpec& g = terrain_.spec;
   const int width = g.width;
@@ -196,7 +203,7 @@ void AvalancheRun::beginRecord(int rx, int ry, double day, bool user) {
 
 bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, double seaLevelTemperatureC, bool user) {
   const auto t0 = WallClock::now();
-  downloadBefore();
+  takeSnapshot();
   const SnowState& s = terrain_;
   const int w = s.spec.width;
   std::vector<uint8_t>& moving = movingCells();
@@ -204,10 +211,10 @@ bool AvalancheRun::releaseZone(const std::vector<uint8_t>& zone, double day, dou
   int rx = -1, ry = -1;
   double highest = -std::numeric_limits<double>::infinity();
   for (size_t i = 0; i < moving.size() && i < zone.size(); ++i) {
-    if (!zone[i] || !s.validCell.values()[i] || before_.unstable.values()[i] < p_.avalancheMinUnstableM) continue;
+    if (!zone[i] || !s.validCell.values()[i] || layers_[2][i] < p_.avalancheMinUnstableM) continue;
     moving[i] = 1;
     box.add(static_cast<int>(i % w), static_cast<int>(i / w));
-    const double a = surfaceBefore(i);
+    const double a = layersSurface(i);
     if (a > highest) highest = a, rx = static_cast<int>(i % w), ry = static_cast<int>(i / w);
   }
   if (rx < 0) {
@@ -226,8 +233,8 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
   const auto t0 = WallClock::now();
   beginRecord(rx, ry, day, user);
   const SnowState& s = terrain_;
-  const Grid<float>& unstable = before_.unstable;
   const int w = s.spec.width, h = s.spec.height;
+  auto unstable = [&](int x, int y) { return layers_[2][static_cast<size_t>(y) * w + x]; };
   if (rx < 0 || ry < 0 || rx >= w || ry >= h || !s.validCell(rx, ry)) {
     record_.why = "rupture point outside the terrain";
     return false;
@@ -270,8 +277,10 @@ bool AvalancheRun::releaseFromSnapshot(int rx, int ry, double day, double seaLev
 
 void AvalancheRun::releaseScratch() {
   if (active_) return;
+  snapshot_ = SnowBox{};
   before_ = SnowBox{};
   after_ = SnowBox{};
+  for (auto& l : layers_) l = nullptr;
   haveSnapshot_ = false;
   moving_ = std::vector<uint8_t>();  // all zeros between releases: made again at the next one
   weights_ = std::vector<double>();
@@ -292,13 +301,11 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
     for (int x = x0; x < x1; ++x)
       if (moving[index(x, y)]) {
         ++record_.releaseCells;
-        record_.releasedM3 += (static_cast<double>(before_.unstable(x, y)) + before_.powder(x, y)) * s.spec.cellAreaM2();
+        record_.releasedM3 += (static_cast<double>(layers_[2][index(x, y)]) + layers_[3][index(x, y)]) * s.spec.cellAreaM2();
       }
-  args_ = makeAvalancheArgs(p_, seaLevelTemperatureC);
-  args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
-  backend_.avalancheRelease(moving, args_);
-  unionBox_ = args_;
-  record_.released = true;
+  // What the release reads of the layers, before it changes them: the released box's layers, the maps.
+  before_ = SnowBox{};
+  growBeforeBox(x0, y0, x1, y1);
   if (keepMaps_) {
     record_.maps = std::make_shared<AvalancheMaps>();
     Grid<float> zone(w, h, 0.f);
@@ -306,16 +313,51 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
     record_.maps->release = crop(zone, x0, y0, x1, y1);
     if (frameIntervalS_ > 0.0) {
       record_.maps->depthAtRelease = Grid<float>(w, h, 0.f);
-      for (size_t i = 0; i < record_.maps->depthAtRelease.size(); ++i) record_.maps->depthAtRelease.values()[i] = before_.depth(i);
+      for (size_t i = 0; i < record_.maps->depthAtRelease.size(); ++i)
+        record_.maps->depthAtRelease.values()[i] = layers_[0][i] + layers_[1][i] + layers_[2][i] + layers_[3][i];
       record_.maps->frames.push_back({0.0, crop(record_.maps->depthAtRelease, x0, y0, x1, y1)});
       nextFrameS_ = frameIntervalS_;
     }
   }
+  args_ = makeAvalancheArgs(p_, seaLevelTemperatureC);
+  args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
+  backend_.avalancheRelease(moving, args_);
+  unionBox_ = args_;
+  record_.released = true;
   for (int y = y0; y < y1; ++y) std::fill_n(moving.begin() + static_cast<std::ptrdiff_t>(index(x0, y)), x1 - x0, uint8_t{0});
   active_ = true;
   lastSpeed_ = 0.f;
   peakEnergy_ = 0.0;
   wallSeconds_ = elapsedSeconds(t0);
+}
+
+// Widens before_ to hold [x0, x1) x [y0, y1) (with a margin, so that a box growing a cell a
+// substep widens it every few steps only): its cells outside the old box have not changed since
+// the release (no step has reached them; while an avalanche runs nothing else does), so layers_
+// holds their values at release.
+void AvalancheRun::growBeforeBox(int x0, int y0, int x1, int y1) {
+  const GridSpec& g = terrain_.spec;
+  SnowBox& b = before_;
+  const bool empty = b.width == 0 || b.height == 0;
+  if (!empty && x0 >= b.x0 && y0 >= b.y0 && x1 <= b.x0 + b.width && y1 <= b.y0 + b.height) return;
+  constexpr int kMargin = 8;
+  const int nx0 = std::max(0, std::min(x0, empty ? x0 : b.x0) - kMargin), ny0 = std::max(0, std::min(y0, empty ? y0 : b.y0) - kMargin);
+  const int nx1 = std::min(g.width, std::max(x1, empty ? x1 : b.x0 + b.width) + kMargin);
+  const int ny1 = std::min(g.height, std::max(y1, empty ? y1 : b.y0 + b.height) + kMargin);
+  SnowBox grown;
+  grown.x0 = nx0, grown.y0 = ny0, grown.width = nx1 - nx0, grown.height = ny1 - ny0;
+  Grid<float>* to[4] = {&grown.compacted, &grown.stable, &grown.unstable, &grown.powder};
+  const Grid<float>* from[4] = {&b.compacted, &b.stable, &b.unstable, &b.powder};
+  for (int l = 0; l < 4; ++l) {
+    to[l]->resize(grown.width, grown.height);
+    for (int y = ny0; y < ny1; ++y) {
+      float* row = to[l]->data() + static_cast<size_t>(y - ny0) * grown.width;
+      std::copy_n(layers_[l] + static_cast<size_t>(y) * g.width + nx0, grown.width, row);
+      const bool oldRow = !empty && y >= b.y0 && y < b.y0 + b.height;
+      if (oldRow) std::copy_n(from[l]->data() + static_cast<size_t>(y - b.y0) * b.width, b.width, row + (b.x0 - nx0));
+    }
+  }
+  before_ = std::move(grown);
 }
 
 bool AvalancheRun::step() {
@@ -325,6 +367,9 @@ bool AvalancheRun::step() {
   const double minCell = std::min(terrain_.spec.cellSizeXM, terrain_.spec.cellSizeYM);
   const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
   const int substeps = static_cast<int>(std::clamp(std::ceil(stepS / maxSubstep), 1.0, 10000.0));
+  // Snow moves at most a cell a substep: the step stays within its box grown by `substeps`.
+  growBeforeBox(std::max(0, args_.x0 - substeps), std::max(0, args_.y0 - substeps), std::min(terrain_.spec.width, args_.x1 + substeps),
+                std::min(terrain_.spec.height, args_.y1 + substeps));
   AvalancheArgs a = args_;
   a.dtS = static_cast<float>(stepS / substeps);
   // After the first step, the last step's row statistics give the spans the passes run over.
@@ -425,14 +470,15 @@ AvalancheRecord AvalancheRun::settle() {
   const SnowState& s = terrain_;
   const int w = s.spec.width;
   const double area = s.spec.cellAreaM2();
-  const double ruptureA = surfaceBefore(static_cast<size_t>(record_.ruptureY) * w + record_.ruptureX);
+  const double ruptureA = surfaceAt(s.bedrockM, static_cast<size_t>(record_.ruptureY) * w + record_.ruptureX, b,
+                                    b.index(record_.ruptureX, record_.ruptureY));
   double lowest = ruptureA;
   for (int y = unionBox_.y0; y < unionBox_.y1; ++y)
     for (int x = unionBox_.x0; x < unionBox_.x1; ++x) {
-      const size_t i = static_cast<size_t>(y) * w + x, j = after.index(x, y);
+      const size_t i = static_cast<size_t>(y) * w + x, j = after.index(x, y), k = b.index(x, y);
       if (!s.validCell.values()[i]) continue;
       const double change = (static_cast<double>(after.stable.values()[j]) + after.unstable.values()[j] + after.powder.values()[j]) -
-                            (static_cast<double>(b.stable.values()[i]) + b.unstable.values()[i] + b.powder.values()[i]);
+                            (static_cast<double>(b.stable.values()[k]) + b.unstable.values()[k] + b.powder.values()[k]);
       if (std::abs(change) > 1e-3) ++record_.footprintCells;
       if (change > 0) record_.depositM3 += change * area;
       if (change > 0.01) {
@@ -448,10 +494,10 @@ AvalancheRecord AvalancheRun::settle() {
     scour.grid = deposit.grid = Grid<float>(after.width, after.height, 0.f);
     for (int y = unionBox_.y0; y < unionBox_.y1; ++y)
       for (int x = unionBox_.x0; x < unionBox_.x1; ++x) {
-        const size_t i = static_cast<size_t>(y) * w + x, j = after.index(x, y);
+        const size_t i = static_cast<size_t>(y) * w + x, j = after.index(x, y), k = b.index(x, y);
         if (!s.validCell.values()[i]) continue;
         const float change = (after.stable.values()[j] + after.unstable.values()[j] + after.powder.values()[j]) -
-                             (b.stable.values()[i] + b.unstable.values()[i] + b.powder.values()[i]);
+                             (b.stable.values()[k] + b.unstable.values()[k] + b.powder.values()[k]);
         if (change > 0.f) deposit.grid.values()[j] = change;
         if (change < 0.f) scour.grid.values()[j] = -change;
       }

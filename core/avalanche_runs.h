@@ -149,9 +149,17 @@ class AvalancheRun {
   bool rowSpans_ = true;
   const ModelParameters& p_;
   const SnowState& terrain_;
-  // The snow layers at release (the whole grid), and those of the avalanche's box at its end or
-  // at a frame: not whole copies of the state (they were 2 x 82 bytes a cell).
+  // The snow layers a release reads (C, S, U, P over the grid): the backend's own fields where they
+  // live in host memory (SnowBackend::hostSnowLayers), else snapshot_, a download kept while only
+  // this runner's avalanches change the state.
+  const float* layers_[4] = {};
+  SnowBox snapshot_;
+  double layersSurface(size_t i) const;  // A = B + C + S + U + P of layers_ at cell i, in double
+  // The layers at release of every cell the avalanche may have changed (growBeforeBox takes them
+  // from layers_ before the step that may reach them), and those of its box at its end or at a
+  // frame: not whole copies of the state (they were 2 x 82 bytes a cell, then a 16-byte snapshot).
   SnowBox before_, after_;
+  void growBeforeBox(int x0, int y0, int x1, int y1);
   // Running totals of the spontaneous release weights at each row's start (in place of one
   // double a cell): the draw rescans only the row it falls in.
   std::vector<double> rowStartWeights_;
@@ -166,11 +174,10 @@ class AvalancheRun {
   uint64_t snapshotVersion_ = 0;
   int staleY0_ = 0, staleY1_ = 0;  // the rows whose weights are out of date
   void keepSnapshotOfBox();
-  double surfaceBefore(size_t i) const;  // A = B + C + S + U + P of the snapshot at cell i, in double
   // hypot of the offsets to the neighbour (dx, dy) in metres, at 3 (dy + 1) + dx + 1: steepestDrop's
   // divisors, the same doubles at every call.
   double neighbourDistanceM_[9] = {};
-  void downloadBefore();
+  void takeSnapshot();
   AvalancheArgs args_;
   AvalancheArgs unionBox_;
   AvalancheRecord record_;

@@ -57,6 +57,13 @@ class SnowBackend {
   // fields to the host's state, returnState takes them back as they were; nothing else of the
   // backend changes in between.
   virtual void returnState(SnowState& state) { uploadTaking(state); }
+  // Where the snow layers live in host memory: C, S, U, P's own storage (read only, valid until the
+  // stateVersion changes), so the avalanche runner reads them in place of a snapshot. False on a
+  // device.
+  virtual bool hostSnowLayers(const float* layers[4]) {
+    (void)layers;
+    return false;
+  }
   // Frees the scratch that no step holds between events: the fields made with the state, the
   // skiers' storage (uploadRouteMap again before the next batch) and, with `avalancheFields`
   // (no avalanche in motion), the avalanche's, made again at the next release.
@@ -114,7 +121,8 @@ class SnowBackend {
     (void)out;
     return false;
   }
-  // The route map the skier kernels read (phenomena/skiers.h); before the first skierBatch.
+  // The route map the skier kernels read (phenomena/skiers.h); before the first skierBatch. A host
+  // backend reads `route` itself: it must outlive the batches (SkiRun's own).
   virtual void uploadRouteMap(const Grid<float>& route) = 0;
   // A batch of skiers moved together, one move of every skier at a time, until all have stopped
   // (phenomena/skiers.h): in, each agent's startCell and id; out, their final state, and in `paths`

@@ -89,6 +89,16 @@ class ExecBackend final : public SnowBackend {
 #undef SNOW_RETURN_STATE
   }
 
+  bool hostSnowLayers(const float* layers[4]) override {
+    if constexpr (Exec::kDevice) {
+      (void)layers;
+      return false;
+    } else {
+      layers[0] = compactedM_.data(), layers[1] = stableM_.data(), layers[2] = unstableM_.data(), layers[3] = powderM_.data();
+      return true;
+    }
+  }
+
   // The scratch made with the state comes back, zeroed, with the next kernel's view.
   void releaseScratch(bool avalancheFields) override {
 #define SNOW_RELEASE_SCRATCH(view, Element, extent) \
@@ -98,6 +108,7 @@ class ExecBackend final : public SnowBackend {
     scratchReleased_ = true;
     if (avalancheFields) avalancheFieldsReady_ = false;  // made again, zeroed, at the next release
     freeBuffer(skiers_.route), freeBuffer(skiers_.claim), freeBuffer(skiers_.agents), freeBuffer(skiers_.path);
+    skiers_.hostRoute = nullptr;
   }
 
   void forEachHostChunk(int n, int chunk, const std::function<void(int, int)>& f) override {

@@ -5,6 +5,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 
 #include "core/util.h"
@@ -207,7 +208,8 @@ WindSolveStats solveWindEffectSurface(const Grid<float>& altitude, const Grid<ui
                                       const Grid<float>& freeY, double c, const WindSolverOptions& o, Grid<float>& windEffectZ,
                                       Grid<float>& verticalSpeed) {
   const auto t0 = WallClock::now();
-  WindSystem sys(altitude, valid, spec, groundX, groundY, freeX, freeY, c);
+  std::optional<WindSystem> system(std::in_place, altitude, valid, spec, groundX, groundY, freeX, freeY, c);
+  const WindSystem& sys = *system;
   std::vector<double> wz, wsz;
   sys.initialise(wz, wsz);
   WindSolveStats stats;
@@ -232,11 +234,16 @@ WindSolveStats solveWindEffectSurface(const Grid<float>& altitude, const Grid<ui
       break;
     }
   }
-  // The residual of the discrete equations: how far one more update would move any cell.
-  std::vector<double> z2 = wz, s2 = wsz;
+  // The residual of the discrete equations: how far one more update would move any cell (each
+  // cell updated, then put back: its neighbours see the solution, not a copy of it).
   double residual = 0.0;
-  for (size_t i = 0; i < z2.size(); ++i) residual = std::max(residual, sys.update(i, z2, s2)), z2[i] = wz[i], s2[i] = wsz[i];
+  for (size_t i = 0; i < wz.size(); ++i) {
+    const double z = wz[i], sz = wsz[i];
+    residual = std::max(residual, sys.update(i, wz, wsz));
+    wz[i] = z, wsz[i] = sz;
+  }
   stats.residual = residual;
+  system.reset();  // its 32 bytes a cell, before the float fields are made
   windEffectZ.resize(spec.width, spec.height);
   verticalSpeed.resize(spec.width, spec.height);
   for (size_t i = 0; i < wz.size(); ++i) {

@@ -195,3 +195,91 @@ TEST(Backend, StaticFieldsTheHostReleasedKeepTheBackendsValuesThroughADailyRefil
   for (float v : kept.windScourM.values()) scour += v;
   EXPECT_GT(scour, 0.0);  // the wind moved snow after the first day
 }
+
+namespace {
+// Host storage the avalanche runner takes for a device's (SnowBackend::hostSnowLayers false): it
+// keeps a snapshot of the layers, as on CUDA.
+struct SnapshotLikeADevice : SerialExec {
+  static constexpr bool kDevice = true;
+};
+}  // namespace
+
+// On a host backend the avalanche runner reads the backend's own layers in place of a 16-byte
+// snapshot, and keeps the layers at release of the cells each step may reach: the same season,
+// avalanche records and maps (with frames of their motion) as from a snapshot.
+TEST(Backend, AvalanchesReadingTheLayersInPlaceAreTheBytesOfAvalanchesFromASnapshot) {
+  const SnowState initial = test::makeRoughState(48, 40, 7);
+  auto season = [&](SnowBackend& backend, SeasonReport& report) {
+    SnowState s = initial;
+    for (auto& u : s.unstableM.values()) u += 0.6f;
+    SeasonConfig c;
+    c.days = 6;
+    c.seed = 5;
+    c.params = testParameters();
+    c.params.avalancheRatePerKm2PerDay = 400.0;
+    c.avalancheMaps = true;
+    c.avalancheFrameIntervalS = 1.0;
+    c.userAvalanches = {{1.0, 20, 10, false, nullptr}, {3.0, 0, 0, false, std::make_shared<std::vector<uint8_t>>(48 * 40, uint8_t{1})}};
+    report = runSeason(backend, s, c);
+    return s;
+  };
+  ExecBackend<SerialExec> inPlace;
+  ExecBackend<SnapshotLikeADevice> snapshot;
+  SeasonReport a, b;
+  const SnowState endA = season(inPlace, a), endB = season(snapshot, b);
+  test::expectSameBytes(endA, endB);
+  ASSERT_EQ(a.avalanches.size(), b.avalanches.size());
+  size_t released = 0, moved = 0;
+  for (size_t k = 0; k < a.avalanches.size(); ++k) {
+    const AvalancheRecord &x = a.avalanches[k], &y = b.avalanches[k];
+    released += x.released;
+    moved += x.steps > 3;
+    EXPECT_EQ(x.releaseCells, y.releaseCells) << k;
+    EXPECT_EQ(x.footprintCells, y.footprintCells) << k;
+    EXPECT_EQ(x.releasedM3, y.releasedM3) << k;
+    EXPECT_EQ(x.depositM3, y.depositM3) << k;
+    EXPECT_EQ(x.runoutM, y.runoutM) << k;
+    EXPECT_EQ(x.fallHeightM, y.fallHeightM) << k;
+    ASSERT_EQ(bool(x.maps), bool(y.maps)) << k;
+    if (!x.maps) continue;
+    EXPECT_TRUE(x.maps->scour.grid.values() == y.maps->scour.grid.values()) << k;
+    EXPECT_TRUE(x.maps->deposit.grid.values() == y.maps->deposit.grid.values()) << k;
+    EXPECT_TRUE(x.maps->depthAtRelease.values() == y.maps->depthAtRelease.values()) << k;
+    ASSERT_EQ(x.maps->frames.size(), y.maps->frames.size()) << k;
+    for (size_t f = 0; f < x.maps->frames.size(); ++f) EXPECT_TRUE(x.maps->frames[f].second.grid.values() == y.maps->frames[f].second.grid.values()) << k;
+  }
+  EXPECT_GT(released, 5u);
+  EXPECT_GT(moved, 1u) << "no avalanche ran more than three steps";
+}
+
+// The layers at release the avalanche runner keeps only for the cells its steps may reach give
+// each avalanche's deposit and footprint as the whole grid's before and after do.
+TEST(Backend, AvalancheDepositAndFootprintFromTheCellsItMayReachAreTheWholeGridsDifference) {
+  SnowState s = test::makeRoughState(64, 48, 11);
+  for (auto& u : s.unstableM.values()) u += 0.8f;
+  const ModelParameters p = testParameters();
+  ExecBackend<SerialExec> backend;
+  backend.upload(s);
+  AvalancheRun run(backend, p, s);
+  int ran = 0;
+  for (int k = 0; k < 6; ++k) {
+    SnowState before = s, after = s;
+    backend.download(before);
+    if (!run.release(8 + 9 * k, 5 + 3 * k, 1.0, -5.0, true)) continue;
+    const AvalancheRecord r = run.runToRest();
+    backend.download(after);
+    double deposit = 0;
+    int footprint = 0;
+    for (size_t i = 0; i < s.spec.cellCount(); ++i) {
+      if (!s.validCell.values()[i]) continue;
+      const double change = (static_cast<double>(after.stableM.values()[i]) + after.unstableM.values()[i] + after.powderM.values()[i]) -
+                            (static_cast<double>(before.stableM.values()[i]) + before.unstableM.values()[i] + before.powderM.values()[i]);
+      footprint += std::abs(change) > 1e-3;
+      if (change > 0) deposit += change * s.spec.cellAreaM2();
+    }
+    EXPECT_EQ(r.footprintCells, footprint) << k;
+    EXPECT_EQ(r.depositM3, deposit) << k;
+    ran += r.steps > 3;
+  }
+  EXPECT_GE(ran, 2) << "too few avalanches ran more than three steps";
+}

@@ -73,14 +73,19 @@ struct SkierStorage {
   Buffer<SkierAgent> agents;
   Buffer<double> path;
   Buffer<float> route;
+  const float* hostRoute = nullptr;  // host storage: the caller's route map itself, not a copy in `route`
   Buffer<int> claim, counters;
+  const float* routeData() { return hostRoute ? hostRoute : route.data(); }
 };
 
 // The route map the kernels read, with the claims and counters reset, for a grid of `cells`.
+// On host storage the kernels read `route` itself, which must then outlive the batches.
 template <class Exec>
 void uploadSkierRoute(Exec& exec, SkierStorage<Exec>& storage, const std::vector<float>& route, size_t cells) {
-  exec.upload(storage.route, route);
-  exec.upload(storage.claim, std::vector<int>(cells, INT_MAX));
+  if constexpr (Exec::kDevice) exec.upload(storage.route, route);
+  else storage.hostRoute = route.data();
+  std::vector<int> unclaimed(cells, INT_MAX);
+  exec.uploadTaking(storage.claim, unclaimed);
   exec.upload(storage.counters, std::vector<int>(2, 0));
   exec.finish();
 }
@@ -130,7 +135,7 @@ class SkierBatch {
   void run() {
     exec_.upload(storage_.agents, agents_);
     exec_.upload(storage_.path, std::vector<double>(2 * static_cast<size_t>(kChunk) * n_));
-    f_ = SkierFields{storage_.agents.data(), n_, storage_.path.data(), storage_.route.data(), storage_.claim.data(),
+    f_ = SkierFields{storage_.agents.data(), n_, storage_.path.data(), storage_.routeData(), storage_.claim.data(),
                      storage_.counters.data()};
     exec_.forEachIndex(n_, SkierStartKernel{v_, f_, a_});
     enterAll();
