@@ -322,6 +322,11 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
   args_ = makeAvalancheArgs(p_, seaLevelTemperatureC);
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
   backend_.avalancheRelease(moving, args_);
+  // A fixed-time action (a user's skiers, an edit) may write the layers while this avalanche
+  // runs: first, every cell's layers at release.
+  backend_.beforeNextWrite([this] {
+    if (active_) growBeforeBox(0, 0, terrain_.spec.width, terrain_.spec.height);
+  });
   unionBox_ = args_;
   record_.released = true;
   for (int y = y0; y < y1; ++y) std::fill_n(moving.begin() + static_cast<std::ptrdiff_t>(index(x0, y)), x1 - x0, uint8_t{0});
@@ -463,6 +468,7 @@ AvalancheRecord AvalancheRun::settle() {
   if (!active_) return record_;
   const auto t0 = WallClock::now();
   backend_.avalancheSettle(unionBox_);
+  backend_.beforeNextWrite(nullptr);
   active_ = false;
   downloadAfter(record_.maps != nullptr);
   const SnowBox& after = after_;

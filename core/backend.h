@@ -56,7 +56,7 @@ class SnowBackend {
   // A frame written while the season waits (SeasonConfig::lendFrames): downloadGiving lends the
   // fields to the host's state, returnState takes them back as they were; nothing else of the
   // backend changes in between.
-  virtual void returnState(SnowState& state) { uploadTaking(state); }
+  virtual void returnState(SnowState& state) = 0;
   // Where the snow layers live in host memory: C, S, U, P's own storage (read only, valid until the
   // stateVersion changes), so the avalanche runner reads them in place of a snapshot. False on a
   // device.
@@ -64,6 +64,13 @@ class SnowBackend {
     (void)layers;
     return false;
   }
+  // Calls `f` once, before the next kernel that may write the snow layers (any but the
+  // avalanche's); an empty `f` cancels. Fixed-time actions (a user's skiers, a timeline edit, a
+  // storm's edge) run even while an avalanche is in motion: the avalanche runner keeps the layers
+  // at release of the cells it has not reached before they change.
+  void beforeNextWrite(std::function<void()> f) { beforeWrite_ = std::move(f); }
+  // The skiers' storage freed and the route map forgotten (its owner, SkiRun, is gone).
+  virtual void releaseRouteMap() {}
   // Frees the scratch that no step holds between events: the fields made with the state, the
   // skiers' storage (uploadRouteMap again before the next batch) and, with `avalancheFields`
   // (no avalanche in motion), the avalanche's, made again at the next release.
@@ -140,6 +147,16 @@ class SnowBackend {
   virtual std::vector<float> avalancheSteps(const AvalancheArgs& args, int substeps) = 0;
   // Deposits the moving snow in the box and adds the scour and deposit records.
   virtual void avalancheSettle(const AvalancheArgs& box) = 0;
+ protected:
+  void fireBeforeWrite() {
+    if (!beforeWrite_) return;
+    const std::function<void()> f = std::move(beforeWrite_);
+    beforeWrite_ = nullptr;
+    f();
+  }
+
+ private:
+  std::function<void()> beforeWrite_;
 };
 
 }  // namespace snow

@@ -106,7 +106,11 @@ class ExecBackend final : public SnowBackend {
     SNOW_SCRATCH_FIELDS(SNOW_RELEASE_SCRATCH)
 #undef SNOW_RELEASE_SCRATCH
     scratchReleased_ = true;
-    if (avalancheFields) avalancheFieldsReady_ = false;  // made again, zeroed, at the next release
+    if (avalancheFields && avalancheFieldsReady_) avalancheFieldsReady_ = false, avalancheFieldsFreed_ = true;
+    releaseRouteMap();
+  }
+
+  void releaseRouteMap() override {
     freeBuffer(skiers_.route), freeBuffer(skiers_.claim), freeBuffer(skiers_.agents), freeBuffer(skiers_.path);
     skiers_.hostRoute = nullptr;
   }
@@ -197,10 +201,13 @@ class ExecBackend final : public SnowBackend {
   }
 
   void avalancheRelease(const std::vector<uint8_t>& moving, const AvalancheArgs& box) override {
-    const bool wholeGrid = !avalancheFieldsReady_;
-    if (wholeGrid) {  // the fields allocated on the first avalanche after an upload only
-      makeScratch(false);
-      avalancheFieldsReady_ = true;
+    // The whole grid on the first avalanche after an upload; fields freed for a frame
+    // (releaseScratch) are made again, zeroed, and released by box as before they were freed.
+    const bool wholeGrid = !avalancheFieldsReady_ && !avalancheFieldsFreed_;
+    if (!avalancheFieldsReady_) makeScratch(false);
+    avalancheFieldsReady_ = true;
+    avalancheFieldsFreed_ = false;
+    if (wholeGrid) {
       exec_.upload(snowMoving_, moving);
     } else {  // outside the last avalanche's box no flag is set: the release box's rows are enough
       putAvalancheAtRest(exec_, fieldsView(), avalancheTouched_);
@@ -250,15 +257,17 @@ class ExecBackend final : public SnowBackend {
   }
     SNOW_STATE_FIELDS(SNOW_UPLOAD_WITH_STATE)
 #undef SNOW_UPLOAD_WITH_STATE
-    avalancheFieldsReady_ = false;
+    avalancheFieldsReady_ = avalancheFieldsFreed_ = false;
     bed_.ready = false;
     makeScratch(true);
+    scratchReleased_ = false;
     uploadStaticFields(s);
   }
 
   // The kernels' view; every kernel but the avalanche's takes it through view(), which counts the
   // call (stateVersion: a kernel that only reads is counted too, which costs a download, no more).
   SnowFieldsView view() {
+    fireBeforeWrite();
     ++stateVersion_;
     return fieldsView();
   }
@@ -329,6 +338,7 @@ class ExecBackend final : public SnowBackend {
   Buffer<float> editWeight_;
   bool avalancheFieldsReady_ = false;
   bool scratchReleased_ = false;
+  bool avalancheFieldsFreed_ = false;  // by releaseScratch since the last release (not by an upload)
   uint64_t stateVersion_ = 0;
   AvalancheTouched avalancheTouched_;  // phenomena/avalanches.h
   BedformStorage<Exec> bed_;

@@ -123,6 +123,9 @@ const char* skierStopReason(int status);
 class SkiRun {
  public:
   SkiRun(SnowBackend& backend, const ModelParameters& p, const SnowState& state, SkiTracks* tracks);
+  ~SkiRun() { backend_.releaseRouteMap(); }  // a host backend reads route_ itself
+  SkiRun(const SkiRun&) = delete;
+  SkiRun& operator=(const SkiRun&) = delete;
   const Grid<float>& routeMap() const { return route_; }
   // The route map on the backend again, after SnowBackend::releaseScratch freed its copy.
   void uploadRouteMap() { backend_.uploadRouteMap(route_); }

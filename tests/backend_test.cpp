@@ -206,7 +206,8 @@ struct SnapshotLikeADevice : SerialExec {
 
 // On a host backend the avalanche runner reads the backend's own layers in place of a 16-byte
 // snapshot, and keeps the layers at release of the cells each step may reach: the same season,
-// avalanche records and maps (with frames of their motion) as from a snapshot.
+// avalanche records and maps (with frames of their motion) as from a snapshot, also where a
+// user's skiers compact snow while an avalanche runs.
 TEST(Backend, AvalanchesReadingTheLayersInPlaceAreTheBytesOfAvalanchesFromASnapshot) {
   const SnowState initial = test::makeRoughState(48, 40, 7);
   auto season = [&](SnowBackend& backend, SeasonReport& report) {
@@ -220,6 +221,8 @@ TEST(Backend, AvalanchesReadingTheLayersInPlaceAreTheBytesOfAvalanchesFromASnaps
     c.avalancheMaps = true;
     c.avalancheFrameIntervalS = 1.0;
     c.userAvalanches = {{1.0, 20, 10, false, nullptr}, {3.0, 0, 0, false, std::make_shared<std::vector<uint8_t>>(48 * 40, uint8_t{1})}};
+    // Skiers at the instant of the day-3 release: they compact snow while the avalanche runs.
+    c.userSkiers = {{3.0, 24, 4, 12, nullptr}};
     report = runSeason(backend, s, c);
     return s;
   };
@@ -282,4 +285,59 @@ TEST(Backend, AvalancheDepositAndFootprintFromTheCellsItMayReachAreTheWholeGrids
     ran += r.steps > 3;
   }
   EXPECT_GE(ran, 2) << "too few avalanches ran more than three steps";
+}
+
+// An edit (or a user's skiers) may write the layers while an avalanche runs: the runner keeps
+// every cell's layers at release first (SnowBackend::beforeNextWrite), so reading them in place
+// gives the records a snapshot taken at release gives.
+TEST(Backend, ALayerWrittenWhileAnAvalancheRunsLeavesItsRecordsAsFromASnapshotAtRelease) {
+  SnowState s = test::makeRoughState(64, 48, 11);
+  for (auto& u : s.unstableM.values()) u += 0.8f;
+  const ModelParameters p = testParameters();
+  auto avalanche = [&](SnowBackend& backend) {
+    backend.upload(s);
+    AvalancheRun run(backend, p, s);
+    EXPECT_TRUE(run.release(26, 14, 1.0, -5.0, true));
+    for (int k = 0; k < 3; ++k) run.step();
+    EditArgs add;
+    add.op = EditOp::Add, add.layer = 2, add.depthM = 0.25f;  // unstable snow everywhere, mid-avalanche
+    backend.applyEdit(add, {});
+    return run.runToRest();
+  };
+  ExecBackend<SerialExec> inPlace;
+  ExecBackend<SnapshotLikeADevice> snapshot;
+  const AvalancheRecord a = avalanche(inPlace), b = avalanche(snapshot);
+  ASSERT_GT(a.steps, 6);
+  EXPECT_GT(a.footprintCells, 0);
+  EXPECT_EQ(a.footprintCells, b.footprintCells);
+  EXPECT_EQ(a.depositM3, b.depositM3);
+  EXPECT_EQ(a.runoutM, b.runoutM);
+  EXPECT_EQ(a.fallHeightM, b.fallHeightM);
+}
+
+// The scratch a frame frees (SnowBackend::releaseScratch) comes back as it was: an avalanche
+// after it, with a layer written while it runs, leaves the bytes it leaves without the frame.
+TEST(Backend, ScratchFreedForAFrameChangesNoByteOfTheAvalanchesAfterIt) {
+  SnowState s = test::makeRoughState(64, 48, 11);
+  for (auto& u : s.unstableM.values()) u += 0.8f;
+  const ModelParameters p = testParameters();
+  auto season = [&](bool frame) {
+    ExecBackend<SerialExec> backend;
+    backend.upload(s);
+    AvalancheRun run(backend, p, s);
+    EXPECT_TRUE(run.release(8, 5, 1.0, -5.0, true));
+    run.runToRest();
+    if (frame) backend.releaseScratch(true), run.releaseScratch();
+    EXPECT_TRUE(run.release(26, 14, 1.0, -5.0, true));
+    for (int k = 0; k < 3; ++k) run.step();
+    EditArgs add;
+    add.op = EditOp::Add, add.layer = 2, add.depthM = 0.25f;
+    backend.applyEdit(add, {});
+    const AvalancheRecord r = run.runToRest();
+    EXPECT_GT(r.steps, 6);
+    SnowState end = s;
+    backend.download(end);
+    return end;
+  };
+  test::expectSameBytes(season(true), season(false));
 }

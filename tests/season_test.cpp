@@ -231,6 +231,7 @@ TEST(Season, FramesLentWhileTheSeasonWaitsAreTheBytesOfFramesCopied) {
     c.params.avalancheRatePerKm2PerDay = 20.0;
     c.params.skiersPerHour = 4.0;
     c.userAvalanches = {{25.0, 0, 0, false, std::make_shared<std::vector<uint8_t>>(64 * 64, uint8_t{1})}};
+    c.userSkiers = {{25.0, 30, 6, 12, nullptr}};  // skiing while it runs
     c.frameDays = frameDays;
     c.recordFields = fieldBit(SnowField::meltedM) | fieldBit(SnowField::avalancheDepositM);
     c.lendFrames = lend;
