@@ -145,6 +145,7 @@ void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const Laye
     }
   }
   const bool now = range.mode != RangeMode::Season || src_.plan;  // plan: listed once, on the day
+  SpillFile::Extent values, mask;  // the layer and its mask on disk, once for all its encodings
   for (const std::string& encoding : out.encodings) {
     if (encoding == "r32") {  // floats as they are: no range
       writeRawFloatRaster(set, baseOf(d), d.day, layer.name, grid, content, layer.unit);
@@ -155,8 +156,10 @@ void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const Laye
     const std::lock_guard lock(seasonMutex_);
     const bool masked = valid->width() == grid.width() && valid->height() == grid.height();
     if (!spill_) spill_ = std::make_unique<SpillFile>(src_.outDir);
-    const SpillFile::Extent values = spill_->put(grid.values());
-    const SpillFile::Extent mask = masked ? spill_->put(valid->values()) : SpillFile::Extent{};
+    if (values.bytes == 0) {
+      values = spill_->put(grid.values());
+      if (masked) mask = spill_->put(valid->values());
+    }
     seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid.width(), grid.height(), values, mask, set});
   }
 }

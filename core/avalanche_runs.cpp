@@ -29,6 +29,10 @@ double surfaceAt(const Grid<float>& bedrock, size_t i, const SnowBox& b, size_t 
 }
 }  // namespace
 
+AvalancheRun::~AvalancheRun() {
+  if (active_) backend_.beforeNextWrite(nullptr);  // its hook calls back into this runner
+}
+
 AvalancheRun::AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain)
     : backend_(backend), p_(params), terrain_(terrain) {
   for (int dy = -1; dy <= 1; ++dy)
@@ -58,7 +62,8 @@ void AvalancheRun::takeSnapshot() {
 // rows' weights are stale.
 void AvalancheRun::keepSnapshotOfBox() {
   const int w = terrain_.spec.width;
-  for (int y = unionBox_.y0; y < unionBox_.y1 && layers_[0] == snapshot_.compacted.data(); ++y) {
+  const bool held = layers_[0] == snapshot_.compacted.data();  // not where the layers are read in place
+  for (int y = unionBox_.y0; held && y < unionBox_.y1; ++y) {
     const size_t i = static_cast<size_t>(y) * w + unionBox_.x0, j = after_.index(unionBox_.x0, y);
     const size_t n = static_cast<size_t>(unionBox_.x1 - unionBox_.x0);
     for (auto [to, from] : {std::pair{&snapshot_.compacted, &after_.compacted}, {&snapshot_.stable, &after_.stable},
@@ -338,8 +343,8 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
 
 // Widens before_ to hold [x0, x1) x [y0, y1) (with a margin, so that a box growing a cell a
 // substep widens it every few steps only): its cells outside the old box have not changed since
-// the release (no step has reached them; while an avalanche runs nothing else does), so layers_
-// holds their values at release.
+// the release (no step has reached them, and a write by anything else first widens the box to the
+// grid: SnowBackend::beforeNextWrite), so layers_ holds their values at release.
 void AvalancheRun::growBeforeBox(int x0, int y0, int x1, int y1) {
   const GridSpec& g = terrain_.spec;
   SnowBox& b = before_;

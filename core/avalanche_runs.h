@@ -81,6 +81,9 @@ class AvalancheRun {
   // `terrain` supplies the grid, bedrock, valid cells and release factors (the backend holds the
   // snow); the run reads them through a reference, so the state must outlive it.
   AvalancheRun(SnowBackend& backend, const ModelParameters& params, const SnowState& terrain);
+  ~AvalancheRun();
+  AvalancheRun(const AvalancheRun&) = delete;
+  AvalancheRun& operator=(const AvalancheRun&) = delete;
   AvalancheRun(SnowBackend& backend, const ModelParameters& params, SnowState&& terrain) = delete;
   // It keeps a reference to the parameters: a temporary would dangle (AddressSanitizer found
   // three callers doing so: stack-use-after-scope).

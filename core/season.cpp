@@ -273,12 +273,23 @@ void SeasonRun::addFrames() {
   }
 }
 
-// The state now, on the host: the host's own fields (terrain and host-only; its copies of the
-// backend's were released) and a download of the rest, with the record fields the season keeps
-// only; the ski-track texture faded to it.
-SnowState SeasonRun::frameCopy() {
+namespace {
+// The fields a frame set aside keeps on disk: what a frame downloads.
+bool setAside(FieldRole r) { return downloadedWithState(r) || r == FieldRole::BedformResult; }
+}  // namespace
+
+// The host's own fields of a frame: terrain and host-only (its copies of the backend's were
+// released), with the terrain's own valid cells.
+SnowState SeasonRun::hostFrame() const {
   SnowState frame = state_;
   if (noSnow_) frame.validCell = terrainValid_;
+  return frame;
+}
+
+// The state now, on the host: hostFrame and a download of the rest, with the record fields the
+// season keeps only; the ski-track texture faded to it.
+SnowState SeasonRun::frameCopy() {
+  SnowState frame = hostFrame();
   frame.restoreFields(downloadedWithState, cfg_.recordFields);
   backend_.download(frame);
   if (cfg_.skiTracks) cfg_.skiTracks->fade(frame);
@@ -315,7 +326,7 @@ void SeasonRun::setFrameAside(double day) {
   FrameSetAside f;
   f.day = day;
   forEachSnowField(frame, [&](const SnowFieldInfo& info, auto& grid) {
-    if (downloadedWithState(info.role) || info.role == FieldRole::BedformResult) f.fields.push_back(spill_->put(grid.values()));
+    if (setAside(info.role)) f.fields.push_back(spill_->put(grid.values()));
   });
   if (cfg_.skiTracks) f.skiDepth = spill_->put(cfg_.skiTracks->depth().values());
   framesSetAside_.push_back(std::move(f));
@@ -329,11 +340,10 @@ void SeasonRun::writeFramesSetAside(bool seasonEnd) {
   if (framesSetAside_.empty() || (moving && !seasonEnd)) return;
   if (!moving) releaseScratch();
   for (const FrameSetAside& f : framesSetAside_) {
-    SnowState frame = state_;
-    if (noSnow_) frame.validCell = terrainValid_;
+    SnowState frame = hostFrame();
     size_t k = 0;
     forEachSnowField(frame, [&](const SnowFieldInfo& info, auto& grid) {
-      if (!downloadedWithState(info.role) && info.role != FieldRole::BedformResult) return;
+      if (!setAside(info.role)) return;
       using Element = typename std::decay_t<decltype(grid)>::value_type;
       const SpillFile::Extent& e = f.fields[k++];
       if (e.bytes == 0) grid = std::decay_t<decltype(grid)>();

@@ -68,6 +68,7 @@ class SeasonRun {
   // season.cpp again
   void addStaticFieldRefresh();
   void addFrames();
+  SnowState hostFrame() const;
   SnowState frameCopy();
   void writeLentFrame(double day);
   void setFrameAside(double day);
