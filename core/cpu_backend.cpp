@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "exec_backend.h"
+#include "phenomena/avalanche_rows.h"
 #include "phenomena/powder_diffusion_rows.h"
 #include "phenomena/surface_slope_rows.h"
 #include "serial_exec.h"

@@ -14,6 +14,7 @@
 
 #include "core/avalanche_runs.h"
 #include "core/cpu_backend.h"
+#include "core/simd_lanes.h"
 #include "core/rng.h"
 #include "bakers/grid_writer.h"
 #include "bake_support.h"
@@ -387,6 +388,42 @@ TEST(Avalanche, SameBytesSerialAndOnOneAndTwoThreads) {
     const Outcome b = runAvalanche(s, rx, ry, ModelParameters{}, createCpuBackend());
     test::expectSameBytes(a.state, b.state);
     EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float))) << threads;
+  }
+}
+
+// The TBB executor's row paths for the avalanche passes (avalanche_rows.h: flow, scale and row
+// statistics eight cells at a time with AVX2 or four with SSE2, heights four with AVX2; the
+// grid's edges and the spans' tails cell by cell) give the per-cell bodies' bytes, as the serial
+// executor runs them: on rough terrain with NODATA holes reaching the grid's edges, dry, wet and
+// in between (the temperature crosses T_dry and T_wet from cell to cell), with and without the
+// turbulent drag, with T_dry = T_wet, and with no stop thickness; every field, peaks included.
+TEST(Avalanche, RowPathsGiveThePerCellBodiesBytesDryWetAndWithDrag) {
+  SnowState s = test::makeRoughState(61, 47, 11);
+  for (int y = 0; y < 47; ++y)
+    for (int x = 0; x < 61; ++x) {
+      s.temperatureBaseC(x, y) = static_cast<float>(-14.0 + 0.27 * x + 0.05 * y);  // -14 to 4.5 degrees
+      if (s.validCell(x, y)) s.unstableM(x, y) = 0.4f + 0.02f * static_cast<float>((x * 7 + y * 3) % 50);
+    }
+  int rx = 30, ry = 23;
+  while (!s.validCell(rx, ry)) ++rx;
+  ModelParameters wetIsDry, noDrag, noStop;
+  wetIsDry.avalancheWetTemperatureC = wetIsDry.avalancheDryTemperatureC = -5.0;
+  noDrag.avalancheTurbulenceMps2 = 0.0;
+  noStop.avalancheStopThicknessM = 0.0;
+  const std::pair<const char*, ModelParameters> cases[] = {
+      {"defaults", ModelParameters{}}, {"T_dry = T_wet", wetIsDry}, {"no drag", noDrag}, {"no stop thickness", noStop}};
+  for (const auto& [name, p] : cases) {
+    const Outcome serial = runAvalanche(s, rx, ry, p, createSerialBackend());
+    ASSERT_GT(serial.record.steps, 5) << name;
+    for (const bool avx2 : {true, false}) {
+      SCOPED_TRACE(std::string(name) + (avx2 ? ", AVX2 allowed" : ", SSE2 alone"));
+      lanesAvx2Allowed() = avx2;
+      const Outcome rows = runAvalanche(s, rx, ry, p, createCpuBackend());
+      lanesAvx2Allowed() = true;
+      test::expectSameBytes(serial.state, rows.state);
+      EXPECT_EQ(serial.state.avalancheDepositM.values(), rows.state.avalancheDepositM.values());
+      EXPECT_EQ(serial.record.steps, rows.record.steps);
+    }
   }
 }
 

@@ -130,7 +130,7 @@ TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
   for (const bool avx2 : {true, false}) {
     for (const auto& shape : shapes) {
       SCOPED_TRACE(std::to_string(shape[0]) + " x " + std::to_string(shape[1]) + (avx2 ? ", AVX2 allowed" : ", SSE2 alone"));
-      powderAvx2Allowed() = avx2;
+      lanesAvx2Allowed() = avx2;
       const SnowState initial = test::makeRoughState(shape[0], shape[1], 3, 2.0, 3.0);
       auto serial = createSerialBackend();
       auto cpu = createCpuBackend();
@@ -145,7 +145,7 @@ TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
       }
       serial->download(a);
       cpu->download(b);
-      powderAvx2Allowed() = true;
+      lanesAvx2Allowed() = true;
       test::expectSameBytes(a, b);
       if (shape[0] >= 37) {
         EXPECT_NE(a.powderM.values(), initial.powderM.values()) << "no powder moved";

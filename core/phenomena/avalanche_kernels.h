@@ -271,21 +271,27 @@ struct AvalancheRowStatsKernel {
     const int y = a.y0 + row;
     float speed = 0.f, energy = 0.f;
     int lo = v.width, hi = -1;
-    const float c = v.cellSizeXM * v.cellSizeYM;
     int x0 = 0, x1 = -1;
     avalancheRowSpan(v, a, y, k, x0, x1);
-    for (int x = x0; x <= x1; ++x) {
-      AvalancheClearIdleKernel{v, a}(x, y);  // the cell's own pipes, which are all it reads
-      const int i = v.index(x, y);
-      float fastest = 0.f;
-      for (int d = 0; d < 4; ++d) fastest = maxf(fastest, fabsf(movedPipe(v, x, y, i, d)) / c);
-      speed = maxf(speed, fastest);
-      if (avalancheSource(v, a, i)) {  // the box follows the snow that can still flow
-        energy += 0.5f * c * v.unstable[i] * fastest * fastest;
-        if (x < lo) lo = x;
-        hi = x;
-      }
+    for (int x = x0; x <= x1; ++x) cell(x, y, speed, energy, lo, hi);
+    store(y, speed, energy, lo, hi);
+  }
+  // Cell (x, y) of the row, in column order: its idle pipes cleared, then the row's fastest pipe,
+  // kinetic energy and columns of snow that can flow taken in.
+  SNOW_HD void cell(int x, int y, float& speed, float& energy, int& lo, int& hi) const {
+    AvalancheClearIdleKernel{v, a}(x, y);  // the cell's own pipes, which are all it reads
+    const int i = v.index(x, y);
+    const float c = v.cellSizeXM * v.cellSizeYM;
+    float fastest = 0.f;
+    for (int d = 0; d < 4; ++d) fastest = maxf(fastest, fabsf(movedPipe(v, x, y, i, d)) / c);
+    speed = maxf(speed, fastest);
+    if (avalancheSource(v, a, i)) {  // the box follows the snow that can still flow
+      energy += 0.5f * c * v.unstable[i] * fastest * fastest;
+      if (x < lo) lo = x;
+      hi = x;
     }
+  }
+  SNOW_HD void store(int y, float speed, float energy, int lo, int hi) const {
     float* s = avalancheRowStats(v, y, 1 - a.statsIn);
     s[0] = speed;
     s[1] = energy;

@@ -34,7 +34,8 @@
 // Mass: conserved (see above); the scour and deposit records (avalancheScourM, avalancheDepositM)
 // are kept at the settle.
 // Backend: SnowBackend::avalancheRelease, avalancheSteps and avalancheSettle (ExecBackend runs
-// the functions below). Host runner: AvalancheRun (core/avalanche_runs.h: the release zone,
+// the functions below; the TBB executor runs the three passes' rows several cells at a time,
+// avalanche_rows.h, to the per-cell bodies' bytes). Host runner: AvalancheRun (core/avalanche_runs.h: the release zone,
 // the substep length, the box, the records). Season: SeasonRun::addAvalanches
 // (core/season_avalanches.cpp). Parameters: the §6.1 blocks of ModelParameters
 // (core/parameters.h; scene keys in parameterTable, parameters.cpp).

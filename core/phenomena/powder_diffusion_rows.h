@@ -7,24 +7,11 @@
 // the serial executor's and CUDA's, which run the per-cell bodies (the tests compare the serial
 // and TBB executors byte for byte). Host only: never included by CUDA translation units.
 #pragma once
-#include <atomic>
-#include <cstring>
 #include <vector>
 
 #include "powder_diffusion.h"
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-// The AVX2 body needs GCC's per-function target pragma (clang does not take it).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__SSE2__)
-#define SNOW_POWDER_AVX2 1
-#else
-#define SNOW_POWDER_AVX2 0
-#endif
-#if SNOW_POWDER_AVX2
-#include <immintrin.h>
-#endif
+#include "../simd_lanes.h"
 
 namespace snow {
 
@@ -61,99 +48,24 @@ class PowderRowBuffer {
 };
 
 #if defined(__SSE2__)
-namespace simd_detail {
-// Four bytes (0 / non-zero) as a four-lane mask.
-inline __m128 byteMask(const uint8_t* p) {
-  int32_t word;
-  std::memcpy(&word, p, 4);
-  const __m128i zero = _mm_setzero_si128();
-  const __m128i wide = _mm_unpacklo_epi16(_mm_unpacklo_epi8(_mm_cvtsi32_si128(word), zero), zero);
-  return _mm_castsi128_ps(_mm_xor_si128(_mm_cmpeq_epi32(wide, zero), _mm_set1_epi32(-1)));
-}
-inline __m128 select(__m128 mask, __m128 a, __m128 b) { return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b)); }
-
-// Vector operations for powder_diffusion_lanes.inc: MINPS / MAXPS return the second operand
-// unless the first is strictly less / greater, exactly minf / maxf.
-struct Sse2 {
-  using F = __m128;
-  static constexpr int kLanes = 4;
-  static F zero() { return _mm_setzero_ps(); }
-  static F set1(float a) { return _mm_set1_ps(a); }
-  static F load(const float* p) { return _mm_loadu_ps(p); }
-  static void store(float* p, F a) { _mm_storeu_ps(p, a); }
-  static F add(F a, F b) { return _mm_add_ps(a, b); }
-  static F sub(F a, F b) { return _mm_sub_ps(a, b); }
-  static F mul(F a, F b) { return _mm_mul_ps(a, b); }
-  static F div(F a, F b) { return _mm_div_ps(a, b); }
-  static F min(F a, F b) { return _mm_min_ps(a, b); }
-  static F max(F a, F b) { return _mm_max_ps(a, b); }
-  static F sqrt(F a) { return _mm_sqrt_ps(a); }
-  static F gt(F a, F b) { return _mm_cmpgt_ps(a, b); }
-  static F ge(F a, F b) { return _mm_cmpge_ps(a, b); }
-  static F notGt(F a, F b) { return _mm_cmpngt_ps(a, b); }
-  static F bitAnd(F a, F b) { return _mm_and_ps(a, b); }
-  static F bitAndNot(F a, F b) { return _mm_andnot_ps(a, b); }
-  static F select(F mask, F a, F b) { return simd_detail::select(mask, a, b); }
-  static bool none(F mask) { return _mm_movemask_ps(mask) == 0; }
-  static F byteMask(const uint8_t* p) { return simd_detail::byteMask(p); }
-};
-}  // namespace simd_detail
-
 namespace sse2_lanes {
 using V = simd_detail::Sse2;
 #include "powder_diffusion_lanes.inc"
 }  // namespace sse2_lanes
 #endif
 
-#if SNOW_POWDER_AVX2
+#if SNOW_LANES_AVX2
 // The same body eight cells at a time, compiled for AVX2 (no FMA) and used when the CPU has it:
 // the same bytes as SSE2 and the per-cell body.
 #pragma GCC push_options
 #pragma GCC target("avx2")
 namespace avx2_lanes {
-struct Avx2 {
-  using F = __m256;
-  static constexpr int kLanes = 8;
-  static F zero() { return _mm256_setzero_ps(); }
-  static F set1(float a) { return _mm256_set1_ps(a); }
-  static F load(const float* p) { return _mm256_loadu_ps(p); }
-  static void store(float* p, F a) { _mm256_storeu_ps(p, a); }
-  static F add(F a, F b) { return _mm256_add_ps(a, b); }
-  static F sub(F a, F b) { return _mm256_sub_ps(a, b); }
-  static F mul(F a, F b) { return _mm256_mul_ps(a, b); }
-  static F div(F a, F b) { return _mm256_div_ps(a, b); }
-  static F min(F a, F b) { return _mm256_min_ps(a, b); }
-  static F max(F a, F b) { return _mm256_max_ps(a, b); }
-  static F sqrt(F a) { return _mm256_sqrt_ps(a); }
-  static F gt(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_GT_OQ); }
-  static F ge(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_GE_OQ); }
-  static F notGt(F a, F b) { return _mm256_cmp_ps(a, b, _CMP_NGT_UQ); }
-  static F bitAnd(F a, F b) { return _mm256_and_ps(a, b); }
-  static F bitAndNot(F a, F b) { return _mm256_andnot_ps(a, b); }
-  static F select(F mask, F a, F b) { return _mm256_blendv_ps(b, a, mask); }
-  static bool none(F mask) { return _mm256_movemask_ps(mask) == 0; }
-  static F byteMask(const uint8_t* p) {
-    const __m256i wide = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
-    return _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(wide, _mm256_setzero_si256()), _mm256_set1_epi32(-1)));
-  }
-};
-using V = Avx2;
+using V = simd_detail::Avx2;
 #include "powder_diffusion_lanes.inc"
 }  // namespace avx2_lanes
 #pragma GCC pop_options
 
-inline bool cpuHasAvx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
 #endif
-
-// Whether the shares pass may take the AVX2 body where the CPU has it (tests turn it off to check
-// the SSE2 body alone against the per-cell one).
-inline std::atomic<bool>& powderAvx2Allowed() {
-  static std::atomic<bool> allowed{true};
-  return allowed;
-}
 
 // Pass 1 on row y: every cell's shares and what it keeps, into `out` (PowderBaseKernel has run).
 inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowShares& out) {
@@ -168,8 +80,8 @@ inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowSha
 #if defined(__SSE2__)
   if (y > 0 && y < v.height - 1) {
     for (; x < v.width && x < 1; ++x) scalar(x);  // the west edge: its neighbour tests need bounds
-#if SNOW_POWDER_AVX2
-    if (cpuHasAvx2() && powderAvx2Allowed().load(std::memory_order_relaxed)) x = avx2_lanes::sharesLanes(k, y, out, x, v.width - 1);
+#if SNOW_LANES_AVX2
+    if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed)) x = avx2_lanes::sharesLanes(k, y, out, x, v.width - 1);
 #endif
     x = sse2_lanes::sharesLanes(k, y, out, x, v.width - 1);
   }
