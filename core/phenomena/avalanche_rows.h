@@ -29,11 +29,22 @@ using V = simd_detail::Avx2;
 #pragma GCC pop_options
 #endif
 
+// Where lanes `lanes` wide starting at x stop for cells [x, end): at end, or past it to the end of
+// their last whole vector when that stays within `limit`. The box's cells past a row's span hold
+// no flows and no snow that can flow, so every pass leaves them as they are (InRowSpans): the
+// bytes are the span's, and the span's tail takes no per-cell loop.
+inline int lanesEnd(int x, int end, int limit, int lanes) {
+  if (end <= x) return end;
+  const int whole = x + (end - x + lanes - 1) / lanes * lanes;
+  return whole <= limit ? whole : end;
+}
+
 // Row `row` of the box at k's substep: the per-cell body where a neighbour may be outside the
-// grid (the first and last row and column) and on the span's tail, `lanes(kernel, y, x, end)` on
-// the cells between, which returns where it stopped; then `sse2` the same way.
+// grid (the first and last row and column) and on what the lanes leave of the span,
+// `avx2(kernel, y, x, end)` (avx2Lanes wide) on the cells between, which returns where it
+// stopped; then `sse2` (four wide) the same way.
 template <class K, class Avx2, class Sse2Lanes>
-void avalancheRowSpan(const InRowSpans<K>& k, int row, Avx2 avx2, Sse2Lanes sse2) {
+void avalancheRowSpan(const InRowSpans<K>& k, int row, Avx2 avx2, int avx2Lanes, Sse2Lanes sse2) {
   const SnowFieldsView& v = k.v;
   const int y = k.a.y0 + row;
   int lo = 0, hi = -1;
@@ -41,11 +52,12 @@ void avalancheRowSpan(const InRowSpans<K>& k, int row, Avx2 avx2, Sse2Lanes sse2
   int x = lo;
   if (y > 0 && y < v.height - 1) {
     for (; x <= hi && x < 1; ++x) k.kernel(x, y);
-    const int end = hi + 1 < v.width - 1 ? hi + 1 : v.width - 1;
+    const int limit = k.a.x1 < v.width - 1 ? k.a.x1 : v.width - 1;  // in the box, every neighbour in the grid
+    const int end = hi + 1 < limit ? hi + 1 : limit;
 #if SNOW_LANES_AVX2
-    if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed)) x = avx2(k.kernel, y, x, end);
+    if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed)) x = avx2(k.kernel, y, x, lanesEnd(x, end, limit, avx2Lanes));
 #endif
-    x = sse2(k.kernel, y, x, end);
+    x = sse2(k.kernel, y, x, lanesEnd(x, end, limit, 4));
   }
   for (; x <= hi; ++x) k.kernel(x, y);
 }
@@ -60,22 +72,22 @@ void avalancheRowSpan(const InRowSpans<K>& k, int row, Avx2 avx2, Sse2Lanes sse2
 // TbbExec::forEachCell calls these for the box's rows (found by argument-dependent lookup).
 inline void rowSpan(const InRowSpans<AvalancheFlowKernel>& k, int row, int, int) {
   avalancheRowSpan(
-      k, row, [](const AvalancheFlowKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(flowLanes(f, y, x, end)); },
+      k, row, [](const AvalancheFlowKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(flowLanes(f, y, x, end)); }, 8,
       [](const AvalancheFlowKernel& f, int y, int x, int end) { return sse2_lanes::flowLanes(f, y, x, end); });
 }
 inline void rowSpan(const InRowSpans<AvalancheScaleKernel>& k, int row, int, int) {
   avalancheRowSpan(
-      k, row, [](const AvalancheScaleKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(scaleLanes(f, y, x, end)); },
+      k, row, [](const AvalancheScaleKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(scaleLanes(f, y, x, end)); }, 8,
       [](const AvalancheScaleKernel& f, int y, int x, int end) { return sse2_lanes::scaleLanes(f, y, x, end); });
 }
 inline void rowSpan(const InRowSpans<AvalancheHeightKernel>& k, int row, int, int) {
   avalancheRowSpan(
-      k, row, [](const AvalancheHeightKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(heightLanes(f, y, x, end)); },
+      k, row, [](const AvalancheHeightKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(heightLanes(f, y, x, end)); }, 4,
       [](const AvalancheHeightKernel&, int, int x, int) { return x; });  // no SSE2 body: the per-cell one
 }
 
 // The row statistics after a step's substeps: the per-cell part (AvalancheRowStatsKernel::cell)
-// at the grid's edges and the span's tail, lanes between, in column order.
+// at the grid's edges and on what the lanes leave of the span, lanes between, in column order.
 inline void rowSpan(const AvalancheRowStatsKernel& k, int row, int, int) {
   const SnowFieldsView& v = k.v;
   const int y = k.a.y0 + row;
@@ -85,12 +97,13 @@ inline void rowSpan(const AvalancheRowStatsKernel& k, int row, int, int) {
   int x = x0;
   if (y > 0 && y < v.height - 1) {
     for (; x <= x1 && x < 1; ++x) k.cell(x, y, speed, energy, lo, hi);
-    const int end = x1 + 1 < v.width - 1 ? x1 + 1 : v.width - 1;
+    const int limit = k.a.x1 < v.width - 1 ? k.a.x1 : v.width - 1;
+    const int end = x1 + 1 < limit ? x1 + 1 : limit;
 #if SNOW_LANES_AVX2
     if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed))
-      x = avx2_lanes::rowStatsLanes(k, y, x, end, speed, energy, lo, hi);
+      x = avx2_lanes::rowStatsLanes(k, y, x, lanesEnd(x, end, limit, 8), speed, energy, lo, hi);
 #endif
-    x = sse2_lanes::rowStatsLanes(k, y, x, end, speed, energy, lo, hi);
+    x = sse2_lanes::rowStatsLanes(k, y, x, lanesEnd(x, end, limit, 4), speed, energy, lo, hi);
   }
   for (; x <= x1; ++x) k.cell(x, y, speed, energy, lo, hi);
   k.store(y, speed, energy, lo, hi);
