@@ -6,6 +6,7 @@
 #include <limits>
 #include <utility>
 
+#include "simd_lanes.h"
 #include "util.h"
 
 namespace snow {
@@ -94,6 +95,49 @@ double AvalancheRun::steepestDrop(int x, int y) const {
   return slope;
 }
 
+#if SNOW_LANES_AVX2
+#pragma GCC push_options
+#pragma GCC target("avx2")
+namespace {
+// releaseWeights' cells [0, width) of a row four at a time from x (its ring rows padded with +inf
+// at both ends, so every cell has its neighbours): the per-cell loop's double operations in its
+// order. std::min(a, b) is (b < a ? b : a), MINPD(b, a); std::max(a, b) is (a < b ? b : a),
+// MAXPD(b, a). Returns where it stopped.
+int releaseWeightsLanes(const double* up, const double* mid, const double* down, const float* u, const uint8_t* valid, const float* factor,
+                        int width, double minUnstable, double lx, double ly, double ld, double tanRest, double share, double* out) {
+  const __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), least = _mm256_set1_pd(minUnstable);
+  const __m256d perX = _mm256_set1_pd(lx), perY = _mm256_set1_pd(ly), perD = _mm256_set1_pd(ld);
+  const __m256d rest = _mm256_set1_pd(tanRest), perShare = _mm256_set1_pd(share);
+  int x = 0;
+  for (; x + 4 <= width; x += 4) {
+    int32_t bytes;
+    std::memcpy(&bytes, valid + x, 4);
+    const __m256d isValid = _mm256_castsi256_pd(_mm256_xor_si256(_mm256_cmpeq_epi64(_mm256_cvtepu8_epi64(_mm_cvtsi32_si128(bytes)), _mm256_setzero_si256()),
+                                                                 _mm256_set1_epi64x(-1)));
+    const __m256d ux = _mm256_cvtps_pd(_mm_loadu_ps(u + x));
+    const __m256d candidate = _mm256_and_pd(isValid, _mm256_cmp_pd(ux, least, _CMP_GE_OQ));
+    if (_mm256_movemask_pd(candidate) == 0) {
+      _mm256_storeu_pd(out + x, zero);
+      continue;
+    }
+    const __m256d a = _mm256_loadu_pd(mid + x + 1);
+    const __m256d nx = _mm256_min_pd(_mm256_loadu_pd(mid + x + 2), _mm256_loadu_pd(mid + x));
+    const __m256d ny = _mm256_min_pd(_mm256_loadu_pd(down + x + 1), _mm256_loadu_pd(up + x + 1));
+    const __m256d nd = _mm256_min_pd(_mm256_min_pd(_mm256_loadu_pd(down + x + 2), _mm256_loadu_pd(down + x)),
+                                     _mm256_min_pd(_mm256_loadu_pd(up + x + 2), _mm256_loadu_pd(up + x)));
+    const __m256d first = _mm256_max_pd(_mm256_div_pd(_mm256_sub_pd(a, nx), perX), zero);
+    const __m256d second = _mm256_max_pd(_mm256_div_pd(_mm256_sub_pd(a, nd), perD), _mm256_div_pd(_mm256_sub_pd(a, ny), perY));
+    const __m256d excess = _mm256_sub_pd(_mm256_max_pd(second, first), rest);
+    const __m256d f = factor ? _mm256_cvtps_pd(_mm_loadu_ps(factor + x)) : one;
+    const __m256d weight = _mm256_min_pd(_mm256_div_pd(_mm256_mul_pd(_mm256_mul_pd(f, ux), excess), perShare), one);
+    _mm256_storeu_pd(out + x, _mm256_and_pd(_mm256_and_pd(candidate, _mm256_cmp_pd(excess, zero, _CMP_GT_OQ)), weight));
+  }
+  return x;
+}
+}  // namespace
+#pragma GCC pop_options
+#endif
+
 // The release weights of rows [y0, y1) into w, row after row: min(1, f U (s - tan theta_c) /
 // (1 - tan theta_c)) where the cell is valid with U >= avalanche_min_unstable_m and s > tan theta_c,
 // else 0. s is steepestDrop's value: the largest of (A - A_n) / L_n is, for each of the three
@@ -104,6 +148,7 @@ void AvalancheRun::releaseWeights(int y0, int y1, double* w) const {
   const int width = g.width;
   const double inf = std::numeric_limits<double>::infinity();
   const double tanRest = std::tan(p_.avalancheRestAngleDeg * kPi / 180.0);
+  const double share = std::max(1e-6, 1.0 - tanRest);  // the weight's denominator
   const bool factors = terrain_.avalancheReleaseFactor.size() == g.cellCount();
   const double lx = neighbourDistanceM_[5], ly = neighbourDistanceM_[7], ld = neighbourDistanceM_[8];
   const uint8_t* valid = terrain_.validCell.values().data();
@@ -127,7 +172,13 @@ void AvalancheRun::releaseWeights(int y0, int y1, double* w) const {
     const double *up = rowOf(y - 1), *mid = rowOf(y), *down = rowOf(y + 1);
     double* out = w + static_cast<size_t>(y - y0) * width;
     const size_t i0 = static_cast<size_t>(y) * width;
-    for (int x = 0; x < width; ++x) {
+    int x = 0;
+#if SNOW_LANES_AVX2
+    if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed))
+      x = releaseWeightsLanes(up, mid, down, u + i0, valid + i0, factor ? factor + i0 : nullptr, width, p_.avalancheMinUnstableM, lx, ly, ld,
+                              tanRest, share, out);
+#endif
+    for (; x < width; ++x) {
       out[x] = 0.0;
       const double ux = u[i0 + x];
       if (!valid[i0 + x] || !(ux >= p_.avalancheMinUnstableM)) continue;
@@ -136,7 +187,7 @@ void AvalancheRun::releaseWeights(int y0, int y1, double* w) const {
       const double nd = std::min(std::min(up[x], up[x + 2]), std::min(down[x], down[x + 2]));
       const double excess = std::max(std::max(0.0, (a - nx) / lx), std::max((a - ny) / ly, (a - nd) / ld)) - tanRest;
       const double f = factor ? factor[i0 + x] : 1.0;
-      if (excess > 0.0) out[x] = std::min(1.0, f * ux * excess / std::max(1e-6, 1.0 - tanRest));
+      if (excess > 0.0) out[x] = std::min(1.0, f * ux * excess / share);
     }
   }
 }

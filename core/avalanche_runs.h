@@ -128,6 +128,10 @@ class AvalancheRun {
   // bytes the spans must give: Avalanche.RowSpansGiveTheSameBytesAsTheWholeBox).
   void useRowSpans(bool on) { rowSpans_ = on; }
 
+  // The spontaneous release weights of rows [y0, y1), width doubles a row, into w (public for
+  // the tests, which check its AVX2 lanes against its per-cell loop).
+  void releaseWeights(int y0, int y1, double* w) const;
+
  private:
   bool releaseFromSnapshot(int x, int y, double day, double seaLevelTemperatureC, bool user);
   // tan of the steepest drop of the snapshot's snow surface from (x, y) to a valid 8-neighbour.
@@ -168,7 +172,6 @@ class AvalancheRun {
   std::vector<double> rowStartWeights_;
   std::vector<double> rowWeights_;  // each row's weights summed in order
   std::vector<double> weights_;     // a band of rows' release weights
-  void releaseWeights(int y0, int y1, double* w) const;
   void weighRows(int r0, int r1);
   // The snapshot kept between tries: while the backend's stateVersion is the one it was taken at,
   // only the avalanches since have changed the state, and settle() copies their boxes in.

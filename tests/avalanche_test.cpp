@@ -427,6 +427,38 @@ TEST(Avalanche, RowPathsGiveThePerCellBodiesBytesDryWetAndWithDrag) {
   }
 }
 
+// The spontaneous release weights four cells at a time with AVX2 (releaseWeightsLanes) are the
+// per-cell loop's doubles, on a rough terrain with NODATA holes, cliffs and a grid width that is
+// not a multiple of four, with and without the scene's release factors; some cells weigh
+// something, some are capped at 1.
+TEST(Avalanche, ReleaseWeightsInLanesAreThePerCellLoopsDoubles) {
+  for (const bool factors : {false, true}) {
+    SCOPED_TRACE(factors ? "release factors" : "no release factors");
+    SnowState s = test::makeRoughState(61, 47, 5, 2.0, 6.0);
+    for (int y = 0; y < 47; ++y)
+      for (int x = 0; x < 61; ++x) s.unstableM(x, y) = 0.05f * static_cast<float>((3 * x + y) % 13);
+    if (factors) {
+      s.avalancheReleaseFactor.resize(61, 47);
+      for (int y = 0; y < 47; ++y)
+        for (int x = 0; x < 61; ++x) s.avalancheReleaseFactor(x, y) = 0.25f * static_cast<float>((x + 2 * y) % 9);
+    }
+    auto backend = createCpuBackend();
+    backend->upload(s);
+    const ModelParameters params;
+    AvalancheRun run(*backend, params, s);
+    ASSERT_TRUE(run.trySpontaneous(0.5, 10.0, -5.0));  // the try points the run at the layers
+    std::vector<double> lanes(61 * 47), cells(61 * 47);
+    run.releaseWeights(0, 47, lanes.data());
+    lanesAvx2Allowed() = false;
+    run.releaseWeights(0, 47, cells.data());
+    lanesAvx2Allowed() = true;
+    EXPECT_EQ(0, std::memcmp(lanes.data(), cells.data(), lanes.size() * sizeof(double)));
+    EXPECT_GT(std::count_if(cells.begin(), cells.end(), [](double w) { return w > 0.0 && w < 1.0; }), 20);
+    EXPECT_GT(std::count(cells.begin(), cells.end(), 1.0), 0);
+    EXPECT_GT(std::count(cells.begin(), cells.end(), 0.0), 20);
+  }
+}
+
 // A release on a rough diagonal slope runs along a band of snow across the grid, so its box holds
 // far more cells than its path: the passes over the rows' spans give the same bytes as the passes
 // over the whole box (state, scour and deposit, the record's steps and runout).
