@@ -13,7 +13,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config
-  libembree-dev libopenvdb-dev libnanovdb-dev libboost-iostreams-dev libassimp-dev
+  libembree-dev libopenvdb-dev libboost-iostreams-dev libassimp-dev
   libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
   time
