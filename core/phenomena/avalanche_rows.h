@@ -39,73 +39,64 @@ inline int lanesEnd(int x, int end, int limit, int lanes) {
   return whole <= limit ? whole : end;
 }
 
-// Row `row` of the box at k's substep: the per-cell body where a neighbour may be outside the
-// grid (the first and last row and column) and on what the lanes leave of the span,
-// `avx2(kernel, y, x, end)` (avx2Lanes wide) on the cells between, which returns where it
-// stopped; then `sse2` (four wide) the same way.
-template <class K, class Avx2, class Sse2Lanes>
-void avalancheRowSpan(const InRowSpans<K>& k, int row, Avx2 avx2, int avx2Lanes, Sse2Lanes sse2) {
-  const SnowFieldsView& v = k.v;
-  const int y = k.a.y0 + row;
+// Row y's span at substep k (avalancheRowSpan) in column order: `cell(x)` where a neighbour may
+// be outside the grid (the first and last row and column) and on what the lanes leave of the
+// span, `avx2(x, end)` (avx2Lanes wide) on the cells between, which returns where it stopped,
+// then `sse2(x, end)` (four wide) the same way.
+template <class Cell, class Avx2, class Sse2Lanes>
+void avalancheSpanByLanes(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, Cell cell, Avx2 avx2, int avx2Lanes, Sse2Lanes sse2) {
   int lo = 0, hi = -1;
-  avalancheRowSpan(v, k.a, y, k.k, lo, hi);
+  avalancheRowSpan(v, a, y, k, lo, hi);
   int x = lo;
   if (y > 0 && y < v.height - 1) {
-    for (; x <= hi && x < 1; ++x) k.kernel(x, y);
-    const int limit = k.a.x1 < v.width - 1 ? k.a.x1 : v.width - 1;  // in the box, every neighbour in the grid
+    for (; x <= hi && x < 1; ++x) cell(x);
+    const int limit = a.x1 < v.width - 1 ? a.x1 : v.width - 1;  // in the box, every neighbour in the grid
     const int end = hi + 1 < limit ? hi + 1 : limit;
 #if SNOW_LANES_AVX2
-    if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed)) x = avx2(k.kernel, y, x, lanesEnd(x, end, limit, avx2Lanes));
+    if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed)) x = avx2(x, lanesEnd(x, end, limit, avx2Lanes));
 #endif
-    x = sse2(k.kernel, y, x, lanesEnd(x, end, limit, 4));
+    x = sse2(x, lanesEnd(x, end, limit, 4));
   }
-  for (; x <= hi; ++x) k.kernel(x, y);
+  for (; x <= hi; ++x) cell(x);
 }
 
 #if SNOW_LANES_AVX2
 #define SNOW_LANES_AVX2_CALL(call) avx2_lanes::call
 #else
-#define SNOW_LANES_AVX2_CALL(call) x  // never called: avalancheRowSpan tests SNOW_LANES_AVX2
+#define SNOW_LANES_AVX2_CALL(call) x  // never called: avalancheSpanByLanes tests SNOW_LANES_AVX2
 #endif
 
 #if defined(__SSE2__)
 // TbbExec::forEachCell calls these for the box's rows (found by argument-dependent lookup).
 inline void rowSpan(const InRowSpans<AvalancheFlowKernel>& k, int row, int, int) {
-  avalancheRowSpan(
-      k, row, [](const AvalancheFlowKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(flowLanes(f, y, x, end)); }, 8,
-      [](const AvalancheFlowKernel& f, int y, int x, int end) { return sse2_lanes::flowLanes(f, y, x, end); });
+  const int y = k.a.y0 + row;
+  avalancheSpanByLanes(
+      k.v, k.a, y, k.k, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(flowLanes(k.kernel, y, x, end)); }, 8,
+      [&](int x, int end) { return sse2_lanes::flowLanes(k.kernel, y, x, end); });
 }
 inline void rowSpan(const InRowSpans<AvalancheScaleKernel>& k, int row, int, int) {
-  avalancheRowSpan(
-      k, row, [](const AvalancheScaleKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(scaleLanes(f, y, x, end)); }, 8,
-      [](const AvalancheScaleKernel& f, int y, int x, int end) { return sse2_lanes::scaleLanes(f, y, x, end); });
+  const int y = k.a.y0 + row;
+  avalancheSpanByLanes(
+      k.v, k.a, y, k.k, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(scaleLanes(k.kernel, y, x, end)); }, 8,
+      [&](int x, int end) { return sse2_lanes::scaleLanes(k.kernel, y, x, end); });
 }
 inline void rowSpan(const InRowSpans<AvalancheHeightKernel>& k, int row, int, int) {
-  avalancheRowSpan(
-      k, row, [](const AvalancheHeightKernel& f, int y, int x, int end) { return SNOW_LANES_AVX2_CALL(heightLanes(f, y, x, end)); }, 4,
-      [](const AvalancheHeightKernel&, int, int x, int) { return x; });  // no SSE2 body: the per-cell one
+  const int y = k.a.y0 + row;
+  avalancheSpanByLanes(
+      k.v, k.a, y, k.k, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(heightLanes(k.kernel, y, x, end)); }, 4,
+      [](int x, int) { return x; });  // no SSE2 body: the per-cell one
 }
 
 // The row statistics after a step's substeps: the per-cell part (AvalancheRowStatsKernel::cell)
 // at the grid's edges and on what the lanes leave of the span, lanes between, in column order.
 inline void rowSpan(const AvalancheRowStatsKernel& k, int row, int, int) {
-  const SnowFieldsView& v = k.v;
   const int y = k.a.y0 + row;
   float speed = 0.f, energy = 0.f;
-  int lo = v.width, hi = -1, x0 = 0, x1 = -1;
-  avalancheRowSpan(v, k.a, y, k.k, x0, x1);
-  int x = x0;
-  if (y > 0 && y < v.height - 1) {
-    for (; x <= x1 && x < 1; ++x) k.cell(x, y, speed, energy, lo, hi);
-    const int limit = k.a.x1 < v.width - 1 ? k.a.x1 : v.width - 1;
-    const int end = x1 + 1 < limit ? x1 + 1 : limit;
-#if SNOW_LANES_AVX2
-    if (cpuHasAvx2() && lanesAvx2Allowed().load(std::memory_order_relaxed))
-      x = avx2_lanes::rowStatsLanes(k, y, x, lanesEnd(x, end, limit, 8), speed, energy, lo, hi);
-#endif
-    x = sse2_lanes::rowStatsLanes(k, y, x, lanesEnd(x, end, limit, 4), speed, energy, lo, hi);
-  }
-  for (; x <= x1; ++x) k.cell(x, y, speed, energy, lo, hi);
+  int lo = k.v.width, hi = -1;
+  avalancheSpanByLanes(
+      k.v, k.a, y, k.k, [&](int x) { k.cell(x, y, speed, energy, lo, hi); },
+      [&](int x, int end) { return SNOW_LANES_AVX2_CALL(rowStatsLanes(k, y, x, end, speed, energy, lo, hi)); }, 8,
+      [&](int x, int end) { return sse2_lanes::rowStatsLanes(k, y, x, end, speed, energy, lo, hi); });
   k.store(y, speed, energy, lo, hi);
 }
 #endif
