@@ -64,6 +64,13 @@ class SnowBackend {
     (void)layers;
     return false;
   }
+  // A field's own storage in host memory (the field table's element type, width × height of
+  // them), where a halo exchange between ranks reads and writes it in place (distributed/). Null
+  // on a device, for a field the backend does not hold, or one absent this season.
+  virtual void* hostField(SnowField field) {
+    (void)field;
+    return nullptr;
+  }
   // Calls `f` once, before the next kernel that may write the snow layers (any but the
   // avalanche's); an empty `f` cancels. Fixed-time actions (a user's skiers, a timeline edit, a
   // storm's edge) run even while an avalanche is in motion: the avalanche runner keeps the layers

@@ -99,6 +99,24 @@ class ExecBackend final : public SnowBackend {
     }
   }
 
+  void* hostField(SnowField field) override {
+    if constexpr (Exec::kDevice) {
+      (void)field;
+      return nullptr;
+    } else {
+      switch (field) {
+#define SNOW_HOST_FIELD(member, view, Element, role, access, fill)                      \
+  case SnowField::member:                                                               \
+    if constexpr (heldByBackend(FieldRole::role)) return static_cast<void*>(dataIfPresent(member##_)); \
+    else return nullptr;
+        SNOW_STATE_FIELDS(SNOW_HOST_FIELD)
+#undef SNOW_HOST_FIELD
+        case SnowField::Count: break;
+      }
+      return nullptr;
+    }
+  }
+
   // The scratch made with the state comes back, zeroed, with the next kernel's view.
   void releaseScratch(bool avalancheFields) override {
 #define SNOW_RELEASE_SCRATCH(view, Element, extent) \
