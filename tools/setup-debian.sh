@@ -5,6 +5,8 @@
 # tools/measure-memory.sh compare with the memory model.
 # pybind11-dev, python3-dev, python3-pytest, python3-numpy and python3-openimageio are for the
 # optional Python module (-DSNOWBAKE_PYTHON=ON, python/) and its pytest.
+# libopenmpi-dev and openmpi-bin are for the distributed decomposition (distributed/,
+# docs/distributed.md) and its tests under mpirun on localhost.
 # slurm-wlm and munge are for the Slurm job-array test (tests/farm/slurm_array_test.sh), which
 # starts its own single-node Slurm; the bake itself never needs them.
 # --with-blender also installs Blender 3.4, which the test suite uses as a real client of the
@@ -16,6 +18,7 @@ packages=(
   libembree-dev libopenvdb-dev libboost-iostreams-dev libassimp-dev
   libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
+  libopenmpi-dev openmpi-bin
   time
   pybind11-dev python3-dev python3-pytest python3-numpy python3-openimageio
   slurm-wlm munge

@@ -1,0 +1,136 @@
+// The cost of the distributed decomposition (docs/distributed.md): the season's continuous
+// phenomena (continuous_step.h) on the default range at size x size cells of 10 m, half-day steps,
+// on as many ranks as the launcher started. Prints one table row: the process grid, the halo,
+// each rank's share of the grid, the time per step in the kernels, waiting for the slowest rank
+// before each exchange (a barrier, for this measure only) and in the halo exchange (slowest rank
+// each), the bytes all ranks send per step, the fields' memory and peak resident memory per rank. tools/bench-distributed.sh runs it on 1, 2 and 4 ranks.
+//   distributed_bench [size=2048] [steps=4] [--header]
+//   distributed_bench SIZE --plan RANKS   the exchange volume of RANKS ranks from the halo plan
+//                                         alone (nothing allocated: for grids beyond this machine)
+#include <sys/resource.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/cpu_backend.h"
+#include "core/default_terrain.h"
+#include "distributed/continuous_step.h"
+
+using namespace snow;
+using namespace snow::dist;
+
+namespace {
+
+// The default range with a metre of mixed snow and a westerly (what a storm's season step reads),
+// made on `cells` of it alone: only the relief is generated whole (4 bytes a cell, freed here).
+SnowState localState(int size, const CellRect& cells) {
+  DefaultTerrainOptions o;
+  o.size = size;
+  o.cellSizeM = 10.0;
+  GridSpec whole;
+  const Grid<float> relief = generateDefaultTerrain(o, &whole);
+  GridSpec spec = whole;
+  spec.width = cells.width(), spec.height = cells.height();
+  SnowState s;
+  s.allocate(spec);
+  for (int y = 0; y < spec.height; ++y)
+    for (int x = 0; x < spec.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * spec.width + x;
+      const float b = relief(cells.x0 + x, cells.y0 + y);
+      s.bedrockM.values()[i] = b;
+      s.compactedM.values()[i] = 0.4f, s.stableM.values()[i] = 0.2f, s.unstableM.values()[i] = 0.1f, s.powderM.values()[i] = 0.3f;
+      s.exposureHours.values()[i] = 5.f;
+      s.temperatureBaseC.values()[i] = -0.0065f * (b - 1500.f);
+      s.windXMps.values()[i] = 8.f, s.windYMps.values()[i] = 2.f;
+      s.windEffectZM.values()[i] = b;
+    }
+  s.keepRecordFields(0);  // as the default preset's season: no output reads a record field
+  return s;
+}
+
+double peakResidentMB() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;
+}
+
+// The bytes a halo refresh moves: the snow layers (4 floats) and the moving flag, a cell.
+constexpr double kExchangedBytesPerCell = 4 * sizeof(float) + sizeof(uint8_t);
+constexpr int kRefreshesPerStep = 5;  // one after each phenomenon
+
+int planRow(int size, int ranks) {
+  ModelParameters p;
+  const int halo = continuousStepHalo(p, 0.5, 10.0);
+  const Decomposition d = Decomposition::choose(ranks, size, size, halo);
+  double sent = 0, largest = 0;
+  for (int r = 0; r < ranks; ++r) {
+    for (const HaloTransfer& t : haloPlan(d, r).sends) sent += static_cast<double>(t.cells.cells());
+    largest = std::max(largest, static_cast<double>(d.local(r).cells()));
+  }
+  std::printf("| %d (plan) | %d x %d | %d | %.0f cells (%.4f) | | | | %.1f | | | |\n", ranks, d.columns, d.rows, halo, largest,
+              largest / (static_cast<double>(size) * size), sent * kExchangedBytesPerCell * kRefreshesPerStep / 1e6);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MpiSession mpi;
+  const Communicator comm = Communicator::world();
+  int size = 2048, steps = 4;
+  bool header = false;
+  std::vector<int> numbers;
+  for (int a = 1; a < argc; ++a) {
+    if (std::strcmp(argv[a], "--header") == 0) header = true;
+    else if (std::strcmp(argv[a], "--plan") != 0) numbers.push_back(std::atoi(argv[a]));
+  }
+  if (numbers.size() > 0) size = numbers[0];
+  if (argc == 4 && std::strcmp(argv[2], "--plan") == 0) return planRow(size, std::atoi(argv[3]));
+  if (numbers.size() > 1) steps = numbers[1];
+  // The cores shared among the ranks of this machine.
+  const int threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / comm.size());
+  tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);
+
+  ModelParameters p;
+  const double dt = 0.5;
+  const int halo = continuousStepHalo(p, dt, 10.0);
+  const Decomposition d = Decomposition::choose(comm.size(), size, size, halo);
+  const HaloPlan plan = haloPlan(d, comm.rank());
+  auto backend = createCpuBackend();
+  size_t fieldBytes = 0;
+  {
+    SnowState local = localState(size, d.local(comm.rank()));
+    fieldBytes = local.bytes([](FieldRole) { return true; });
+    backend->uploadTaking(local);
+  }
+  StepCost total;
+  for (int s = 0; s < steps; ++s) {
+    WeatherState w;
+    w.seaLevelTemperatureC = s % 2 ? 2.0 : -4.0;
+    const StepCost c = continuousStep(*backend, RankContext{&comm, &d, &plan, true}, p, dt, w);
+    total.computeS += c.computeS, total.waitS += c.waitS, total.exchangeS += c.exchangeS, total.bytesSent += c.bytesSent;
+  }
+  const std::vector<double> all = comm.allGather({total.computeS / steps, total.waitS / steps, total.exchangeS / steps,
+                                                  static_cast<double>(total.bytesSent) / steps, static_cast<double>(fieldBytes),
+                                                  static_cast<double>(d.local(comm.rank()).cells()), peakResidentMB()});
+  if (comm.rank() != 0) return 0;
+  double compute = 0, fastest = 1e300, wait = 0, exchange = 0, sent = 0, fields = 0, cells = 0, rss = 0;
+  for (int r = 0; r < comm.size(); ++r) {
+    const double* v = &all[static_cast<size_t>(r) * 7];
+    compute = std::max(compute, v[0]), fastest = std::min(fastest, v[0]), wait = std::max(wait, v[1]), exchange = std::max(exchange, v[2]), sent += v[3];
+    fields = std::max(fields, v[4]), cells = std::max(cells, v[5]), rss = std::max(rss, v[6]);
+  }
+  if (header) {
+    std::printf("| ranks | process grid | halo (cells) | largest local grid (share of the whole) | kernels s/step (fastest, slowest rank) | waiting s/step | exchange s/step | MB sent/step (all ranks) | fields MB/rank | peak RSS MB/rank | threads/rank |\n");
+    std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+  }
+  std::printf("| %d | %d x %d | %d | %.0f cells (%.3f) | %.3f, %.3f | %.4f | %.4f | %.1f | %.0f | %.0f | %d |\n", comm.size(), d.columns, d.rows,
+              halo, cells, cells / (static_cast<double>(size) * size), fastest, compute, wait, exchange, sent / 1e6, fields / 1e6, rss, threads);
+  return 0;
+}

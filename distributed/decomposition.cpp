@@ -1,0 +1,66 @@
+#include "decomposition.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace snow::dist {
+
+CellRect CellRect::intersect(const CellRect& o) const {
+  CellRect r{std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
+  if (r.empty()) return CellRect{};
+  return r;
+}
+
+namespace {
+int cut(int extent, int parts, int k) { return static_cast<int>(static_cast<int64_t>(extent) * k / parts); }
+int lowerToMultiple(int v) { return v - v % kLocalOriginMultiple; }
+}  // namespace
+
+CellRect Decomposition::owned(int rank) const {
+  const int c = columnOf(rank), r = rowOf(rank);
+  return CellRect{cut(width, columns, c), cut(height, rows, r), cut(width, columns, c + 1), cut(height, rows, r + 1)};
+}
+
+CellRect Decomposition::local(int rank) const {
+  const CellRect o = owned(rank);
+  return CellRect{lowerToMultiple(std::max(0, o.x0 - halo)), lowerToMultiple(std::max(0, o.y0 - halo)), std::min(width, o.x1 + halo),
+                  std::min(height, o.y1 + halo)};
+}
+
+Decomposition Decomposition::choose(int ranks, int width, int height, int halo) {
+  if (ranks < 1) throw std::invalid_argument("a decomposition needs at least one rank, not " + std::to_string(ranks));
+  const int side = std::max(1, halo);
+  Decomposition best;
+  int64_t bestCut = std::numeric_limits<int64_t>::max();
+  for (int columns = 1; columns <= ranks; ++columns) {
+    if (ranks % columns) continue;
+    const int rows = ranks / columns;
+    // The smallest subdomain of a balanced split is floor(extent / parts) a side.
+    if (width / columns < side || height / rows < side) continue;
+    const int64_t cutCells = static_cast<int64_t>(columns - 1) * height + static_cast<int64_t>(rows - 1) * width;
+    if (cutCells < bestCut) bestCut = cutCells, best = Decomposition{width, height, columns, rows, halo};
+  }
+  if (bestCut == std::numeric_limits<int64_t>::max())
+    throw std::invalid_argument(std::to_string(ranks) + " ranks cannot split a " + std::to_string(width) + " x " +
+                                std::to_string(height) + " grid into subdomains of at least " + std::to_string(side) +
+                                " cells a side (the halo); run fewer ranks");
+  return best;
+}
+
+HaloPlan haloPlan(const Decomposition& d, int self) {
+  HaloPlan plan;
+  const CellRect mine = d.owned(self), myLocal = d.local(self);
+  for (int peer = 0; peer < d.ranks(); ++peer) {
+    if (peer == self) continue;
+    const CellRect send = mine.intersect(d.local(peer));
+    if (!send.empty()) plan.sends.push_back({peer, send});
+    const CellRect receive = d.owned(peer).intersect(myLocal);
+    if (!receive.empty()) plan.receives.push_back({peer, receive});
+  }
+  return plan;
+}
+
+}  // namespace snow::dist

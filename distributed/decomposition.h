@@ -1,0 +1,62 @@
+// The grid split among ranks for a distributed bake (docs/distributed.md): a 2-D process grid of
+// rectangles, each rank's subdomain; its local grid, the subdomain widened by a halo; and the
+// cells each rank sends to and receives from the others to refresh its halo.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+namespace snow::dist {
+
+// Cells [x0, x1) × [y0, y1) of the whole grid.
+struct CellRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  int width() const { return x1 - x0; }
+  int height() const { return y1 - y0; }
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  size_t cells() const { return empty() ? 0 : static_cast<size_t>(width()) * static_cast<size_t>(height()); }
+  bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+  CellRect intersect(const CellRect& o) const;
+  bool operator==(const CellRect&) const = default;
+};
+
+// Local grids start on whole-grid cells whose coordinates are multiples of this: the 5-colour
+// cross tiling (core/tiling.h) then gives every local cell its whole-grid colour, so the
+// colour passes of wind transport and the bedforms run in the same order on every rank.
+constexpr int kLocalOriginMultiple = 5;
+
+struct Decomposition {
+  int width = 0, height = 0;    // the whole grid, cells
+  int columns = 1, rows = 1;    // the process grid; rank = row * columns + column
+  int halo = 0;                 // cells of neighbours each local grid holds at least, each side
+
+  int ranks() const { return columns * rows; }
+  int columnOf(int rank) const { return rank % columns; }
+  int rowOf(int rank) const { return rank / columns; }
+  int rankAt(int column, int row) const { return row * columns + column; }
+  // The cells `rank` owns: balanced splits, the first cut at width * column / columns.
+  CellRect owned(int rank) const;
+  // Its local grid: `owned` widened by `halo` within the grid, its origin lowered to multiples of
+  // kLocalOriginMultiple.
+  CellRect local(int rank) const;
+
+  // The process grid for `ranks` processes on a width × height grid: of the factorisations
+  // columns × rows, the one whose cuts are shortest (the least halo to exchange), fewer columns on
+  // a tie (rows are contiguous in memory). Throws std::invalid_argument, saying why, when no
+  // factorisation gives every subdomain at least `halo` cells (and one) a side.
+  static Decomposition choose(int ranks, int width, int height, int halo);
+};
+
+// One block of cells (whole-grid coordinates) that `self` sends to `peer` or receives from it.
+struct HaloTransfer {
+  int peer = 0;
+  CellRect cells;
+};
+// What `self` exchanges to refresh its halo: the cells it owns that another rank's local grid
+// holds (sends), and the cells of its own local grid that others own (receives). Every halo cell
+// is received from its one owner, corners from diagonal neighbours directly.
+struct HaloPlan {
+  std::vector<HaloTransfer> sends, receives;
+};
+HaloPlan haloPlan(const Decomposition& d, int self);
+
+}  // namespace snow::dist

@@ -1,0 +1,24 @@
+// How many processes a launcher (mpirun, srun) started, read from its environment without
+// initialising MPI: header only, so the program can ask without linking MPI.
+#pragma once
+#include <cstdlib>
+
+namespace snow::dist {
+
+// 1 when the program was started alone (or by a launcher with one process).
+inline int launchedRanks() {
+  // OpenMPI's mpirun, then PMI (MPICH, srun --mpi=pmi2), then srun --mpi=pmix (its step's tasks;
+  // not a batch script's SLURM_NTASKS: a farm's job may take several cores for one process).
+  const bool pmix = std::getenv("PMIX_RANK") != nullptr;
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", pmix ? "SLURM_STEP_NUM_TASKS" : ""}) {
+    if (!*name) continue;
+    const char* v = std::getenv(name);
+    if (!v || !*v) continue;
+    char* end = nullptr;
+    const long n = std::strtol(v, &end, 10);
+    if (*end == '\0' && n >= 1 && n <= (1L << 20)) return static_cast<int>(n);
+  }
+  return 1;
+}
+
+}  // namespace snow::dist

@@ -1,0 +1,71 @@
+#include "local_state.h"
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace snow::dist {
+
+namespace {
+template <class T>
+void copyRect(const T* from, int fromWidth, int fromX, int fromY, T* to, int toWidth, int toX, int toY, int width, int height) {
+  for (int r = 0; r < height; ++r)
+    std::memcpy(to + static_cast<size_t>(toY + r) * toWidth + toX, from + static_cast<size_t>(fromY + r) * fromWidth + fromX,
+                static_cast<size_t>(width) * sizeof(T));
+}
+}  // namespace
+
+SnowState cutLocalState(const SnowState& whole, const CellRect& cells) {
+  SnowState local;
+  local.spec = whole.spec;
+  local.spec.width = cells.width();
+  local.spec.height = cells.height();
+  local.spec.originX = whole.spec.originX + cells.x0 * whole.spec.cellSizeXM;
+  local.spec.originY = whole.spec.originY - cells.y0 * whole.spec.cellSizeYM;
+#define SNOW_CUT_FIELD(member, view, Element, role, access, fill)                                                           \
+  if (whole.member.size() == whole.spec.cellCount() && whole.member.size() > 0) {                                           \
+    local.member.resize(cells.width(), cells.height());                                                                     \
+    copyRect(whole.member.data(), whole.spec.width, cells.x0, cells.y0, local.member.data(), cells.width(), 0, 0, cells.width(), \
+             cells.height());                                                                                               \
+  }
+  SNOW_STATE_FIELDS(SNOW_CUT_FIELD)
+#undef SNOW_CUT_FIELD
+  return local;
+}
+
+namespace {
+// One field of gatherOwned: `root` takes each rank's owned block in turn (its own copied).
+template <class T>
+void gatherField(const Communicator& comm, const Decomposition& d, const Grid<T>& local, Grid<T>& whole, int root, const char* name) {
+  const int self = comm.rank();
+  const CellRect at = d.local(self);
+  auto ownedBlock = [&](const CellRect& o) {
+    std::vector<T> block(o.cells());
+    copyRect(local.data(), at.width(), o.x0 - at.x0, o.y0 - at.y0, block.data(), o.width(), 0, 0, o.width(), o.height());
+    return block;
+  };
+  if (self != root) {
+    const std::vector<T> block = ownedBlock(d.owned(self));
+    comm.exchange({{root, block.data(), block.size() * sizeof(T)}}, {});
+    return;
+  }
+  if (whole.size() != static_cast<size_t>(d.width) * d.height)
+    throw std::invalid_argument(std::string("gatherOwned: the whole state has no ") + name + " grid of the decomposition's size");
+  for (int peer = 0; peer < d.ranks(); ++peer) {
+    const CellRect o = d.owned(peer);
+    std::vector<T> block = peer == root ? ownedBlock(o) : std::vector<T>(o.cells());
+    if (peer != root) comm.exchange({}, {{peer, block.data(), block.size() * sizeof(T)}});
+    copyRect(block.data(), o.width(), 0, 0, whole.data(), d.width, o.x0, o.y0, o.width(), o.height());
+  }
+}
+}  // namespace
+
+void gatherOwned(const Communicator& comm, const Decomposition& d, const SnowState& local, SnowState& whole, int root) {
+#define SNOW_GATHER_FIELD(member, view, Element, role, access, fill) \
+  if (local.member.size() > 0) gatherField(comm, d, local.member, whole.member, root, #member);
+  SNOW_STATE_FIELDS(SNOW_GATHER_FIELD)
+#undef SNOW_GATHER_FIELD
+}
+
+}  // namespace snow::dist

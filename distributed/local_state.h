@@ -1,0 +1,19 @@
+// A rank's part of the whole state and back: its local grid cut out of a whole-grid SnowState
+// (every field the state holds), and the ranks' owned cells put together again on one rank.
+#pragma once
+#include "communicator.h"
+#include "core/snow_state.h"
+#include "decomposition.h"
+
+namespace snow::dist {
+
+// The fields `whole` holds, cut to `cells`; the spec's origin moved to the local grid's
+// north-west corner (north-up: y runs south).
+SnowState cutLocalState(const SnowState& whole, const CellRect& cells);
+
+// Rank `root`'s `whole` (allocated like the local states' fields: a field absent on the ranks is
+// left as it is) receives every rank's owned cells of every field the local state holds; the
+// other ranks send theirs. `whole` is read only on `root`.
+void gatherOwned(const Communicator& comm, const Decomposition& d, const SnowState& local, SnowState& whole, int root = 0);
+
+}  // namespace snow::dist

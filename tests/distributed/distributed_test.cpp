@@ -1,0 +1,252 @@
+// The decomposition of a distributed bake (distributed/, docs/distributed.md). The plain tests
+// check the process grid and halo plan for every rank in one process; the Ranks tests run on as
+// many ranks as the launcher started (ctest runs this binary alone and under mpirun with 2, 3
+// and 4 ranks) and assert the same bytes as one process.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+#include "core/cpu_backend.h"
+#include "core/default_terrain.h"
+#include "core/parameters.h"
+#include "core/snow_state.h"
+#include "distributed/communicator.h"
+#include "distributed/continuous_step.h"
+#include "distributed/decomposition.h"
+#include "distributed/exact_sum.h"
+#include "distributed/halo_exchange.h"
+#include "distributed/local_state.h"
+
+namespace snow::dist {
+namespace {
+
+uint32_t mix(uint32_t x) {
+  x ^= x >> 16, x *= 0x7feb352dU, x ^= x >> 15, x *= 0x846ca68bU, x ^= x >> 16;
+  return x;
+}
+float unit(int x, int y, uint32_t salt) { return static_cast<float>(mix(x * 73856093U ^ y * 19349663U ^ salt) >> 8) / 16777216.f; }
+
+// ---------------------------------------------------------------- the process grid, one process
+
+TEST(Decomposition, ChoosesTheShortestCutsFewerColumnsOnATie) {
+  EXPECT_EQ(Decomposition::choose(4, 512, 512, 8).columns, 2);
+  EXPECT_EQ(Decomposition::choose(4, 512, 512, 8).rows, 2);
+  EXPECT_EQ(Decomposition::choose(4, 1000, 100, 8).columns, 4);  // cut 300 cells, not 3000
+  EXPECT_EQ(Decomposition::choose(4, 100, 1000, 8).rows, 4);
+  EXPECT_EQ(Decomposition::choose(2, 300, 300, 8).columns, 1);  // a tie: two row strips
+  EXPECT_EQ(Decomposition::choose(6, 600, 400, 8).columns, 3);  // 3 x 2: cut 1400 cells (2 x 3: 1600)
+  EXPECT_EQ(Decomposition::choose(1, 7, 5, 3).ranks(), 1);
+}
+
+TEST(Decomposition, OwnedCellsCoverTheGridOnceAndLocalGridsHoldTheirHaloOnMultiplesOfFive) {
+  for (int ranks = 1; ranks <= 8; ++ranks)
+    for (auto [w, h] : {std::pair{97, 61}, std::pair{1000, 100}, std::pair{64, 640}, std::pair{37, 23}}) {
+      const int halo = 4;
+      const Decomposition d = Decomposition::choose(ranks, w, h, halo);
+      ASSERT_EQ(d.ranks(), ranks);
+      std::vector<int> owners(static_cast<size_t>(w) * h, 0);
+      for (int r = 0; r < ranks; ++r) {
+        const CellRect o = d.owned(r), l = d.local(r);
+        EXPECT_GE(o.width(), halo);
+        EXPECT_GE(o.height(), halo);
+        for (int y = o.y0; y < o.y1; ++y)
+          for (int x = o.x0; x < o.x1; ++x) ++owners[static_cast<size_t>(y) * w + x];
+        EXPECT_EQ(l.intersect(o), o);
+        EXPECT_EQ(l.x0 % kLocalOriginMultiple, 0);
+        EXPECT_EQ(l.y0 % kLocalOriginMultiple, 0);
+        EXPECT_TRUE(l.x0 <= std::max(0, o.x0 - halo) && l.y0 <= std::max(0, o.y0 - halo));
+        EXPECT_EQ(l.x1, std::min(w, o.x1 + halo));
+        EXPECT_EQ(l.y1, std::min(h, o.y1 + halo));
+      }
+      for (int c : owners) ASSERT_EQ(c, 1) << ranks << " ranks on " << w << " x " << h;
+    }
+}
+
+TEST(Decomposition, RefusesSubdomainsNarrowerThanTheHaloSayingWhy) {
+  try {
+    Decomposition::choose(16, 20, 20, 8);
+    FAIL() << "16 ranks split a 20 x 20 grid with an 8-cell halo";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("run fewer ranks"), std::string::npos) << e.what();
+  }
+}
+
+TEST(HaloPlan, EveryHaloCellComesFromItsOwnerOnceAndEachSendIsItsPeersReceive) {
+  for (int ranks = 2; ranks <= 6; ++ranks) {
+    const Decomposition d = Decomposition::choose(ranks, 83, 71, 6);
+    std::vector<HaloPlan> plans;
+    for (int r = 0; r < ranks; ++r) plans.push_back(haloPlan(d, r));
+    for (int r = 0; r < ranks; ++r) {
+      const CellRect l = d.local(r), o = d.owned(r);
+      std::vector<int> got(l.cells(), 0);
+      for (const HaloTransfer& t : plans[r].receives) {
+        EXPECT_EQ(t.cells.intersect(d.owned(t.peer)), t.cells);
+        for (int y = t.cells.y0; y < t.cells.y1; ++y)
+          for (int x = t.cells.x0; x < t.cells.x1; ++x) ++got[static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0)];
+        bool matched = false;
+        for (const HaloTransfer& s : plans[t.peer].sends) matched |= s.peer == r && s.cells == t.cells;
+        EXPECT_TRUE(matched) << "rank " << t.peer << " sends rank " << r << " no such block";
+      }
+      for (int y = l.y0; y < l.y1; ++y)
+        for (int x = l.x0; x < l.x1; ++x)
+          EXPECT_EQ(got[static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0)], o.contains(x, y) ? 0 : 1) << x << ", " << y;
+    }
+  }
+}
+
+// ---------------------------------------------------------------- on the launched ranks
+
+// A state on `w` x `h` cells of 10 m: the default range's relief made rough, snow in every layer,
+// varied static fields, winds of every direction and a NODATA disc across the subdomains' borders.
+SnowState testState(int w, int h) {
+  DefaultTerrainOptions o;
+  o.size = std::max(w, h);
+  o.cellSizeM = 10.0;
+  const Grid<float> relief = generateDefaultTerrain(o);
+  SnowState s;
+  GridSpec spec;
+  spec.width = w, spec.height = h, spec.cellSizeXM = 10.0, spec.cellSizeYM = 10.0;
+  s.allocate(spec);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = static_cast<size_t>(y) * w + x;
+      s.bedrockM.values()[i] = relief(x, y) + 6.f * unit(x, y, 11);  // rough: slopes above rest everywhere
+      s.compactedM.values()[i] = 0.5f * unit(x, y, 1);
+      s.stableM.values()[i] = 0.3f * unit(x, y, 2);
+      s.unstableM.values()[i] = 0.4f * unit(x, y, 3);
+      s.powderM.values()[i] = 0.6f * unit(x, y, 4);
+      s.exposureHours.values()[i] = 2.f + 6.f * unit(x, y, 5);
+      s.temperatureBaseC.values()[i] = -8.f + 6.f * unit(x, y, 6) - 0.004f * (relief(x, y) - 2000.f);
+      // Gusts of every direction, so errors could travel upwind from any edge.
+      s.windXMps.values()[i] = 8.f * std::sin(0.11f * y + 0.05f * x) + 2.f * (unit(x, y, 12) - 0.5f);
+      s.windYMps.values()[i] = 8.f * std::cos(0.09f * x - 0.04f * y) + 2.f * (unit(x, y, 13) - 0.5f);
+      s.windEffectZM.values()[i] = s.bedrockM.values()[i] + 2.f * unit(x, y, 7) - 0.5f;
+      s.windLoadingMps2.values()[i] = 0.02f * unit(x, y, 8);
+      const float dx = x - 0.5f * w, dy = y - 0.45f * h;
+      s.validCell.values()[i] = dx * dx + dy * dy < 0.01f * w * h ? 0 : 1;
+    }
+  return s;
+}
+
+template <class T>
+bool sameBytes(const Grid<T>& a, const Grid<T>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+TEST(Ranks, HaloExchangeFillsEveryHaloCellWithItsOwnersValue) {
+  const Communicator comm = Communicator::world();
+  const Decomposition d = Decomposition::choose(comm.size(), 97, 61, 6);
+  const HaloPlan plan = haloPlan(d, comm.rank());
+  const CellRect l = d.local(comm.rank()), o = d.owned(comm.rank());
+  std::vector<float> f(l.cells());
+  std::vector<double> g(l.cells());
+  for (int y = l.y0; y < l.y1; ++y)
+    for (int x = l.x0; x < l.x1; ++x) {
+      const size_t i = static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0);
+      f[i] = o.contains(x, y) ? unit(x, y, 9) : NAN;  // the halo starts wrong
+      g[i] = o.contains(x, y) ? 1.0 + unit(x, y, 10) : -1.0;
+    }
+  const size_t sent = exchangeHalo(comm, d, plan, f.data(), sizeof(float)) + exchangeHalo(comm, d, plan, g.data(), sizeof(double));
+  if (comm.size() > 1) {
+    EXPECT_GT(sent, 0u);
+  }
+  for (int y = l.y0; y < l.y1; ++y)
+    for (int x = l.x0; x < l.x1; ++x) {
+      const size_t i = static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0);
+      EXPECT_EQ(std::bit_cast<uint32_t>(f[i]), std::bit_cast<uint32_t>(unit(x, y, 9))) << x << ", " << y;
+      EXPECT_EQ(g[i], 1.0 + unit(x, y, 10)) << x << ", " << y;
+    }
+}
+
+TEST(Ranks, ExactSumsAreTheSingleProcessBackendsTotalsBitForBit) {
+  const Communicator comm = Communicator::world();
+  const SnowState whole = testState(131, 77);
+  auto reference = createCpuBackend();
+  reference->upload(whole);
+  const LayerTotals t = reference->totals();
+  const Decomposition d = Decomposition::choose(comm.size(), 131, 77, 3);
+  const SnowState local = cutLocalState(whole, d.local(comm.rank()));
+  const double area = whole.spec.cellAreaM2();
+  const uint8_t* valid = local.validCell.data();
+  EXPECT_EQ(std::bit_cast<uint64_t>(exactSum(comm, d, local.compactedM.data(), valid) * area), std::bit_cast<uint64_t>(t.compactedM3));
+  EXPECT_EQ(std::bit_cast<uint64_t>(exactSum(comm, d, local.stableM.data(), valid) * area), std::bit_cast<uint64_t>(t.stableM3));
+  EXPECT_EQ(std::bit_cast<uint64_t>(exactSum(comm, d, local.unstableM.data(), valid) * area), std::bit_cast<uint64_t>(t.unstableM3));
+  EXPECT_EQ(std::bit_cast<uint64_t>(exactSum(comm, d, local.powderM.data(), valid) * area), std::bit_cast<uint64_t>(t.powderM3));
+  EXPECT_EQ(exactMax(comm, d, local.temperatureBaseC.data(), valid), reference->maxTemperatureBaseC());
+}
+
+// Snowfall, stability, melt, powder diffusion and wind transport, six steps of `dt`, on the whole
+// grid and on each rank's local grid with its halo refreshed after every phenomenon: the owned
+// cells of every evolved and record field, and the totals, are the single process's bytes.
+void expectContinuousStepsGiveTheSingleProcessBytes(double dt, int expectedHalo) {
+  const Communicator comm = Communicator::world();
+  const int w = 150, h = 104;
+  const SnowState whole = testState(w, h);
+  ModelParameters p;
+  const int halo = continuousStepHalo(p, dt, 10.0);
+  ASSERT_EQ(halo, expectedHalo);
+  const Decomposition d = Decomposition::choose(comm.size(), w, h, halo);
+  const HaloPlan plan = haloPlan(d, comm.rank());
+  SnowState local = cutLocalState(whole, d.local(comm.rank()));
+  auto reference = createCpuBackend();
+  auto mine = createCpuBackend();
+  reference->upload(whole);
+  mine->upload(local);
+  auto evolved = [](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; };
+  for (int step = 0; step < 6; ++step) {
+    WeatherState weather;
+    weather.seaLevelTemperatureC = step < 3 ? -2.0 : 9.0;  // a storm, then a thaw
+    continuousStep(*reference, RankContext{}, p, dt, weather);
+    const StepCost cost = continuousStep(*mine, RankContext{&comm, &d, &plan}, p, dt, weather);
+    if (comm.size() > 1) {
+      EXPECT_GT(cost.bytesSent, 0u);
+    }
+  }
+  SnowState expected = whole, gathered = whole;
+  reference->download(expected);
+  mine->download(local);
+  const double area = whole.spec.cellAreaM2();
+  const LayerTotals t = reference->totals();
+  EXPECT_EQ(std::bit_cast<uint64_t>(exactSum(comm, d, local.powderM.data(), local.validCell.data()) * area),
+            std::bit_cast<uint64_t>(t.powderM3));
+  EXPECT_EQ(std::bit_cast<uint64_t>(exactSum(comm, d, local.unstableM.data(), local.validCell.data()) * area),
+            std::bit_cast<uint64_t>(t.unstableM3));
+  gatherOwned(comm, d, local, gathered);
+  if (comm.rank() != 0) return;
+  int compared = 0;
+#define SNOW_COMPARE_FIELD(member, view, Element, role, access, fill)                                                    \
+  if (evolved(FieldRole::role)) {                                                                                        \
+    EXPECT_TRUE(sameBytes(expected.member, gathered.member)) << #member << " on " << comm.size() << " ranks";            \
+    ++compared;                                                                                                          \
+  }
+  SNOW_STATE_FIELDS(SNOW_COMPARE_FIELD)
+#undef SNOW_COMPARE_FIELD
+  EXPECT_GE(compared, 5);
+  EXPECT_FALSE(sameBytes(expected.powderM, whole.powderM));  // the phenomena changed the snow
+  EXPECT_FALSE(sameBytes(expected.windDepositM, whole.windDepositM));
+}
+
+// Quarter days: five powder substeps, whose 10 cells are the widest reach.
+TEST(Ranks, ContinuousPhenomenaOnLocalGridsGiveTheSingleProcessBytes) { expectContinuousStepsGiveTheSingleProcessBytes(0.25, 10); }
+// An hour: one powder substep, so the halo is wind transport's bound, 7 cells (a giver's powder,
+// changed by gifts of earlier colours, bounds its gift: a chain this state does not reach, where
+// 2 cells already give the same bytes; 1 does not).
+TEST(Ranks, ContinuousPhenomenaInHourStepsGiveTheSingleProcessBytes) {
+  expectContinuousStepsGiveTheSingleProcessBytes(1.0 / 24.0, 7);
+}
+
+}  // namespace
+}  // namespace snow::dist
+
+int main(int argc, char** argv) {
+  snow::dist::MpiSession mpi;
+  ::testing::InitGoogleTest(&argc, argv);
+  // One rank's report: the others print only their failures.
+  if (snow::dist::Communicator::world().rank() != 0) GTEST_FLAG_SET(brief, true);
+  return RUN_ALL_TESTS();
+}
