@@ -175,6 +175,25 @@ TEST(Cli, UsageErrorsExitTwoAndHelpExitsZero) {
   fs::remove_all(dir);
 }
 
+// mpirun -np 2 (or srun -n 2) would start two whole bakes writing the same files: each process
+// refuses with exit 2 before any work, until the bake runs decomposed.
+TEST(Cli, BakeStartedAsSeveralMpiProcessesIsRefusedBeforeWritingAnything) {
+  const fs::path dir = workDir();
+  setenv("OMPI_COMM_WORLD_SIZE", "2", 1);
+  const ProcessResult r = snowbake(dir, "bake preset:default --set terrain.size=64 --out " + (dir / "out").string());
+  const ProcessResult info = snowbake(dir, "help scene");
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("started as 2 processes"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_EQ(info.status, 0);  // reading commands still run
+  setenv("OMPI_COMM_WORLD_SIZE", "1", 1);  // mpirun -np 1: the bake as ever
+  const ProcessResult one = snowbake(dir, "bake preset:default --set terrain.size=64 --set season.days=2 --set 'outputs.frames_days=[]' --no-cache --out " + (dir / "one").string());
+  unsetenv("OMPI_COMM_WORLD_SIZE");
+  EXPECT_EQ(one.status, 0) << one.err;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, InfoReportsTheTerrainAsJson) {
   const fs::path dir = workDir();
   const ProcessResult r = snowbake(dir, "info builtin:ridged --json");

@@ -32,6 +32,7 @@
 #include "bake/progress.h"
 #include "bake/scene_list.h"
 #include "bench/bench.h"
+#include "distributed/launch.h"
 #include "precompute/cache.h"
 #include "precompute/cache_folder.h"
 #include "scene/scene_reference.h"
@@ -364,6 +365,13 @@ int main(int argc, char** argv) {
   addHelpCommand(app, help);
   addBenchCommand(app, bench);
   if (const std::optional<int> status = parseCommandLine(app, argc, argv)) return *status;
+  // Under mpirun -np N or srun -n N every process would bake the whole scene into the same
+  // outputs: refused, on every rank alike, until the bake runs decomposed (docs/distributed.md).
+  if (const int ranks = snow::dist::launchedRanks(); ranks > 1 && !*info.cmd && !*help.cmd) {
+    std::cerr << "snowbake: error: started as " << ranks
+              << " processes (mpirun or srun): a bake across ranks is not available yet (docs/distributed.md); run one process\n";
+    return 2;
+  }
 
   try {
     if (*bake.cmd) {
