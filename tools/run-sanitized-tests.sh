@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test suite under AddressSanitizer and UndefinedBehaviorSanitizer, then the fuzzer
 # (docs/testing.md). Builds build-asan (SNOWBAKE_SANITIZE=ON, CPU only) with only the binaries
-# it runs: snowbake (the CLI tests run it), snowbake_tests, bench_tests and snowbake_fuzz.
+# it runs: snowbake (the CLI tests run it), snowbake_tests, bench_tests, snowbake_fuzz and
+# distributed_tests (alone and on 3 ranks where mpiexec is).
 #   SNOWBAKE_SANITIZE_FILTER  gtest filter of the sanitized suite (default: every test but the
 #                             five heaviest, each over 20 s unsanitized, whose code lighter tests
 #                             run too, and the Blender and BlenderAddon suites, which check
@@ -21,7 +22,7 @@ if command -v ccache > /dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=c
 
 start=$(date +%s)
 cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DSNOWBAKE_SANITIZE=ON -DSNOWBAKE_WITH_CUDA=OFF "${launcher[@]}" "$@"
-cmake --build build-asan -j"$(nproc)" --target snowbake snowbake_tests bench_tests snowbake_fuzz
+cmake --build build-asan -j"$(nproc)" --target snowbake snowbake_tests bench_tests snowbake_fuzz distributed_tests
 echo "sanitized build: $(( $(date +%s) - start )) s"
 
 # Every report fails the run. Leaks are not checked: the libraries (TBB's workers, GDAL's and
@@ -42,6 +43,13 @@ for ((i = 0; i < shards; ++i)); do
   pids+=($!)
 done
 ./build-asan/bench_tests --gtest_filter="$filter" --gtest_brief=1 --gtest_output="xml:$logs/bench.xml" > "$logs/bench.log" 2>&1 || { cat "$logs/bench.log"; failed=1; }
+# The decomposition alone and on 3 ranks (a 3 x 1 process grid: every halo path but corners, which
+# the unsanitized suite's 4 ranks cross).
+./build-asan/distributed_tests --gtest_brief=1 > "$logs/distributed.log" 2>&1 || { cat "$logs/distributed.log"; failed=1; }
+if command -v mpiexec > /dev/null; then
+  OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpiexec --oversubscribe -n 3 ./build-asan/distributed_tests --gtest_brief=1 \
+    > "$logs/distributed3.log" 2>&1 || { cat "$logs/distributed3.log"; failed=1; }
+fi
 for ((i = 0; i < shards; ++i)); do
   if ! wait "${pids[$i]}"; then cat "$logs/shard$i.log"; failed=1; fi
 done
