@@ -71,6 +71,12 @@ class SnowBackend {
     (void)field;
     return nullptr;
   }
+  // The same for a scratch field (snow_fields.h), while the backend holds it: the last step's
+  // `delta`, which a distributed run sums over the cells each rank owns.
+  virtual void* hostScratch(ScratchField field) {
+    (void)field;
+    return nullptr;
+  }
   // Calls `f` once, before the next kernel that may write the snow layers (any but the
   // avalanche's); an empty `f` cancels. Fixed-time actions (a user's skiers, a timeline edit, a
   // storm's edge) run even while an avalanche is in motion: the avalanche runner keeps the layers
@@ -100,6 +106,9 @@ class SnowBackend {
   virtual double melt(const MeltArgs& args) = 0;
   // Transport: conserves mass; runs its own substeps (see powderDiffusionSubsteps).
   virtual void powderDiffusion(const PowderDiffusionArgs& args) = 0;
+  // Called after each of powder diffusion's substeps, when set (a distributed run refreshes the
+  // powder's halo there); never changes a result.
+  void afterEachPowderSubstep(std::function<void()> f) { afterPowderSubstep_ = std::move(f); }
   virtual void windTransport(const WindTransportArgs& args) = 0;  // conserves mass
   // Moves snow between the stable and unstable layers (conserves mass).
   virtual void stabilityChange(const StabilityArgs& args) = 0;
@@ -161,6 +170,8 @@ class SnowBackend {
     beforeWrite_ = nullptr;
     f();
   }
+
+  std::function<void()> afterPowderSubstep_;
 
  private:
   std::function<void()> beforeWrite_;

@@ -117,6 +117,22 @@ class ExecBackend final : public SnowBackend {
     }
   }
 
+  void* hostScratch(ScratchField field) override {
+    if constexpr (Exec::kDevice) {
+      (void)field;
+      return nullptr;
+    } else {
+      switch (field) {
+#define SNOW_HOST_SCRATCH(view, Element, extent) \
+  case ScratchField::view: return static_cast<void*>(dataIfPresent(view##_));
+        SNOW_SCRATCH_FIELDS(SNOW_HOST_SCRATCH)
+#undef SNOW_HOST_SCRATCH
+        case ScratchField::Count: break;
+      }
+      return nullptr;
+    }
+  }
+
   // The scratch made with the state comes back, zeroed, with the next kernel's view.
   void releaseScratch(bool avalancheFields) override {
 #define SNOW_RELEASE_SCRATCH(view, Element, extent) \
@@ -146,7 +162,7 @@ class ExecBackend final : public SnowBackend {
     exec_.finish();
   }
   void powderDiffusion(const PowderDiffusionArgs& a) override {
-    runPowderDiffusion(exec_, view(), a);
+    runPowderDiffusion(exec_, view(), a, afterPowderSubstep_);
     exec_.finish();
   }
 

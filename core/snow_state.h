@@ -32,6 +32,13 @@ enum class SnowField : int {
 #undef SNOW_FIELD_ID
   Count
 };
+// Each of the backend's scratch fields (SNOW_SCRATCH_FIELDS) by its view's name.
+enum class ScratchField : int {
+#define SNOW_SCRATCH_ID(view, Element, extent) view,
+  SNOW_SCRATCH_FIELDS(SNOW_SCRATCH_ID)
+#undef SNOW_SCRATCH_ID
+  Count
+};
 using SnowFieldSet = uint64_t;
 static_assert(static_cast<int>(SnowField::Count) <= 64, "SnowFieldSet holds a bit a field");
 constexpr SnowFieldSet fieldBit(SnowField f) { return SnowFieldSet(1) << static_cast<int>(f); }

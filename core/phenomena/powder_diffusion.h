@@ -37,6 +37,7 @@
 // (core/parameters.h; scene keys in parameterTable, parameters.cpp).
 #pragma once
 #include <cmath>
+#include <functional>
 #include "../hd.h"
 #include "../parameters.h"
 #include "../snow_state.h"
@@ -237,8 +238,11 @@ inline PowderDiffusionArgs makePowderDiffusionArgs(const ModelParameters& p, dou
   return a;
 }
 
+// `afterSubstep`, when set, runs after each substep (a distributed run refreshes the powder's halo
+// there, so its halo need not grow with the substeps).
 template <class Exec>
-void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusionArgs& a) {
+void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusionArgs& a,
+                        const std::function<void()>& afterSubstep = {}) {
   const float minCell = v.cellSizeXM < v.cellSizeYM ? v.cellSizeXM : v.cellSizeYM;
   const int substeps = powderDiffusionSubsteps(a.dtDays, a.diffusionRatePerDay, a.diffusionLengthM, minCell);
   PowderDiffusionArgs sub = a;
@@ -247,7 +251,13 @@ void runPowderDiffusion(Exec& exec, const SnowFieldsView& v, const PowderDiffusi
   // Each substep: every cell's shares from the state at the substep's start, then every cell
   // gathers what it keeps and what its neighbours give it. The TBB executor interleaves the two
   // passes row by row (powder_diffusion_rows.h); the others run them one after the other.
-  for (int s = 0; s < substeps; ++s) exec.forEachCellThen(v.width, v.height, PowderFlowKernel{v, sub}, PowderGatherKernel{v});
+  for (int s = 0; s < substeps; ++s) {
+    exec.forEachCellThen(v.width, v.height, PowderFlowKernel{v, sub}, PowderGatherKernel{v});
+    if (afterSubstep) {
+      exec.finish();
+      afterSubstep();
+    }
+  }
 }
 
 }  // namespace snow
