@@ -2,7 +2,7 @@
 // phenomena (continuous_step.h) on the default range at size x size cells of 10 m, half-day steps,
 // on as many ranks as the launcher started. Prints one table row: the process grid, the halo,
 // each rank's share of the grid, the time per step in the kernels, waiting for the slowest rank
-// before each exchange (a barrier, for this measure only) and in the halo exchange (slowest rank
+// before each refresh (a barrier, for this measure only) and in the halo exchange (slowest rank
 // each), the bytes all ranks send per step, the fields' memory and peak resident memory per rank. tools/bench-distributed.sh runs it on 1, 2 and 4 ranks.
 //   distributed_bench [size=2048] [steps=4] [--header]
 //   distributed_bench SIZE --plan RANKS   the exchange volume of RANKS ranks from the halo plan
@@ -11,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -20,7 +21,9 @@
 
 #include "core/cpu_backend.h"
 #include "core/default_terrain.h"
+#include "core/phenomena/powder_diffusion.h"
 #include "distributed/continuous_step.h"
+#include "distributed/distributed_backend.h"
 
 using namespace snow;
 using namespace snow::dist;
@@ -60,21 +63,24 @@ double peakResidentMB() {
   return u.ru_maxrss / 1024.0;
 }
 
-// The bytes a halo refresh moves: the snow layers (4 floats) and the moving flag, a cell.
-constexpr double kExchangedBytesPerCell = 4 * sizeof(float) + sizeof(uint8_t);
-constexpr int kRefreshesPerStep = 5;  // one after each phenomenon
+// A step's refreshes: after each of its five phenomena the snow layers (4 floats) and the moving
+// flag a cell, and after each of powder diffusion's substeps the powder (a float).
+double exchangedBytesPerCell(double dt) {
+  ModelParameters p;
+  const int substeps = powderDiffusionSubsteps(static_cast<float>(dt), static_cast<float>(p.diffusionRatePerDay),
+                                               static_cast<float>(p.diffusionLengthM), 10.f);
+  return 5.0 * (4 * sizeof(float) + sizeof(uint8_t)) + substeps * sizeof(float);
+}
 
 int planRow(int size, int ranks) {
-  ModelParameters p;
-  const int halo = continuousStepHalo(p, 0.5, 10.0);
-  const Decomposition d = Decomposition::choose(ranks, size, size, halo);
+  const Decomposition d = Decomposition::choose(ranks, size, size, kContinuousHalo);
   double sent = 0, largest = 0;
   for (int r = 0; r < ranks; ++r) {
     for (const HaloTransfer& t : haloPlan(d, r).sends) sent += static_cast<double>(t.cells.cells());
     largest = std::max(largest, static_cast<double>(d.local(r).cells()));
   }
-  std::printf("| %d (plan) | %d x %d | %d | %.0f cells (%.4f) | | | | %.1f | | | |\n", ranks, d.columns, d.rows, halo, largest,
-              largest / (static_cast<double>(size) * size), sent * kExchangedBytesPerCell * kRefreshesPerStep / 1e6);
+  std::printf("| %d (plan) | %d x %d | %d | %.0f cells (%.4f) | | | | %.1f | | | |\n", ranks, d.columns, d.rows, kContinuousHalo, largest,
+              largest / (static_cast<double>(size) * size), sent * exchangedBytesPerCell(0.5) / 1e6);
   return 0;
 }
 
@@ -99,25 +105,25 @@ int main(int argc, char** argv) {
 
   ModelParameters p;
   const double dt = 0.5;
-  const int halo = continuousStepHalo(p, dt, 10.0);
+  const int halo = kContinuousHalo;
   const Decomposition d = Decomposition::choose(comm.size(), size, size, halo);
-  const HaloPlan plan = haloPlan(d, comm.rank());
-  auto backend = createCpuBackend();
+  DistributedBackend backend(createCpuBackend(), comm, d, true);
   size_t fieldBytes = 0;
   {
     SnowState local = localState(size, d.local(comm.rank()));
     fieldBytes = local.bytes([](FieldRole) { return true; });
-    backend->uploadTaking(local);
+    backend.uploadTaking(local);
   }
-  StepCost total;
+  const auto t0 = std::chrono::steady_clock::now();
   for (int s = 0; s < steps; ++s) {
     WeatherState w;
     w.seaLevelTemperatureC = s % 2 ? 2.0 : -4.0;
-    const StepCost c = continuousStep(*backend, RankContext{&comm, &d, &plan, true}, p, dt, w);
-    total.computeS += c.computeS, total.waitS += c.waitS, total.exchangeS += c.exchangeS, total.bytesSent += c.bytesSent;
+    continuousStep(backend, p, dt, w);
   }
-  const std::vector<double> all = comm.allGather({total.computeS / steps, total.waitS / steps, total.exchangeS / steps,
-                                                  static_cast<double>(total.bytesSent) / steps, static_cast<double>(fieldBytes),
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double kernels = wall - backend.waitSeconds() - backend.exchangeSeconds();
+  const std::vector<double> all = comm.allGather({kernels / steps, backend.waitSeconds() / steps, backend.exchangeSeconds() / steps,
+                                                  static_cast<double>(backend.bytesSent()) / steps, static_cast<double>(fieldBytes),
                                                   static_cast<double>(d.local(comm.rank()).cells()), peakResidentMB()});
   if (comm.rank() != 0) return 0;
   double compute = 0, fastest = 1e300, wait = 0, exchange = 0, sent = 0, fields = 0, cells = 0, rss = 0;
