@@ -1,9 +1,11 @@
 // The cost of the distributed decomposition (docs/distributed.md): the season's continuous
 // phenomena (continuous_step.h) on the default range at size x size cells of 10 m, half-day steps,
 // on as many ranks as the launcher started. Prints one table row: the process grid, the halo,
-// each rank's share of the grid, the time per step in the kernels, waiting for the slowest rank
-// before each refresh (a barrier, for this measure only) and in the halo exchange (slowest rank
-// each), the bytes all ranks send per step, the fields' memory and peak resident memory per rank. tools/bench-distributed.sh runs it on 1, 2 and 4 ranks.
+// each rank's share of the grid, and per step (slowest rank each) the time in the kernels and the
+// exact sums (whose hand-offs along the process row wait too), waiting for the slowest rank
+// before each refresh (a barrier, for this measure only) and in the halo exchange; the bytes all
+// ranks send per step, the fields' memory and peak resident memory per rank.
+// tools/bench-distributed.sh runs it on 1, 2 and 4 ranks.
 //   distributed_bench [size=2048] [steps=4] [--header]
 //   distributed_bench SIZE --plan RANKS   the exchange volume of RANKS ranks from the halo plan
 //                                         alone (nothing allocated: for grids beyond this machine)
@@ -63,13 +65,13 @@ double peakResidentMB() {
   return u.ru_maxrss / 1024.0;
 }
 
-// A step's refreshes: after each of its five phenomena the snow layers (4 floats) and the moving
-// flag a cell, and after each of powder diffusion's substeps the powder (a float).
+// A step's refreshes: after snowfall, stability, melt and wind transport the snow layers (4
+// floats) and the moving flag a cell, after each of powder diffusion's substeps the powder.
 double exchangedBytesPerCell(double dt) {
   ModelParameters p;
   const int substeps = powderDiffusionSubsteps(static_cast<float>(dt), static_cast<float>(p.diffusionRatePerDay),
                                                static_cast<float>(p.diffusionLengthM), 10.f);
-  return 5.0 * (4 * sizeof(float) + sizeof(uint8_t)) + substeps * sizeof(float);
+  return 4.0 * (4 * sizeof(float) + sizeof(uint8_t)) + substeps * sizeof(float);
 }
 
 int planRow(int size, int ranks) {
@@ -129,14 +131,18 @@ int main(int argc, char** argv) {
   double compute = 0, fastest = 1e300, wait = 0, exchange = 0, sent = 0, fields = 0, cells = 0, rss = 0;
   for (int r = 0; r < comm.size(); ++r) {
     const double* v = &all[static_cast<size_t>(r) * 7];
-    compute = std::max(compute, v[0]), fastest = std::min(fastest, v[0]), wait = std::max(wait, v[1]), exchange = std::max(exchange, v[2]), sent += v[3];
+    compute = std::max(compute, v[0]), fastest = std::min(fastest, v[0]);
+    wait = std::max(wait, v[1]), exchange = std::max(exchange, v[2]), sent += v[3];
     fields = std::max(fields, v[4]), cells = std::max(cells, v[5]), rss = std::max(rss, v[6]);
   }
   if (header) {
-    std::printf("| ranks | process grid | halo (cells) | largest local grid (share of the whole) | kernels s/step (fastest, slowest rank) | waiting s/step | exchange s/step | MB sent/step (all ranks) | fields MB/rank | peak RSS MB/rank | threads/rank |\n");
+    std::printf(
+        "| ranks | process grid | halo (cells) | largest local grid (share of the whole) | kernels and sums s/step (fastest, slowest rank) "
+        "| waiting s/step | exchange s/step | MB sent/step (all ranks) | fields MB/rank | peak RSS MB/rank | threads/rank |\n");
     std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   }
-  std::printf("| %d | %d x %d | %d | %.0f cells (%.3f) | %.3f, %.3f | %.4f | %.4f | %.1f | %.0f | %.0f | %d |\n", comm.size(), d.columns, d.rows,
-              halo, cells, cells / (static_cast<double>(size) * size), fastest, compute, wait, exchange, sent / 1e6, fields / 1e6, rss, threads);
+  std::printf("| %d | %d x %d | %d | %.0f cells (%.3f) | %.3f, %.3f | %.4f | %.4f | %.1f | %.0f | %.0f | %d |\n", comm.size(), d.columns,
+              d.rows, halo, cells, cells / (static_cast<double>(size) * size), fastest, compute, wait, exchange, sent / 1e6, fields / 1e6,
+              rss, threads);
   return 0;
 }

@@ -30,6 +30,7 @@ MpiSession::MpiSession() {
   if (!ready) {
     int provided = 0;
     check(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+    if (provided < MPI_THREAD_FUNNELED) throw std::runtime_error("MPI: this MPI does not allow threads beside the main one (TBB's)");
   }
   sessionOpen = true;
 }

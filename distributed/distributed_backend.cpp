@@ -10,19 +10,23 @@
 
 namespace snow::dist {
 
-std::string distributedSeasonRefusal(const SeasonConfig& c) {
+std::string distributedSeasonRefusal(const SeasonConfig& c, const SnowState& state) {
   const ModelParameters& p = c.params;
   if (p.avalancheRatePerKm2PerDay > 0.0 || !c.userAvalanches.empty()) return "avalanches";
   if ((p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !c.userSkiers.empty()) return "skiers";
   if (c.bedforms) return "wind bedforms";
   if (!c.edits.empty()) return "timeline edits";
   if (c.updateStaticFields) return "static fields that change with the day (a wind timeline, daily sun)";
+  if (state.noSnow.size() > 0) return "no-snow masks";
   return "";
 }
 
 DistributedBackend::DistributedBackend(std::unique_ptr<SnowBackend> local, const Communicator& comm, const Decomposition& d,
                                        bool measureWaits)
     : local_(std::move(local)), comm_(comm), d_(d), plan_(haloPlan(d, comm.rank())), measureWaits_(measureWaits) {
+  if (comm.size() != d.ranks())
+    throw std::invalid_argument("DistributedBackend: a decomposition of " + std::to_string(d.ranks()) + " ranks run on " +
+                                std::to_string(comm.size()));
   if (d.halo < kContinuousHalo)
     throw std::invalid_argument("DistributedBackend: a halo of " + std::to_string(d.halo) + " cells, where the season needs " +
                                 std::to_string(kContinuousHalo));
@@ -33,14 +37,31 @@ void DistributedBackend::notYet(const char* what) {
   throw std::logic_error(std::string("a season across ranks does not run ") + what + " yet (docs/distributed.md)");
 }
 
+// The halo exchange and the sums index the local grid by the decomposition: it must be that one.
+void DistributedBackend::checkLocalGrid(const GridSpec& spec) const {
+  const CellRect l = d_.local(comm_.rank());
+  if (spec.width != l.width() || spec.height != l.height())
+    throw std::invalid_argument("DistributedBackend: a " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                                " state uploaded on rank " + std::to_string(comm_.rank()) + ", whose local grid is " +
+                                std::to_string(l.width()) + " x " + std::to_string(l.height()));
+}
+
 void DistributedBackend::upload(const SnowState& s) {
+  checkLocalGrid(s.spec);
   spec_ = s.spec;
   local_->upload(s);
 }
 
 void DistributedBackend::uploadTaking(SnowState& s) {
+  checkLocalGrid(s.spec);
   spec_ = s.spec;
   local_->uploadTaking(s);
+}
+
+void* DistributedBackend::field(SnowField f) {
+  void* data = local_->hostField(f);
+  if (!data) throw std::logic_error("DistributedBackend: the local backend's fields are not in host memory");
+  return data;
 }
 
 // The evolved and record fields (the field table's roles a phenomenon writes), or the powder alone
@@ -54,15 +75,16 @@ void DistributedBackend::refreshHalo(bool powderOnly) {
     waitS_ += since(t);
   }
   const auto t0 = Clock::now();
-  if (powderOnly) bytesSent_ += exchangeHalo(comm_, d_, plan_, local_->hostField(SnowField::powderM), sizeof(float));
-  else bytesSent_ += exchangeBackendHalos(comm_, d_, plan_, *local_, [](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; });
+  auto evolved = [](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; };
+  if (powderOnly) bytesSent_ += exchangeHalo(comm_, d_, plan_, field(SnowField::powderM), sizeof(float));
+  else bytesSent_ += exchangeBackendHalos(comm_, d_, plan_, *local_, evolved);
   exchangeS_ += since(t0);
 }
 
 double DistributedBackend::deltaVolume() {
   const auto* delta = static_cast<const float*>(local_->hostScratch(ScratchField::delta));
-  const auto* valid = static_cast<const uint8_t*>(local_->hostField(SnowField::validCell));
-  if (!delta || !valid) throw std::logic_error("DistributedBackend: the local backend's fields are not in host memory");
+  if (!delta) throw std::logic_error("DistributedBackend: the local backend's scratch is not in host memory");
+  const auto* valid = static_cast<const uint8_t*>(field(SnowField::validCell));
   return exactSum(comm_, d_, delta, valid) * static_cast<double>(static_cast<float>(spec_.cellSizeXM)) *
          static_cast<float>(spec_.cellSizeYM);
 }
@@ -81,10 +103,10 @@ double DistributedBackend::melt(const MeltArgs& a) {
   return deltaVolume();
 }
 
+// Powder diffusion writes the powder alone, whose halo its last substep's hook has refreshed.
 void DistributedBackend::powderDiffusion(const PowderDiffusionArgs& a) {
   fireBeforeWrite();
   local_->powderDiffusion(a);
-  refreshHalo();
 }
 
 void DistributedBackend::windTransport(const WindTransportArgs& a) {
@@ -100,10 +122,7 @@ void DistributedBackend::stabilityChange(const StabilityArgs& a) {
 }
 
 double DistributedBackend::layerSum(SnowField layer) {
-  const auto* values = static_cast<const float*>(local_->hostField(layer));
-  const auto* valid = static_cast<const uint8_t*>(local_->hostField(SnowField::validCell));
-  if (!values || !valid) throw std::logic_error("DistributedBackend: the local backend's fields are not in host memory");
-  return exactSum(comm_, d_, values, valid);
+  return exactSum(comm_, d_, static_cast<const float*>(field(layer)), static_cast<const uint8_t*>(field(SnowField::validCell)));
 }
 
 LayerTotals DistributedBackend::totals() {
@@ -117,10 +136,8 @@ LayerTotals DistributedBackend::totals() {
 }
 
 float DistributedBackend::maxTemperatureBaseC() {
-  const auto* values = static_cast<const float*>(local_->hostField(SnowField::temperatureBaseC));
-  const auto* valid = static_cast<const uint8_t*>(local_->hostField(SnowField::validCell));
-  if (!values || !valid) throw std::logic_error("DistributedBackend: the local backend's fields are not in host memory");
-  return exactMax(comm_, d_, values, valid);
+  return exactMax(comm_, d_, static_cast<const float*>(field(SnowField::temperatureBaseC)),
+                  static_cast<const uint8_t*>(field(SnowField::validCell)));
 }
 
 }  // namespace snow::dist

@@ -16,8 +16,9 @@
 
 namespace snow::dist {
 
-// Why `config` (its parameters and events) cannot run across ranks yet; empty when it can.
-std::string distributedSeasonRefusal(const SeasonConfig& config);
+// Why `config` (its parameters and events) on `state` cannot run across ranks yet; empty when it
+// can. (A no-snow mask's removed snow is added up on the host in whole-grid order.)
+std::string distributedSeasonRefusal(const SeasonConfig& config, const SnowState& state);
 
 class DistributedBackend final : public SnowBackend {
  public:
@@ -26,6 +27,9 @@ class DistributedBackend final : public SnowBackend {
   // of powder diffusion's substeps. With `measureWaits`, a barrier before each refresh, so that
   // exchangeSeconds is the transfer alone and waitSeconds the wait for the slowest rank.
   DistributedBackend(std::unique_ptr<SnowBackend> local, const Communicator& comm, const Decomposition& d, bool measureWaits = false);
+
+  DistributedBackend(const DistributedBackend&) = delete;  // local_'s substep hook holds `this`
+  DistributedBackend& operator=(const DistributedBackend&) = delete;
 
   std::string name() const override { return local_->name(); }
   void upload(const SnowState& s) override;
@@ -67,6 +71,8 @@ class DistributedBackend final : public SnowBackend {
 
  private:
   [[noreturn]] static void notYet(const char* what);
+  void checkLocalGrid(const GridSpec& spec) const;
+  void* field(SnowField f);
   void refreshHalo(bool powderOnly = false);
   // A step's `delta` over the owned cells, times the cell area in the kernels' float cell sizes:
   // what the single process's snowfall and melt return.

@@ -2,15 +2,18 @@
 // initialising MPI: header only, so the program can ask without linking MPI.
 #pragma once
 #include <cstdlib>
+#include <cstring>
 
 namespace snow::dist {
 
 // 1 when the program was started alone (or by a launcher with one process).
 inline int launchedRanks() {
-  // OpenMPI's mpirun, then PMI (MPICH, srun --mpi=pmi2), then srun --mpi=pmix (its step's tasks;
-  // not a batch script's SLURM_NTASKS: a farm's job may take several cores for one process).
-  const bool pmix = std::getenv("PMIX_RANK") != nullptr;
-  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", pmix ? "SLURM_STEP_NUM_TASKS" : ""}) {
+  // OpenMPI's mpirun, then PMI (MPICH, srun --mpi=pmi2), then an srun step's tasks (srun sets a
+  // numeric SLURM_STEP_ID; a batch script, whose SLURM_NTASKS may count cores for one process,
+  // runs in no such step).
+  const char* step = std::getenv("SLURM_STEP_ID");
+  const bool srunStep = step && *step && std::strspn(step, "0123456789") == std::strlen(step);
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", srunStep ? "SLURM_STEP_NUM_TASKS" : ""}) {
     if (!*name) continue;
     const char* v = std::getenv(name);
     if (!v || !*v) continue;

@@ -40,6 +40,8 @@ template <class T>
 void gatherField(const Communicator& comm, const Decomposition& d, const Grid<T>& local, Grid<T>& whole, int root, const char* name) {
   const int self = comm.rank();
   const CellRect at = d.local(self);
+  if (local.size() != at.cells())
+    throw std::invalid_argument(std::string("gatherOwned: rank ") + std::to_string(self) + "'s " + name + " is not its local grid");
   auto ownedBlock = [&](const CellRect& o) {
     std::vector<T> block(o.cells());
     copyRect(local.data(), at.width(), o.x0 - at.x0, o.y0 - at.y0, block.data(), o.width(), 0, 0, o.width(), o.height());

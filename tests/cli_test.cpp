@@ -187,6 +187,16 @@ TEST(Cli, BakeStartedAsSeveralMpiProcessesIsRefusedBeforeWritingAnything) {
   EXPECT_NE(r.err.find("started as 2 processes"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
   EXPECT_EQ(info.status, 0);  // reading commands still run
+  setenv("SLURM_STEP_ID", "0", 1);  // srun -n 3, whatever its MPI plugin
+  setenv("SLURM_STEP_NUM_TASKS", "3", 1);
+  const ProcessResult srun = snowbake(dir, "bake preset:default --set terrain.size=64 --out " + (dir / "out").string());
+  setenv("SLURM_STEP_ID", "batch", 1);  // a batch script of a job with 3 tasks: one process
+  const ProcessResult batch = snowbake(dir, "help scene");
+  unsetenv("SLURM_STEP_ID");
+  unsetenv("SLURM_STEP_NUM_TASKS");
+  EXPECT_EQ(srun.status, 2);
+  EXPECT_NE(srun.err.find("started as 3 processes"), std::string::npos) << srun.err;
+  EXPECT_EQ(batch.status, 0);
   setenv("OMPI_COMM_WORLD_SIZE", "1", 1);  // mpirun -np 1: the bake as ever
   const ProcessResult one = snowbake(dir, "bake preset:default --set terrain.size=64 --set season.days=2 --set 'outputs.frames_days=[]' --no-cache --out " + (dir / "one").string());
   unsetenv("OMPI_COMM_WORLD_SIZE");

@@ -267,17 +267,28 @@ SeasonConfig continuousSeason() {
 }
 
 TEST(DistributedSeason, RefusesWhatIsNotAcrossRanksYetNamingIt) {
+  SnowState state = testState(20, 20);
   SeasonConfig c = continuousSeason();
-  EXPECT_EQ(distributedSeasonRefusal(c), "");
+  EXPECT_EQ(distributedSeasonRefusal(c, state), "");
   c.params.avalancheRatePerKm2PerDay = 0.1;
-  EXPECT_EQ(distributedSeasonRefusal(c), "avalanches");
+  EXPECT_EQ(distributedSeasonRefusal(c, state), "avalanches");
   c = continuousSeason();
   c.userSkiers.push_back({});
-  EXPECT_EQ(distributedSeasonRefusal(c), "skiers");
+  EXPECT_EQ(distributedSeasonRefusal(c, state), "skiers");
   c = continuousSeason();
   c.edits.push_back({});
-  EXPECT_EQ(distributedSeasonRefusal(c), "timeline edits");
-  EXPECT_NE(distributedSeasonRefusal(SeasonConfig{}), "");  // the defaults have avalanches and skiers
+  EXPECT_EQ(distributedSeasonRefusal(c, state), "timeline edits");
+  EXPECT_NE(distributedSeasonRefusal(SeasonConfig{}, state), "");  // the defaults have avalanches and skiers
+  state.noSnow.resize(20, 20, 0);
+  EXPECT_EQ(distributedSeasonRefusal(continuousSeason(), state), "no-snow masks");
+}
+
+TEST(DistributedSeason, RefusesAStateThatIsNotTheRanksLocalGrid) {
+  const Communicator comm = Communicator::world();
+  const Decomposition d = Decomposition::choose(comm.size(), 60, 40, kContinuousHalo);
+  DistributedBackend b(createCpuBackend(), comm, d);
+  EXPECT_THROW(b.upload(testState(61, 40)), std::invalid_argument);
+  EXPECT_THROW(DistributedBackend(createCpuBackend(), comm, Decomposition::choose(comm.size(), 60, 40, 3)), std::invalid_argument);
 }
 
 // The season itself (its Poisson scheduler, elapsed-time steps and mass ledger) on each rank's
@@ -288,7 +299,7 @@ TEST(Ranks, SeasonOfSnowfallMeltAndTransportGivesTheSingleProcessBytesAndLedger)
   const int w = 150, h = 104;
   const SnowState initial = testState(w, h);
   const SeasonConfig config = continuousSeason();
-  ASSERT_EQ(distributedSeasonRefusal(config), "");
+  ASSERT_EQ(distributedSeasonRefusal(config, initial), "");
   const Decomposition d = Decomposition::choose(comm.size(), w, h, kContinuousHalo);
   SnowState whole = initial, local = cutLocalState(initial, d.local(comm.rank()));
   auto reference = createCpuBackend();
