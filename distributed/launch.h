@@ -10,9 +10,9 @@ namespace snow::dist {
 inline int launchedRanks() {
   // OpenMPI's mpirun, then PMI (MPICH, srun --mpi=pmi2), then an srun step's tasks (srun sets a
   // numeric SLURM_STEP_ID; a batch script, whose SLURM_NTASKS may count cores for one process,
-  // runs in no such step).
+  // runs in no such step, or in Slurm's batch or extern step, 4294967294 and 4294967295).
   const char* step = std::getenv("SLURM_STEP_ID");
-  const bool srunStep = step && *step && std::strspn(step, "0123456789") == std::strlen(step);
+  const bool srunStep = step && *step && std::strspn(step, "0123456789") == std::strlen(step) && std::strlen(step) < 10;
   for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", srunStep ? "SLURM_STEP_NUM_TASKS" : ""}) {
     if (!*name) continue;
     const char* v = std::getenv(name);
