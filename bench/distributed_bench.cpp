@@ -91,16 +91,17 @@ int planRow(int size, int ranks) {
 int main(int argc, char** argv) {
   MpiSession mpi;
   const Communicator comm = Communicator::world();
-  int size = 2048, steps = 4;
+  int size = 2048, steps = 4, planRanks = 0;
   bool header = false;
   std::vector<int> numbers;
   for (int a = 1; a < argc; ++a) {
     if (std::strcmp(argv[a], "--header") == 0) header = true;
-    else if (std::strcmp(argv[a], "--plan") != 0) numbers.push_back(std::atoi(argv[a]));
+    else if (std::strcmp(argv[a], "--plan") == 0 && a + 1 < argc) planRanks = std::atoi(argv[++a]);
+    else numbers.push_back(std::atoi(argv[a]));
   }
   if (numbers.size() > 0) size = numbers[0];
-  if (argc == 4 && std::strcmp(argv[2], "--plan") == 0) return planRow(size, std::atoi(argv[3]));
   if (numbers.size() > 1) steps = numbers[1];
+  if (planRanks > 0) return planRow(size, planRanks);
   // The cores shared among the ranks of this machine.
   const int threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / comm.size());
   tbb::global_control control(tbb::global_control::max_allowed_parallelism, threads);

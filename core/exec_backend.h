@@ -100,37 +100,27 @@ class ExecBackend final : public SnowBackend {
   }
 
   void* hostField(SnowField field) override {
-    if constexpr (Exec::kDevice) {
-      (void)field;
-      return nullptr;
-    } else {
-      switch (field) {
-#define SNOW_HOST_FIELD(member, view, Element, role, access, fill)                      \
-  case SnowField::member:                                                               \
-    if constexpr (heldByBackend(FieldRole::role)) return static_cast<void*>(dataIfPresent(member##_)); \
+    switch (field) {
+#define SNOW_HOST_FIELD(member, view, Element, role, access, fill) \
+  case SnowField::member:                                          \
+    if constexpr (heldByBackend(FieldRole::role)) return hostData(member##_); \
     else return nullptr;
-        SNOW_STATE_FIELDS(SNOW_HOST_FIELD)
+      SNOW_STATE_FIELDS(SNOW_HOST_FIELD)
 #undef SNOW_HOST_FIELD
-        case SnowField::Count: break;
-      }
-      return nullptr;
+      case SnowField::Count: break;
     }
+    return nullptr;
   }
 
   void* hostScratch(ScratchField field) override {
-    if constexpr (Exec::kDevice) {
-      (void)field;
-      return nullptr;
-    } else {
-      switch (field) {
+    switch (field) {
 #define SNOW_HOST_SCRATCH(view, Element, extent) \
-  case ScratchField::view: return static_cast<void*>(dataIfPresent(view##_));
-        SNOW_SCRATCH_FIELDS(SNOW_HOST_SCRATCH)
+  case ScratchField::view: return hostData(view##_);
+      SNOW_SCRATCH_FIELDS(SNOW_HOST_SCRATCH)
 #undef SNOW_HOST_SCRATCH
-        case ScratchField::Count: break;
-      }
-      return nullptr;
+      case ScratchField::Count: break;
     }
+    return nullptr;
   }
 
   // The scratch made with the state comes back, zeroed, with the next kernel's view.
@@ -349,6 +339,16 @@ class ExecBackend final : public SnowBackend {
   }
   template <class B>
   static auto dataIfPresent(B& b) -> decltype(b.data()) { return b.size() > 0 ? b.data() : nullptr; }
+  // A buffer's storage where the host can use it in place (hostField, hostScratch): null on a device.
+  template <class B>
+  static void* hostData(B& b) {
+    if constexpr (Exec::kDevice) {
+      (void)b;
+      return nullptr;
+    } else {
+      return static_cast<void*>(dataIfPresent(b));
+    }
+  }
   // A static field as it is; an art-direction one when the scene paints it (else an empty buffer).
   // A static field the host released (SeasonRun::releaseHostCopies: a day's refill replaces some of
   // them, the constant wind not) keeps the backend's values: uploaded, its buffer would be emptied

@@ -6,7 +6,6 @@
 #include <cstddef>
 #include <vector>
 
-
 namespace snow::dist {
 
 // Initialises MPI for the program's life where the build has it and a launcher started more than

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -48,6 +49,13 @@ Decomposition Decomposition::choose(int ranks, int width, int height, int halo) 
                                 std::to_string(height) + " grid into subdomains of at least " + std::to_string(side) +
                                 " cells a side (the halo); run fewer ranks");
   return best;
+}
+
+void copyCells(const CellRect& cells, const CellRect& fromGrid, const void* from, const CellRect& toGrid, void* to, size_t elementBytes) {
+  const size_t rowBytes = static_cast<size_t>(cells.width()) * elementBytes;
+  for (int y = cells.y0; y < cells.y1; ++y)
+    std::memcpy(static_cast<char*>(to) + toGrid.offsetOf(cells.x0, y) * elementBytes,
+                static_cast<const char*>(from) + fromGrid.offsetOf(cells.x0, y) * elementBytes, rowBytes);
 }
 
 HaloPlan haloPlan(const Decomposition& d, int self) {

@@ -15,6 +15,8 @@ struct CellRect {
   bool empty() const { return x1 <= x0 || y1 <= y0; }
   size_t cells() const { return empty() ? 0 : static_cast<size_t>(width()) * static_cast<size_t>(height()); }
   bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+  // Where whole-grid cell (x, y) lies in a row-major grid of this rectangle's cells.
+  size_t offsetOf(int x, int y) const { return static_cast<size_t>(y - y0) * static_cast<size_t>(width()) + static_cast<size_t>(x - x0); }
   CellRect intersect(const CellRect& o) const;
   bool operator==(const CellRect&) const = default;
 };
@@ -45,6 +47,10 @@ struct Decomposition {
   // factorisation gives every subdomain at least `halo` cells (and one) a side.
   static Decomposition choose(int ranks, int width, int height, int halo);
 };
+
+// Copies `cells` (whole-grid coordinates, inside both) from a row-major grid of `fromGrid`'s cells
+// to one of `toGrid`'s, `elementBytes` a cell: cutting, gathering and packing halo blocks.
+void copyCells(const CellRect& cells, const CellRect& fromGrid, const void* from, const CellRect& toGrid, void* to, size_t elementBytes);
 
 // One block of cells (whole-grid coordinates) that `self` sends to `peer` or receives from it.
 struct HaloTransfer {

@@ -12,7 +12,7 @@ double exactSum(const Communicator& comm, const Decomposition& d, const float* v
   if (column > 0) comm.exchange({}, {{d.rankAt(column - 1, row), rows.data(), rows.size() * sizeof(double)}});
   for (int y = mine.y0; y < mine.y1; ++y) {
     double s = rows[y - mine.y0];
-    const size_t first = static_cast<size_t>(y - at.y0) * at.width() + (mine.x0 - at.x0);
+    const size_t first = at.offsetOf(mine.x0, y);
     for (size_t i = first; i < first + static_cast<size_t>(mine.width()); ++i)
       if (valid[i]) s += static_cast<double>(values[i]);
     rows[y - mine.y0] = s;
@@ -30,7 +30,7 @@ float exactMax(const Communicator& comm, const Decomposition& d, const float* va
   const CellRect mine = d.owned(comm.rank()), at = d.local(comm.rank());
   float m = -std::numeric_limits<float>::infinity();
   for (int y = mine.y0; y < mine.y1; ++y) {
-    const size_t first = static_cast<size_t>(y - at.y0) * at.width() + (mine.x0 - at.x0);
+    const size_t first = at.offsetOf(mine.x0, y);
     for (size_t i = first; i < first + static_cast<size_t>(mine.width()); ++i)
       if (valid[i] && values[i] > m) m = values[i];
   }

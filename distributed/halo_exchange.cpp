@@ -1,6 +1,5 @@
 #include "halo_exchange.h"
 
-#include <cstring>
 #include <stdexcept>
 #include <vector>
 
@@ -8,22 +7,8 @@
 
 namespace snow::dist {
 
-namespace {
-// Copies the rows of `cells` between a local grid (origin `at`, `width` cells a row) and a packed block.
-void copyBlock(const CellRect& cells, const CellRect& at, size_t elementBytes, char* grid, char* block, bool toBlock) {
-  const size_t rowBytes = static_cast<size_t>(cells.width()) * elementBytes;
-  for (int y = cells.y0; y < cells.y1; ++y) {
-    char* g = grid + (static_cast<size_t>(y - at.y0) * at.width() + (cells.x0 - at.x0)) * elementBytes;
-    char* b = block + static_cast<size_t>(y - cells.y0) * rowBytes;
-    if (toBlock) std::memcpy(b, g, rowBytes);
-    else std::memcpy(g, b, rowBytes);
-  }
-}
-}  // namespace
-
 size_t exchangeHalo(const Communicator& comm, const Decomposition& d, const HaloPlan& plan, void* local, size_t elementBytes) {
   const CellRect at = d.local(comm.rank());
-  char* grid = static_cast<char*>(local);
   std::vector<std::vector<char>> out(plan.sends.size()), in(plan.receives.size());
   std::vector<Communicator::Send> sends;
   std::vector<Communicator::Receive> receives;
@@ -31,7 +16,7 @@ size_t exchangeHalo(const Communicator& comm, const Decomposition& d, const Halo
   for (size_t k = 0; k < plan.sends.size(); ++k) {
     const HaloTransfer& t = plan.sends[k];
     out[k].resize(t.cells.cells() * elementBytes);
-    copyBlock(t.cells, at, elementBytes, grid, out[k].data(), true);
+    copyCells(t.cells, at, local, t.cells, out[k].data(), elementBytes);
     sends.push_back({t.peer, out[k].data(), out[k].size()});
     sent += out[k].size();
   }
@@ -40,7 +25,10 @@ size_t exchangeHalo(const Communicator& comm, const Decomposition& d, const Halo
     receives.push_back({plan.receives[k].peer, in[k].data(), in[k].size()});
   }
   comm.exchange(sends, receives);
-  for (size_t k = 0; k < plan.receives.size(); ++k) copyBlock(plan.receives[k].cells, at, elementBytes, grid, in[k].data(), false);
+  for (size_t k = 0; k < plan.receives.size(); ++k) {
+    const CellRect& cells = plan.receives[k].cells;
+    copyCells(cells, cells, in[k].data(), at, local, elementBytes);
+  }
   return sent;
 }
 

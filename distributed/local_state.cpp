@@ -1,20 +1,10 @@
 #include "local_state.h"
 
-#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace snow::dist {
-
-namespace {
-template <class T>
-void copyRect(const T* from, int fromWidth, int fromX, int fromY, T* to, int toWidth, int toX, int toY, int width, int height) {
-  for (int r = 0; r < height; ++r)
-    std::memcpy(to + static_cast<size_t>(toY + r) * toWidth + toX, from + static_cast<size_t>(fromY + r) * fromWidth + fromX,
-                static_cast<size_t>(width) * sizeof(T));
-}
-}  // namespace
 
 SnowState cutLocalState(const SnowState& whole, const CellRect& cells) {
   SnowState local;
@@ -26,8 +16,8 @@ SnowState cutLocalState(const SnowState& whole, const CellRect& cells) {
 #define SNOW_CUT_FIELD(member, view, Element, role, access, fill)                                                           \
   if (whole.member.size() == whole.spec.cellCount() && whole.member.size() > 0) {                                           \
     local.member.resize(cells.width(), cells.height());                                                                     \
-    copyRect(whole.member.data(), whole.spec.width, cells.x0, cells.y0, local.member.data(), cells.width(), 0, 0, cells.width(), \
-             cells.height());                                                                                               \
+    copyCells(cells, CellRect{0, 0, whole.spec.width, whole.spec.height}, whole.member.data(), cells, local.member.data(),   \
+              sizeof(Element));                                                                                             \
   }
   SNOW_STATE_FIELDS(SNOW_CUT_FIELD)
 #undef SNOW_CUT_FIELD
@@ -44,7 +34,7 @@ void gatherField(const Communicator& comm, const Decomposition& d, const Grid<T>
     throw std::invalid_argument(std::string("gatherOwned: rank ") + std::to_string(self) + "'s " + name + " is not its local grid");
   auto ownedBlock = [&](const CellRect& o) {
     std::vector<T> block(o.cells());
-    copyRect(local.data(), at.width(), o.x0 - at.x0, o.y0 - at.y0, block.data(), o.width(), 0, 0, o.width(), o.height());
+    copyCells(o, at, local.data(), o, block.data(), sizeof(T));
     return block;
   };
   if (self != root) {
@@ -58,7 +48,7 @@ void gatherField(const Communicator& comm, const Decomposition& d, const Grid<T>
     const CellRect o = d.owned(peer);
     std::vector<T> block = peer == root ? ownedBlock(o) : std::vector<T>(o.cells());
     if (peer != root) comm.exchange({}, {{peer, block.data(), block.size() * sizeof(T)}});
-    copyRect(block.data(), o.width(), 0, 0, whole.data(), d.width, o.x0, o.y0, o.width(), o.height());
+    copyCells(o, o, block.data(), CellRect{0, 0, d.width, d.height}, whole.data(), sizeof(T));
   }
 }
 }  // namespace

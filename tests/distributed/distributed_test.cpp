@@ -89,14 +89,14 @@ TEST(HaloPlan, EveryHaloCellComesFromItsOwnerOnceAndEachSendIsItsPeersReceive) {
       for (const HaloTransfer& t : plans[r].receives) {
         EXPECT_EQ(t.cells.intersect(d.owned(t.peer)), t.cells);
         for (int y = t.cells.y0; y < t.cells.y1; ++y)
-          for (int x = t.cells.x0; x < t.cells.x1; ++x) ++got[static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0)];
+          for (int x = t.cells.x0; x < t.cells.x1; ++x) ++got[l.offsetOf(x, y)];
         bool matched = false;
         for (const HaloTransfer& s : plans[t.peer].sends) matched |= s.peer == r && s.cells == t.cells;
         EXPECT_TRUE(matched) << "rank " << t.peer << " sends rank " << r << " no such block";
       }
       for (int y = l.y0; y < l.y1; ++y)
         for (int x = l.x0; x < l.x1; ++x)
-          EXPECT_EQ(got[static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0)], o.contains(x, y) ? 0 : 1) << x << ", " << y;
+          EXPECT_EQ(got[l.offsetOf(x, y)], o.contains(x, y) ? 0 : 1) << x << ", " << y;
     }
   }
 }
@@ -149,7 +149,7 @@ TEST(Ranks, HaloExchangeFillsEveryHaloCellWithItsOwnersValue) {
   std::vector<double> g(l.cells());
   for (int y = l.y0; y < l.y1; ++y)
     for (int x = l.x0; x < l.x1; ++x) {
-      const size_t i = static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0);
+      const size_t i = l.offsetOf(x, y);
       f[i] = o.contains(x, y) ? unit(x, y, 9) : NAN;  // the halo starts wrong
       g[i] = o.contains(x, y) ? 1.0 + unit(x, y, 10) : -1.0;
     }
@@ -159,7 +159,7 @@ TEST(Ranks, HaloExchangeFillsEveryHaloCellWithItsOwnersValue) {
   }
   for (int y = l.y0; y < l.y1; ++y)
     for (int x = l.x0; x < l.x1; ++x) {
-      const size_t i = static_cast<size_t>(y - l.y0) * l.width() + (x - l.x0);
+      const size_t i = l.offsetOf(x, y);
       EXPECT_EQ(std::bit_cast<uint32_t>(f[i]), std::bit_cast<uint32_t>(unit(x, y, 9))) << x << ", " << y;
       EXPECT_EQ(g[i], 1.0 + unit(x, y, 10)) << x << ", " << y;
     }
