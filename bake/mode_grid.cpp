@@ -8,9 +8,11 @@
 #include <iomanip>
 #include <optional>
 
+#include "across_ranks.h"
 #include "bake_stage.h"
 #include "bakers/bake_manifest.h"
 #include "core/atomic_file.h"
+#include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/format.h"
 #include "memory_model.h"
@@ -124,6 +126,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   progress().stage("terrain", 0.0);
   const BakeTerrain terrain = loadBakeTerrain(scene, log);
   const GridMemoryPlan memoryPlan = checkGridMemory(scene, terrain, options.frames, log);
+  checkRanksSuitTheGrid(terrain.info().spec);
   const MemoryPrediction& memory = memoryPlan.prediction;
   progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
@@ -146,9 +149,11 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const uint8_t needs = layersNeeds(layers);
   if (!pre.wind->varies() && !(needs & kNeedsWind)) pre.wind->releaseFields();
 
-  std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : chooseBackend(scene.backend, log);
+  // Across ranks, each rank's season runs on the CPU (acrossRanksRefusal refuses run.backend = "cuda").
+  std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : bakingAcrossRanks() ? createCpuBackend() : chooseBackend(scene.backend, log);
   const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
-  createOutputFolder(options.outDir);
+  if (bakingAcrossRanks()) log << "backend: " << backendName << " on each rank\n";
+  if (writesOutputs()) createOutputFolder(options.outDir);
 
   OutputSink files;  // every file written, in order: the manifest's list
   const SinkScope filesScope(files);
@@ -172,13 +177,19 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
     FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, memoryPlan.timing);
     config.lendFrames = frames.lendsFrames();
     config.spillFolder = options.outDir;
-    report = runSeasonStage(scene, *backend, state, config, frames, log);
+    report = bakingAcrossRanks() ? runSeasonAcrossRanks(scene, std::move(backend), state, config, frames, log)
+                                 : runSeasonStage(scene, *backend, state, config, frames, log);
     backend.reset();  // its copies of the state and its scratch, freed before the outputs
     // No writer reads the state's static fields, nor the exposure samples unless a layer reads the sun.
     state.releaseFields([](FieldRole r) { return r == FieldRole::Static; });
     if (pre.exposure && !(needs & kNeedsSun)) pre.exposure->release();
     frames.writeHeld();  // the frames held through the season (FrameTiming::AfterSeason)
   }
+
+  BakeResult result;
+  result.season = report;
+  result.backendName = backendName;
+  if (!writesOutputs()) return result;  // rank 0 writes a bake across ranks
 
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
   stage.emplace("outputs");
@@ -193,7 +204,6 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   progress().stage("outputs", 1.0);
   stage.emplace("manifest");  // the outputs stage's memory noted: every owner has had its peak
   progress().stage("manifest", 0.0);
-  BakeResult result;
   Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
                                             occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
                                             options.commandLine});
@@ -207,8 +217,6 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   for (const auto& [kind, seconds] : files.seconds) log << "  " << std::left << std::setw(36) << kind << std::right << fixed(seconds, 2) << " s\n";
   log << "total: " << fixed(elapsedSeconds(tStart), 2) << " s\n";
-  result.season = report;
-  result.backendName = backendName;
   return result;
 }
 

@@ -1,6 +1,7 @@
 #include "communicator.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -95,8 +96,20 @@ float Communicator::maxOverRanks(float value) const {
   return out;
 }
 
+int Communicator::maxOverRanks(int value) const {
+  if (size_ == 1) return value;
+  int out = value;
+  check(MPI_Allreduce(&value, &out, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
+  return out;
+}
+
 void Communicator::barrier() const {
   if (size_ > 1) check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
+}
+
+void Communicator::abortAll(int status) const {
+  if (size_ > 1) MPI_Abort(MPI_COMM_WORLD, status);
+  std::exit(status);
 }
 
 #else  // one process alone
@@ -109,7 +122,9 @@ void Communicator::exchange(const std::vector<Send>& sends, const std::vector<Re
 }
 std::vector<double> Communicator::allGather(const std::vector<double>& mine) const { return mine; }
 float Communicator::maxOverRanks(float value) const { return value; }
+int Communicator::maxOverRanks(int value) const { return value; }
 void Communicator::barrier() const {}
+void Communicator::abortAll(int status) const { std::exit(status); }
 
 #endif
 

@@ -17,7 +17,9 @@
 namespace snow::dist {
 
 // Why `config` (its parameters and events) on `state` cannot run across ranks yet; empty when it
-// can. (A no-snow mask's removed snow is added up on the host in whole-grid order.)
+// can. (A no-snow mask's removed snow is added up on the host in whole-grid order.) The config's
+// updateStaticFields, if any, must fill the rank's local grid: cutFields (local_state.h) cuts a
+// day's whole-grid fields to it.
 std::string distributedSeasonRefusal(const SeasonConfig& config, const SnowState& state);
 
 class DistributedBackend final : public SnowBackend {

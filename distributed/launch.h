@@ -24,4 +24,17 @@ inline int launchedRanks() {
   return 1;
 }
 
+// This process's rank among them (0 alone), from the same launchers' environment.
+inline int launchedRank() {
+  if (launchedRanks() <= 1) return 0;
+  for (const char* name : {"OMPI_COMM_WORLD_RANK", "PMI_RANK", "SLURM_PROCID"}) {
+    const char* v = std::getenv(name);
+    if (!v || !*v) continue;
+    char* end = nullptr;
+    const long n = std::strtol(v, &end, 10);
+    if (*end == '\0' && n >= 0 && n < (1L << 20)) return static_cast<int>(n);
+  }
+  return 0;
+}
+
 }  // namespace snow::dist

@@ -6,6 +6,23 @@
 
 namespace snow::dist {
 
+namespace {
+// One field of `whole` cut to `cells` in `local`.
+template <class T>
+void cutField(const Grid<T>& whole, const GridSpec& spec, const CellRect& cells, Grid<T>& local) {
+  local.resize(cells.width(), cells.height());
+  copyCells(cells, CellRect{0, 0, spec.width, spec.height}, whole.data(), cells, local.data(), sizeof(T));
+}
+}  // namespace
+
+void cutFields(const SnowState& whole, const CellRect& cells, const std::function<bool(FieldRole)>& pick, SnowState& local) {
+#define SNOW_CUT_FIELD(member, view, Element, role, access, fill)                                                      \
+  if (pick(FieldRole::role) && whole.member.size() == whole.spec.cellCount() && whole.member.size() > 0) \
+    cutField(whole.member, whole.spec, cells, local.member);
+  SNOW_STATE_FIELDS(SNOW_CUT_FIELD)
+#undef SNOW_CUT_FIELD
+}
+
 SnowState cutLocalState(const SnowState& whole, const CellRect& cells) {
   SnowState local;
   local.spec = whole.spec;
@@ -13,15 +30,18 @@ SnowState cutLocalState(const SnowState& whole, const CellRect& cells) {
   local.spec.height = cells.height();
   local.spec.originX = whole.spec.originX + cells.x0 * whole.spec.cellSizeXM;
   local.spec.originY = whole.spec.originY - cells.y0 * whole.spec.cellSizeYM;
-#define SNOW_CUT_FIELD(member, view, Element, role, access, fill)                                                           \
-  if (whole.member.size() == whole.spec.cellCount() && whole.member.size() > 0) {                                           \
-    local.member.resize(cells.width(), cells.height());                                                                     \
-    copyCells(cells, CellRect{0, 0, whole.spec.width, whole.spec.height}, whole.member.data(), cells, local.member.data(),   \
-              sizeof(Element));                                                                                             \
-  }
-  SNOW_STATE_FIELDS(SNOW_CUT_FIELD)
-#undef SNOW_CUT_FIELD
+  cutFields(whole, cells, [](FieldRole) { return true; }, local);
   return local;
+}
+
+SnowState wholeLike(const SnowState& local, const GridSpec& spec) {
+  SnowState whole;
+  whole.spec = spec;
+#define SNOW_WHOLE_FIELD(member, view, Element, role, access, fill) \
+  if (local.member.size() > 0) whole.member.resize(spec.width, spec.height);
+  SNOW_STATE_FIELDS(SNOW_WHOLE_FIELD)
+#undef SNOW_WHOLE_FIELD
+  return whole;
 }
 
 namespace {

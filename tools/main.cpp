@@ -22,15 +22,18 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/errors.h"
 #include "core/stop_request.h"
+#include "bake/across_ranks.h"
 #include "bake/bake.h"
 #include "bake/bake_stage.h"
 #include "bake/plan.h"
 #include "bake/progress.h"
 #include "bake/scene_list.h"
+#include "bake/stages.h"
 #include "bench/bench.h"
 #include "distributed/launch.h"
 #include "precompute/cache.h"
@@ -223,6 +226,51 @@ ProgressOutcome bakeOutcome(const BakeResult& r) {
 // The bake, its human log on stderr or in --log-file; with --progress json the last line on
 // stderr says how it ended (and errors are reported there, not as text). The scene (or level) is
 // chosen before the log is opened, so a bad list or index writes nothing.
+// A command's failure on stderr, one line, and its exit status.
+int describeFailure(std::exception_ptr failure) {
+  try {
+    std::rethrow_exception(failure);
+  } catch (const InputError& e) {
+    std::cerr << "snowbake: error: " << e.what() << "\n";
+    return 2;
+  } catch (const Interrupted& e) {
+    std::cerr << "snowbake: " << e.what() << "\n";
+    return kInterruptedExitStatus;
+  } catch (const std::bad_alloc&) {
+    // The memory model refuses what it predicts will not fit; this is what it did not foresee.
+    const std::string stage = currentBakeStage();
+    std::cerr << "snowbake: failed: out of memory" << (stage.empty() ? std::string() : " during the " + stage + " stage")
+              << " (the memory model's prediction was short: see docs/memory.md; lower run.max_memory_gb or bake a smaller grid)\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "snowbake: failed: " << e.what() << "\n";
+    return 1;
+  } catch (...) {
+    std::cerr << "snowbake: failed\n";
+    return 1;
+  }
+}
+
+// mpirun -np N / srun -n N snowbake bake: refused before any work unless the scene can be baked
+// across ranks (bake/across_ranks.h); rank 0 alone logs.
+int runBakeCommandAcrossRanks(const BakeCommand& c, const BakeOptions& bake, int ranks, const std::string& levelNote) {
+  const std::string started = "started as " + std::to_string(ranks) + " processes (mpirun or srun)";
+  if (c.progress == "json") throw InputError("--progress json: " + started + ", a bake across ranks reports on its log only (docs/distributed.md)");
+  if (const std::string why = acrossRanksRefusal(resolveScene(bake)); !why.empty()) throw InputError(why + "; " + started + ": change the scene, or run one process");
+  std::ofstream logFile;
+  std::ostream nowhere(nullptr);
+  std::ostream* log = &std::cerr;
+  if (snow::dist::launchedRank() != 0) {
+    log = &nowhere;
+  } else if (!c.logFile.empty()) {
+    logFile.open(c.logFile);
+    if (!logFile) throw InputError(c.logFile + ": cannot write the log file (--log-file)");
+    log = &logFile;
+  }
+  *log << levelNote;
+  return runBakeAcrossRanks(bake, *log, describeFailure);
+}
+
 int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
   std::ostringstream levelNote;
   BakeOptions bake;
@@ -234,6 +282,9 @@ int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
     return 2;
   }
   const StopOnSignals stopOnSignals;  // Ctrl-C and SIGTERM stop the bake between steps: exit 130
+  if (const int ranks = snow::dist::launchedRanks(); ranks > 1) {
+    return runBakeCommandAcrossRanks(c, bake, ranks, levelNote.str());
+  }
   std::ofstream logFile;
   std::ostream nowhere(nullptr);
   std::ostream* log = &std::cerr;
@@ -365,11 +416,11 @@ int main(int argc, char** argv) {
   addHelpCommand(app, help);
   addBenchCommand(app, bench);
   if (const std::optional<int> status = parseCommandLine(app, argc, argv)) return *status;
-  // Under mpirun -np N or srun -n N every process would bake the whole scene into the same
-  // outputs: refused, on every rank alike, until the bake runs decomposed (docs/distributed.md).
-  if (const int ranks = snow::dist::launchedRanks(); ranks > 1 && !*info.cmd && !*help.cmd) {
+  // Under mpirun -np N or srun -n N only a bake runs decomposed (docs/distributed.md); any other
+  // command would run N times over: refused, on every rank alike.
+  if (const int ranks = snow::dist::launchedRanks(); ranks > 1 && !*bake.cmd && !*info.cmd && !*help.cmd) {
     std::cerr << "snowbake: error: started as " << ranks
-              << " processes (mpirun or srun): a bake across ranks is not available yet (docs/distributed.md); run one process\n";
+              << " processes (mpirun or srun): only `snowbake bake` runs across ranks (docs/distributed.md); run one process\n";
     return 2;
   }
 
@@ -391,21 +442,16 @@ int main(int argc, char** argv) {
     } else if (*help.cmd) {
       std::cout << (help.markdown ? sceneReferenceMarkdown() : sceneReferenceText());
     }
-  } catch (const InputError& e) {
-    std::cerr << "snowbake: error: " << e.what() << "\n";
-    return 2;
-  } catch (const Interrupted& e) {
-    std::cerr << "snowbake: " << e.what() << "\n";
-    return kInterruptedExitStatus;
-  } catch (const std::bad_alloc&) {
-    // The memory model refuses what it predicts will not fit; this is what it did not foresee.
-    const std::string stage = currentBakeStage();
-    std::cerr << "snowbake: failed: out of memory" << (stage.empty() ? std::string() : " during the " + stage + " stage")
-              << " (the memory model's prediction was short: see docs/memory.md; lower run.max_memory_gb or bake a smaller grid)\n";
-    return 1;
-  } catch (const std::exception& e) {
-    std::cerr << "snowbake: failed: " << e.what() << "\n";
-    return 1;
+  } catch (const InputError&) {
+    // Started by mpirun or srun, every rank has the same input error: rank 0 says it, and ends
+    // first (mpirun ends the job at the first process that fails).
+    if (snow::dist::launchedRanks() > 1 && snow::dist::launchedRank() != 0) {
+      std::this_thread::sleep_for(std::chrono::seconds(1));
+      return 2;
+    }
+    return describeFailure(std::current_exception());
+  } catch (...) {
+    return describeFailure(std::current_exception());
   }
   return 0;
 }

@@ -1,0 +1,173 @@
+#include "across_ranks.h"
+
+#include <algorithm>
+#include <iostream>
+#include <stdexcept>
+
+#include "core/errors.h"
+#include "core/format.h"
+#include "core/stop_request.h"
+#include "distributed/communicator.h"
+#include "distributed/continuous_step.h"
+#include "distributed/decomposition.h"
+#include "distributed/distributed_backend.h"
+#include "distributed/launch.h"
+#include "distributed/local_state.h"
+#include "frame_writer.h"
+#include "memory_trace.h"
+#include "progress.h"
+#include "stages.h"
+
+namespace snow {
+
+namespace {
+
+// Set while the launch's MPI is up for a bake, and while the season exchanges (its failures
+// end every rank at once: the others wait in an exchange).
+bool acrossRanks = false;
+bool inSeason = false;
+
+// Another rank failed before the season: this one ends with its status, having said nothing.
+struct OtherRankFailed {
+  int status;
+};
+
+// The status every rank reached this point with (each passes its own; 0: fine).
+int agreedStatus(const dist::Communicator& comm, int status) { return comm.maxOverRanks(status); }
+
+}  // namespace
+
+std::string acrossRanksRefusal(const Scene& s) {
+  auto at = [&](const std::string& key, const std::string& what) {
+    return s.keyLocation(key) + ": " + what + ": a bake across ranks does not run it yet (docs/distributed.md)";
+  };
+  const ModelParameters& p = s.params;
+  if (s.mode != SceneMode::Season) return at("mode", "mode = \"" + std::string(s.mode == SceneMode::Occlusion ? "occlusion" : "mesh") + "\"");
+  if (s.backend == BackendChoice::Cuda) return at("run.backend", "run.backend = \"cuda\"");
+  if (p.avalancheRatePerKm2PerDay > 0.0)
+    return at("parameters.avalanche_rate_per_km2_per_day", "spontaneous avalanches (parameters.avalanche_rate_per_km2_per_day > 0; set it to 0)");
+  if (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0)
+    return at("parameters.skiers_per_hour", "automatic skiers (parameters.skiers_per_hour > 0; set it to 0)");
+  for (const Scene::AvalancheEvent& a : s.userAvalanches) return s.sourceName + ":" + std::to_string(a.line) + ": " + "an avalanche event: a bake across ranks does not run it yet (docs/distributed.md)";
+  for (const Scene::AvalancheEvent& a : s.userSkiers) return s.sourceName + ":" + std::to_string(a.line) + ": " + "a skier event: a bake across ranks does not run it yet (docs/distributed.md)";
+  if (s.bedforms.enabled) return at("bedforms", "[bedforms]");
+  if (!s.edits.empty()) return at("edits", "[[edits]]");
+  if (s.multipliers.noSnow) return at("multipliers.no_snow", "multipliers.no_snow");
+  return "";
+}
+
+bool bakingAcrossRanks() { return acrossRanks; }
+bool writesOutputs() { return !acrossRanks || dist::Communicator::world().rank() == 0; }
+
+void checkRanksSuitTheGrid(const GridSpec& spec) {
+  if (!acrossRanks) return;
+  const int ranks = dist::Communicator::world().size();
+  try {
+    dist::Decomposition::choose(ranks, spec.width, spec.height, dist::kContinuousHalo);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("the terrain's grid cannot be baked across ranks: ") + e.what() + " (run fewer ranks)");
+  }
+}
+
+SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, SeasonConfig config,
+                                  FrameWriter& frames, std::ostream& log) {
+  const dist::Communicator comm = dist::Communicator::world();
+  const GridSpec whole = state.spec;
+  const dist::Decomposition d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
+  const dist::CellRect cells = d.local(comm.rank());
+  // Each day's static fields filled on the rank's whole grid, then cut to its local grid.
+  if (config.updateStaticFields)
+    config.updateStaticFields = [fill = config.updateStaticFields, &state, cells](int day, SnowState& s) {
+      fill(day, state);
+      dist::cutFields(state, cells, [](FieldRole r) { return r == FieldRole::Static; }, s);
+    };
+  config.skiTracks = nullptr;  // no skiers across ranks: the texture stays as the single process leaves it
+  config.lendFrames = false;   // each frame is gathered into a copy of its own
+  if (const std::string why = dist::distributedSeasonRefusal(config, state); !why.empty())
+    throw std::logic_error("a season across ranks with " + why + " passed acrossRanksRefusal");
+  SnowState mine = dist::cutLocalState(state, cells);
+  // The snow is the ranks' now; the whole state keeps what the daily static fill reads.
+  state.releaseFields([](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; });
+  // Every rank is here or failed on its own before: agree before the first exchange.
+  if (const int status = agreedStatus(comm, 0)) throw OtherRankFailed{status};
+  inSeason = true;
+  log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid; rank 0's subdomain "
+      << d.owned(0).width() << " x " << d.owned(0).height() << " cells, halo " << d.halo << "\n";
+  dist::DistributedBackend backend(std::move(local), comm, d);
+  // A whole-grid state on rank 0 from every rank's owned cells.
+  auto gathered = [&](const SnowState& s) {
+    SnowState out = comm.rank() == 0 ? dist::wholeLike(s, whole) : SnowState();
+    dist::gatherOwned(comm, d, s, out);
+    return out;
+  };
+  progress().stage("season", 0.0);
+  SeasonReport report = runSeason(
+      backend, mine, config,
+      [&](double f) {
+        throwIfStopRequested();  // once a simulated day: MPI_Abort ends every rank with 130
+        progress().stage("season", f);
+      },
+      [&](double day, SnowState& s) {
+        throwIfStopRequested();
+        SnowState frame = gathered(s);
+        if (comm.rank() != 0) return;
+        frames.write(day, frame);
+        progress().event("season", "frame", {{"day", jsonNumber(day)}});
+      });
+  frames.join();
+  SnowState final = gathered(mine);
+  inSeason = false;
+  if (comm.rank() == 0) state = std::move(final);
+  progress().stage("season", 1.0);
+  logSeasonReport(report, scene, config, backend.name(), log);
+  return report;
+}
+
+int runBakeAcrossRanks(BakeOptions options, std::ostream& log, const std::function<int(std::exception_ptr)>& describe) {
+  const dist::MpiSession mpi;
+  const dist::Communicator comm = dist::Communicator::world();
+  if (comm.size() != dist::launchedRanks())
+    throw InputError("the launcher started " + std::to_string(dist::launchedRanks()) + " processes, but MPI joined " +
+                     std::to_string(comm.size()) + " (under Slurm, srun --mpi=pmix; see docs/distributed.md)");
+  acrossRanks = true;
+  std::ostream nowhere(nullptr);
+  int status = 0;
+  try {
+    runBake(options, comm.rank() == 0 ? log : nowhere);
+  } catch (const OtherRankFailed& e) {
+    if (comm.rank() == 0) std::cerr << "snowbake: stopped: another rank failed (exit " << e.status << ")\n";
+    acrossRanks = false;
+    return e.status;
+  } catch (...) {
+    const std::exception_ptr e = std::current_exception();
+    bool inputError = false;
+    try {
+      std::rethrow_exception(e);
+    } catch (const InputError&) {
+      inputError = true;
+    } catch (...) {
+    }
+    // An input error is every rank's alike: rank 0 says it.
+    if (comm.rank() == 0 || !inputError) {
+      if (comm.rank() != 0) std::cerr << "[rank " << comm.rank() << "] ";
+      status = describe(e);
+    } else {
+      status = 2;
+    }
+    if (inSeason) comm.abortAll(status);
+  }
+  // Rank 0 wrote the outputs while the others waited here: they end with its status. Each rank's
+  // peak resident memory comes along for rank 0's log.
+  const std::vector<double> all = comm.allGather({static_cast<double>(status), readProcessMemory().peakBytes});
+  status = 0;
+  for (int r = 0; r < comm.size(); ++r) status = std::max(status, static_cast<int>(all[2 * r]));
+  if (comm.rank() == 0 && status == 0) {
+    log << "memory: peak resident per rank";
+    for (int r = 0; r < comm.size(); ++r) log << (r ? ", " : " ") << fixed(all[2 * r + 1] / (1024.0 * 1024.0), 0);
+    log << " MiB\n";
+  }
+  acrossRanks = false;
+  return status;
+}
+
+}  // namespace snow

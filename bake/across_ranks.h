@@ -1,0 +1,51 @@
+// A bake across the ranks of a launch (mpirun -np N snowbake bake ..., srun; docs/distributed.md).
+// Every rank loads the scene and the terrain and runs the precompute alone; the season runs
+// decomposed (each rank its subdomain, halos exchanged, every sum in the single process's order);
+// rank 0 gathers the state at the frames and the season's end and writes every output and the
+// manifest: the single process's bytes.
+//
+// Failures: before the season and after it the ranks work alone, and they agree on the exit
+// status at the season's start and at the end (the largest of theirs), so a bad input ends every
+// rank with exit 2 and one message; a failure during the season, while the others wait in an
+// exchange, ends every rank at once with its status (MPI_Abort).
+#pragma once
+#include <exception>
+#include <functional>
+#include <ostream>
+#include <string>
+
+#include "bake.h"
+#include "core/snow_state.h"
+#include "scene/scene.h"
+
+namespace snow {
+
+struct SeasonConfig;
+struct SeasonReport;
+class FrameWriter;
+class SnowBackend;
+
+// Why `scene` cannot be baked across ranks yet, naming the key and where it was given (or the
+// scene, for a default); empty when it can.
+std::string acrossRanksRefusal(const Scene& scene);
+
+// Whether this process is one of several ranks of a launch that runs a bake across ranks (after
+// the launch's MPI is initialised: runBakeAcrossRanks).
+bool bakingAcrossRanks();
+// Whether this process writes the bake's files: alone, or rank 0 of a bake across ranks.
+bool writesOutputs();
+
+// Refuses (InputError) a grid that `ranks` subdomains cannot split: each needs the season's halo.
+void checkRanksSuitTheGrid(const GridSpec& spec);
+
+// The season across the ranks on rank `state`'s whole grid (every rank holds it, as the precompute
+// left it): on rank 0, `state` is then the gathered final state and each frame day went to
+// `frames`; the other ranks' `state` is left as it was. `local` is the rank's CPU backend.
+SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, SeasonConfig config,
+                                  FrameWriter& frames, std::ostream& log);
+
+// runBake on every rank of the launch; `describe` prints a failure (rank 0's, or another rank's
+// that is not an input error) and returns its exit status. Returns the status all ranks share.
+int runBakeAcrossRanks(BakeOptions options, std::ostream& log, const std::function<int(std::exception_ptr)>& describe);
+
+}  // namespace snow
