@@ -7,8 +7,9 @@
 # optional Python module (-DSNOWBAKE_PYTHON=ON, python/) and its pytest.
 # libopenmpi-dev and openmpi-bin are for the distributed decomposition (distributed/,
 # docs/distributed.md) and its tests under mpirun on localhost.
-# slurm-wlm and munge are for the Slurm job-array test (tests/farm/slurm_array_test.sh), which
-# starts its own single-node Slurm; the bake itself never needs them.
+# slurm-wlm and munge are for the Slurm tests (tests/farm/slurm_array_test.sh, a job array, and
+# tests/distributed/srun_bake_test.sh, srun --mpi=pmix), which start their own single-node Slurm;
+# the bake itself never needs them.
 # --with-blender also installs Blender 3.4, which the test suite uses as a real client of the
 # outputs (tests/blender_test.cpp); the bake itself never needs it.
 set -euo pipefail
