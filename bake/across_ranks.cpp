@@ -75,19 +75,31 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   const GridSpec whole = state.spec;
   const dist::Decomposition d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
   const dist::CellRect cells = d.local(comm.rank());
-  // Each day's static fields filled on the rank's whole grid, then cut to its local grid.
+  // Each day's static fields filled on the whole grid (on a state lent the terrain alone), then cut
+  // to the rank's: the fields the fill makes, and no others, as the single process's state has.
   if (config.updateStaticFields)
     config.updateStaticFields = [fill = config.updateStaticFields, &state, cells](int day, SnowState& s) {
-      fill(day, state);
-      dist::cutFields(state, cells, [](FieldRole r) { return r == FieldRole::Static; }, s);
+      SnowState filled;
+      filled.spec = state.spec;
+      auto lend = [&] { std::swap(filled.bedrockM, state.bedrockM), std::swap(filled.validCell, state.validCell); };
+      lend();
+      try {
+        fill(day, filled);
+      } catch (...) {
+        lend();
+        throw;
+      }
+      lend();
+      dist::cutFields(filled, cells, [](FieldRole r) { return r == FieldRole::Static; }, s);
     };
   config.skiTracks = nullptr;  // no skiers across ranks: the texture stays as the single process leaves it
   config.lendFrames = false;   // each frame is gathered into a copy of its own
   if (const std::string why = dist::distributedSeasonRefusal(config, state); !why.empty())
     throw std::logic_error("a season across ranks with " + why + " passed acrossRanksRefusal");
   SnowState mine = dist::cutLocalState(state, cells);
-  // The snow is the ranks' now; the whole state keeps what the daily static fill reads.
-  state.releaseFields([](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; });
+  // The snow and the static fields are the ranks' now; the whole state keeps the terrain, which
+  // the daily static fill reads.
+  state.releaseFields([](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record || r == FieldRole::Static; });
   // Every rank is here or failed on its own before: agree before the first exchange.
   if (const int status = agreedStatus(comm, 0)) throw OtherRankFailed{status};
   inSeason = true;

@@ -321,6 +321,55 @@ TEST(Ranks, SeasonOfSnowfallMeltAndTransportGivesTheSingleProcessBytesAndLedger)
   expectGatheredFieldsAre(comm, d, local, whole, initial);
 }
 
+// A season whose static fields change each day (as the bake's sun and wind timeline do), filled on
+// the whole grid and cut to each rank's (cutFields, as bake/across_ranks.cpp does): the single
+// process's ledger and fields; and the final state gathered into wholeLike's state on rank 0.
+TEST(Ranks, DailyStaticFieldsCutFromTheWholeGridGiveTheSingleProcessBytes) {
+  const Communicator comm = Communicator::world();
+  const int w = 150, h = 104;
+  const SnowState initial = testState(w, h);
+  SeasonConfig config = continuousSeason();
+  // Each day warmer and windier by a different amount a cell.
+  config.updateStaticFields = [](int day, SnowState& s) {
+    s.temperatureBaseC.resize(s.spec.width, s.spec.height);  // the season frees the host's static fields
+    s.windXMps.resize(s.spec.width, s.spec.height);
+    for (size_t i = 0; i < s.bedrockM.size(); ++i) {
+      const float k = static_cast<float>((i * 7 + static_cast<size_t>(day) * 13) % 17) / 17.f;
+      s.temperatureBaseC.values()[i] = -10.f + 0.9f * day * k;
+      s.windXMps.values()[i] = 3.f + day * k;
+    }
+  };
+  const Decomposition d = Decomposition::choose(comm.size(), w, h, kContinuousHalo);
+  const CellRect cells = d.local(comm.rank());
+  SnowState whole = initial, local = cutLocalState(initial, cells);
+  SeasonConfig localConfig = config;
+  localConfig.updateStaticFields = [&](int day, SnowState& s) {
+    SnowState filled;  // the terrain alone, as bake/across_ranks.cpp lends it
+    filled.spec = initial.spec;
+    filled.bedrockM = initial.bedrockM;
+    config.updateStaticFields(day, filled);
+    cutFields(filled, cells, [](FieldRole r) { return r == FieldRole::Static; }, s);
+  };
+  ASSERT_EQ(distributedSeasonRefusal(localConfig, local), "");
+  auto reference = createCpuBackend();
+  DistributedBackend mine(createCpuBackend(), comm, d);
+  const SeasonReport expected = runSeason(*reference, whole, config);
+  const SeasonReport got = runSeason(mine, local, localConfig);
+  expectSameTotals(got.final, expected.final);
+  EXPECT_EQ(bitsOf(got.snowfallAddedM3), bitsOf(expected.snowfallAddedM3));
+  EXPECT_EQ(bitsOf(got.meltRemovedM3), bitsOf(expected.meltRemovedM3));
+  expectGatheredFieldsAre(comm, d, local, whole, initial);
+  // wholeLike: the local state's fields, whole-grid sized, and no others.
+  SnowState gathered = comm.rank() == 0 ? wholeLike(local, initial.spec) : SnowState();
+  gatherOwned(comm, d, local, gathered);
+  if (comm.rank() != 0) return;
+  EXPECT_EQ(gathered.spec.width, w);
+  EXPECT_TRUE(sameBytes(gathered.powderM, whole.powderM));
+  EXPECT_TRUE(sameBytes(gathered.temperatureBaseC, whole.temperatureBaseC));  // the last day's, cut and gathered
+  EXPECT_EQ(gathered.windYMps.size(), whole.windYMps.size());  // released by the season in both, or kept in both
+  EXPECT_EQ(gathered.noSnow.size(), 0u);
+}
+
 }  // namespace
 }  // namespace snow::dist
 
