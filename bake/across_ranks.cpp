@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/errors.h"
@@ -27,13 +28,19 @@ namespace {
 bool acrossRanks = false;
 bool inSeason = false;
 
+bool seasonAgreed = false;  // the ranks have agreed at the season's start
+
 // Another rank failed before the season: this one ends with its status, having said nothing.
 struct OtherRankFailed {
   int status;
 };
 
-// The status every rank reached this point with (each passes its own; 0: fine).
-int agreedStatus(const dist::Communicator& comm, int status) { return comm.maxOverRanks(status); }
+// The agreement at the season's start: every rank's status (0: fine), in rank order. A rank that
+// failed before it joins from runBakeAcrossRanks; every rank calls it once.
+std::vector<double> agreedStatuses(const dist::Communicator& comm, int status) {
+  seasonAgreed = true;
+  return comm.allGather({static_cast<double>(status)});
+}
 
 }  // namespace
 
@@ -51,7 +58,6 @@ std::string acrossRanksRefusal(const Scene& s) {
   for (const Scene::AvalancheEvent& a : s.userAvalanches) return s.sourceName + ":" + std::to_string(a.line) + ": " + "an avalanche event: a bake across ranks does not run it yet (docs/distributed.md)";
   for (const Scene::AvalancheEvent& a : s.userSkiers) return s.sourceName + ":" + std::to_string(a.line) + ": " + "a skier event: a bake across ranks does not run it yet (docs/distributed.md)";
   if (s.bedforms.enabled) return at("bedforms", "[bedforms]");
-  if (!s.edits.empty()) return at("edits", "[[edits]]");
   if (s.multipliers.noSnow) return at("multipliers.no_snow", "multipliers.no_snow");
   return "";
 }
@@ -101,7 +107,8 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   // the daily static fill reads.
   state.releaseFields([](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record || r == FieldRole::Static; });
   // Every rank is here or failed on its own before: agree before the first exchange.
-  if (const int status = agreedStatus(comm, 0)) throw OtherRankFailed{status};
+  const std::vector<double> statuses = agreedStatuses(comm, 0);
+  if (const double worst = *std::max_element(statuses.begin(), statuses.end()); worst != 0) throw OtherRankFailed{static_cast<int>(worst)};
   inSeason = true;
   log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid; rank 0's subdomain "
       << d.owned(0).width() << " x " << d.owned(0).height() << " cells, halo " << d.halo << "\n";
@@ -135,48 +142,59 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   return report;
 }
 
-int runBakeAcrossRanks(BakeOptions options, std::ostream& log, const std::function<int(std::exception_ptr)>& describe) {
+int runBakeAcrossRanks(BakeOptions options, const std::function<std::ostream&()>& openLog,
+                       const std::function<int(std::exception_ptr, std::ostream&)>& describe) {
   const dist::MpiSession mpi;
   const dist::Communicator comm = dist::Communicator::world();
   if (comm.size() != dist::launchedRanks())
-    throw InputError("the launcher started " + std::to_string(dist::launchedRanks()) + " processes, but MPI joined " +
-                     std::to_string(comm.size()) + " (under Slurm, srun --mpi=pmix; see docs/distributed.md)");
+    throw InputError("the launcher started " + std::to_string(dist::launchedRanks()) + " processes, but " +
+                     (dist::Communicator::hasMpi() ? "MPI joined " + std::to_string(comm.size()) + " (under Slurm, srun --mpi=pmix; see docs/distributed.md)"
+                                                   : std::string("this snowbake was built without MPI (docs/distributed.md)")));
   acrossRanks = true;
+  seasonAgreed = false;
   std::ostream nowhere(nullptr);
+  std::ostream* log = &nowhere;
   int status = 0;
+  std::exception_ptr failure;
+  std::ostringstream message;  // this rank's failure, said once it is known whether rank 0 failed too
   try {
-    runBake(options, comm.rank() == 0 ? log : nowhere);
+    if (comm.rank() == 0) log = &openLog();
+    runBake(options, *log);
   } catch (const OtherRankFailed& e) {
-    if (comm.rank() == 0) std::cerr << "snowbake: stopped: another rank failed (exit " << e.status << ")\n";
-    acrossRanks = false;
-    return e.status;
+    status = e.status;  // the failing rank says why
   } catch (...) {
-    const std::exception_ptr e = std::current_exception();
-    bool inputError = false;
-    try {
-      std::rethrow_exception(e);
+    failure = std::current_exception();
+    if (comm.rank() != 0) message << "[rank " << comm.rank() << "] ";
+    status = describe(failure, message);
+    if (inSeason) {  // the others wait in an exchange
+      std::cerr << message.str();
+      comm.abortAll(status);
+    }
+  }
+  // A rank that failed before the season joins the others' agreement at its start.
+  bool rank0Failed = comm.rank() == 0 && failure;
+  if (failure && !seasonAgreed) rank0Failed = agreedStatuses(comm, status).front() != 0;
+  // An input error is every rank's alike, as a rule: rank 0 says it, and the others only when
+  // rank 0 did not fail.
+  bool inputError = false;
+  if (failure) try {
+      std::rethrow_exception(failure);
     } catch (const InputError&) {
       inputError = true;
     } catch (...) {
     }
-    // An input error is every rank's alike: rank 0 says it.
-    if (comm.rank() == 0 || !inputError) {
-      if (comm.rank() != 0) std::cerr << "[rank " << comm.rank() << "] ";
-      status = describe(e);
-    } else {
-      status = 2;
-    }
-    if (inSeason) comm.abortAll(status);
-  }
-  // Rank 0 wrote the outputs while the others waited here: they end with its status. Each rank's
-  // peak resident memory comes along for rank 0's log.
+  if (failure && (comm.rank() == 0 || !inputError || !rank0Failed)) std::cerr << message.str();
+  // Rank 0 wrote the outputs while the others waited here: they end with the largest status. Each
+  // rank's peak resident memory comes along for rank 0's log.
   const std::vector<double> all = comm.allGather({static_cast<double>(status), readProcessMemory().peakBytes});
+  const int mine = status;
   status = 0;
   for (int r = 0; r < comm.size(); ++r) status = std::max(status, static_cast<int>(all[2 * r]));
+  if (comm.rank() == 0 && mine == 0 && status != 0) std::cerr << "snowbake: stopped: another rank failed (exit " << status << ")\n";
   if (comm.rank() == 0 && status == 0) {
-    log << "memory: peak resident per rank";
-    for (int r = 0; r < comm.size(); ++r) log << (r ? ", " : " ") << fixed(all[2 * r + 1] / (1024.0 * 1024.0), 0);
-    log << " MiB\n";
+    *log << "memory: peak resident per rank";
+    for (int r = 0; r < comm.size(); ++r) *log << (r ? ", " : " ") << fixed(all[2 * r + 1] / (1024.0 * 1024.0), 0);
+    *log << " MiB\n";
   }
   acrossRanks = false;
   return status;

@@ -6,8 +6,9 @@
 //
 // Failures: before the season and after it the ranks work alone, and they agree on the exit
 // status at the season's start and at the end (the largest of theirs), so a bad input ends every
-// rank with exit 2 and one message; a failure during the season, while the others wait in an
-// exchange, ends every rank at once with its status (MPI_Abort).
+// rank with exit 2 and one message (rank 0's; another rank's own when rank 0 did not fail); a
+// failure during the season, while the others wait in an exchange, ends every rank at once with
+// its status (MPI_Abort).
 #pragma once
 #include <exception>
 #include <functional>
@@ -44,8 +45,10 @@ void checkRanksSuitTheGrid(const GridSpec& spec);
 SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, SeasonConfig config,
                                   FrameWriter& frames, std::ostream& log);
 
-// runBake on every rank of the launch; `describe` prints a failure (rank 0's, or another rank's
-// that is not an input error) and returns its exit status. Returns the status all ranks share.
-int runBakeAcrossRanks(BakeOptions options, std::ostream& log, const std::function<int(std::exception_ptr)>& describe);
+// runBake on every rank of the launch, rank 0 logging to openLog() (opened once the ranks have
+// joined, so its failure is every rank's); `describe` writes a failure's message to the stream
+// and returns its exit status. Returns the status all ranks share.
+int runBakeAcrossRanks(BakeOptions options, const std::function<std::ostream&()>& openLog,
+                       const std::function<int(std::exception_ptr, std::ostream&)>& describe);
 
 }  // namespace snow

@@ -44,6 +44,8 @@ MpiSession::~MpiSession() {
   sessionOpen = false;
 }
 
+bool Communicator::hasMpi() { return true; }
+
 Communicator Communicator::world() {
   if (!sessionOpen) return Communicator(0, 1);
   int rank = 0, size = 1;
@@ -116,6 +118,7 @@ void Communicator::abortAll(int status) const {
 
 MpiSession::MpiSession() = default;
 MpiSession::~MpiSession() = default;
+bool Communicator::hasMpi() { return false; }
 Communicator Communicator::world() { return Communicator(0, 1); }
 void Communicator::exchange(const std::vector<Send>& sends, const std::vector<Receive>& receives) const {
   if (!sends.empty() || !receives.empty()) throw std::logic_error("Communicator::exchange: one rank has no peers");

@@ -23,6 +23,8 @@ class Communicator {
  public:
   // Every process of the launch; one process alone without MPI or before an MpiSession.
   static Communicator world();
+  // Whether this build has MPI (SNOWBAKE_MPI).
+  static bool hasMpi();
   int rank() const { return rank_; }
   int size() const { return size_; }
 

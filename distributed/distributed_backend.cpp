@@ -15,7 +15,6 @@ std::string distributedSeasonRefusal(const SeasonConfig& c, const SnowState& sta
   if (p.avalancheRatePerKm2PerDay > 0.0 || !c.userAvalanches.empty()) return "avalanches";
   if ((p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !c.userSkiers.empty()) return "skiers";
   if (c.bedforms) return "wind bedforms";
-  if (!c.edits.empty()) return "timeline edits";
   if (c.skiTracks) return "the ski-track texture";
   if (state.noSnow.size() > 0) return "no-snow masks";
   return "";
@@ -113,6 +112,21 @@ void DistributedBackend::windTransport(const WindTransportArgs& a) {
   fireBeforeWrite();
   local_->windTransport(a);
   refreshHalo();
+}
+
+double DistributedBackend::applyEdit(const EditArgs& a, const std::vector<float>& weights) {
+  fireBeforeWrite();
+  const CellRect whole{0, 0, d_.width, d_.height}, mine = d_.local(comm_.rank());
+  std::vector<float> local;
+  if (!weights.empty()) {
+    if (weights.size() != whole.cells())
+      throw std::invalid_argument("DistributedBackend::applyEdit: " + std::to_string(weights.size()) + " weights for a grid of " +
+                                  std::to_string(whole.cells()) + " cells");
+    local.resize(mine.cells());
+    copyCells(mine, whole, weights.data(), mine, local.data(), sizeof(float));
+  }
+  local_->applyEdit(a, local);  // per cell: the halo's cells come out as their owners' (no refresh)
+  return deltaVolume();
 }
 
 void DistributedBackend::stabilityChange(const StabilityArgs& a) {

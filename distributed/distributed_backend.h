@@ -2,9 +2,9 @@
 // refreshed after each phenomenon (continuous_step.h's reach), and every sum the season reads
 // (the mass ledger, snowfall and melt volumes, the warmest cell) over the whole grid in the
 // single process's order (exact_sum.h). runSeason on each rank's local state with it gives the
-// single process's bytes for a season of snowfall, melt, stability, powder diffusion and wind
-// transport; the phenomena that are not across ranks yet (avalanches, skiers, bedforms, timeline
-// edits) throw std::logic_error, and distributedSeasonRefusal says so before a season starts.
+// single process's bytes for a season of snowfall, melt, stability, powder diffusion, wind
+// transport and timeline edits; the phenomena that are not across ranks yet (avalanches, skiers,
+// bedforms) throw std::logic_error, and distributedSeasonRefusal says so before a season starts.
 #pragma once
 #include <memory>
 #include <string>
@@ -54,8 +54,10 @@ class DistributedBackend final : public SnowBackend {
   LayerTotals totals() override;
   float maxTemperatureBaseC() override;
 
+  // `weights` (empty, or one a cell of the whole grid) cut to the local grid.
+  double applyEdit(const EditArgs& a, const std::vector<float>& weights) override;
+
   // Not across ranks yet.
-  double applyEdit(const EditArgs&, const std::vector<float>&) override { notYet("timeline edits"); }
   void readCells(int, int, int, int, std::vector<float>&, std::vector<float>&) override { notYet("skiers and avalanches"); }
   void downloadBox(SnowBox&, bool) override { notYet("avalanches"); }
   BedformStepReport bedformStep(const BedformArgs&) override { notYet("wind bedforms"); }

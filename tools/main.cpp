@@ -226,27 +226,27 @@ ProgressOutcome bakeOutcome(const BakeResult& r) {
 // The bake, its human log on stderr or in --log-file; with --progress json the last line on
 // stderr says how it ended (and errors are reported there, not as text). The scene (or level) is
 // chosen before the log is opened, so a bad list or index writes nothing.
-// A command's failure on stderr, one line, and its exit status.
-int describeFailure(std::exception_ptr failure) {
+// A command's failure in one line on `err`, and its exit status.
+int describeFailure(std::exception_ptr failure, std::ostream& err) {
   try {
     std::rethrow_exception(failure);
   } catch (const InputError& e) {
-    std::cerr << "snowbake: error: " << e.what() << "\n";
+    err << "snowbake: error: " << e.what() << "\n";
     return 2;
   } catch (const Interrupted& e) {
-    std::cerr << "snowbake: " << e.what() << "\n";
+    err << "snowbake: " << e.what() << "\n";
     return kInterruptedExitStatus;
   } catch (const std::bad_alloc&) {
     // The memory model refuses what it predicts will not fit; this is what it did not foresee.
     const std::string stage = currentBakeStage();
-    std::cerr << "snowbake: failed: out of memory" << (stage.empty() ? std::string() : " during the " + stage + " stage")
+    err << "snowbake: failed: out of memory" << (stage.empty() ? std::string() : " during the " + stage + " stage")
               << " (the memory model's prediction was short: see docs/memory.md; lower run.max_memory_gb or bake a smaller grid)\n";
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "snowbake: failed: " << e.what() << "\n";
+    err << "snowbake: failed: " << e.what() << "\n";
     return 1;
   } catch (...) {
-    std::cerr << "snowbake: failed\n";
+    err << "snowbake: failed\n";
     return 1;
   }
 }
@@ -258,17 +258,17 @@ int runBakeCommandAcrossRanks(const BakeCommand& c, const BakeOptions& bake, int
   if (c.progress == "json") throw InputError("--progress json: " + started + ", a bake across ranks reports on its log only (docs/distributed.md)");
   if (const std::string why = acrossRanksRefusal(resolveScene(bake)); !why.empty()) throw InputError(why + "; " + started + ": change the scene, or run one process");
   std::ofstream logFile;
-  std::ostream nowhere(nullptr);
-  std::ostream* log = &std::cerr;
-  if (snow::dist::launchedRank() != 0) {
-    log = &nowhere;
-  } else if (!c.logFile.empty()) {
-    logFile.open(c.logFile);
-    if (!logFile) throw InputError(c.logFile + ": cannot write the log file (--log-file)");
-    log = &logFile;
-  }
-  *log << levelNote;
-  return runBakeAcrossRanks(bake, *log, describeFailure);
+  const auto openLog = [&]() -> std::ostream& {
+    std::ostream* log = &std::cerr;
+    if (!c.logFile.empty()) {
+      logFile.open(c.logFile);
+      if (!logFile) throw InputError(c.logFile + ": cannot write the log file (--log-file)");
+      log = &logFile;
+    }
+    *log << levelNote;
+    return *log;
+  };
+  return runBakeAcrossRanks(bake, openLog, describeFailure);
 }
 
 int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
@@ -449,9 +449,9 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::seconds(1));
       return 2;
     }
-    return describeFailure(std::current_exception());
+    return describeFailure(std::current_exception(), std::cerr);
   } catch (...) {
-    return describeFailure(std::current_exception());
+    return describeFailure(std::current_exception(), std::cerr);
   }
   return 0;
 }

@@ -2,12 +2,14 @@
 # mpiexec -n N snowbake bake gives the single process's files, byte for byte, for N = 1..4
 # (docs/distributed.md): the default preset with its avalanches and skiers off (sun, a wind that
 # moves snow, frames, every default output), and a real DEM with NODATA from ../shared/data
-# (skipped with a message when absent). Their manifests differ in the "memory" line alone (the
+# (skipped with a message when absent), and art direction (painted masks, initial snow, a snowfall
+# multiplier, timeline edits). Their manifests differ in the "memory" line alone (the
 # measured peak varies from run to run). Then what a launch refuses: a scene with avalanches, and
 # a missing terrain, each exit 2 with one message and nothing written.
 #   bash bake_across_ranks_test.sh SNOWBAKE MPIEXEC DATA_DIR [MPIEXEC_FLAGS...]
 set -euo pipefail
 bin="$(realpath "$1")" mpiexec="$2" data="$3"
+root="$(cd "$(dirname "$0")/../.." && pwd)"
 shift 3
 launch=("$mpiexec" "$@")
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1  # CI runs as root
@@ -60,8 +62,64 @@ check_scene() {  # NAME SCENE [ARGS...]
 
 no_avalanches=(--set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0)
 check_scene default preset:default --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' "${no_avalanches[@]}"
+# The frames gathered on rank 0 and written beside the season, or held until its end.
+for timing in beside after_season; do
+  frames=(preset:default --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' --set "run.frame_writing=\"$timing\"")
+  bake "$timing" "$work/$timing/alone" alone "${frames[@]}" "${no_avalanches[@]}" &&
+    bake "$timing" "$work/$timing/3" 3 "${frames[@]}" "${no_avalanches[@]}" &&
+    same "frames $timing on 3 ranks" "$work/$timing/alone" "$work/$timing/3"
+done
 # The season must have moved snow for the comparison to mean something.
 grep -qE "added [1-9]" "$work/default/alone/log" || fail "default: no snowfall"
+
+# Art direction: the art-direction preset's painted masks, initial snow, snowfall multiplier and
+# timeline edits, without its avalanches, skiers and no-snow road.
+art="$root/presets/art_direction"
+cat > "$work/art.toml" <<TOML
+name = "across ranks: art direction without avalanches, skiers or a no-snow mask"
+[terrain]
+builtin = "ridged"
+size = 128
+cell_size_m = 10.0
+[season]
+start_date = 2025-12-01
+days = 50
+[[weather.keyframe]]
+day = 0
+sea_level_temperature_c = 5.0
+wind_direction_deg = 280
+wind_speed_mps = 8.0
+[masks.release]
+file = "$art/release_zone.png"
+[masks.ski_area]
+file = "$art/ski_area.png"
+[initial_snow]
+stable = 0.2
+powder = { mask = "$art/precipitation.png", depth_m = 0.3 }
+[multipliers]
+snowfall = { file = "$art/precipitation.png", range = [0.6, 1.4] }
+[[edits]]
+day = 20
+op = "add"
+layer = "compacted"
+depth_m = 0.4
+mask = "ski_area"
+[[edits]]
+day = 45
+op = "set"
+layer = "unstable"
+depth_m = 1.2
+mask = "release"
+[parameters]
+rain_snow_limit_m = 1200.0
+avalanche_rate_per_km2_per_day = 0.0
+skiers_per_hour = 0.0
+[outputs]
+layers = ["depth", "compacted", "unstable", "powder", "preview"]
+frames_days = [0, 46]
+TOML
+check_scene art "$work/art.toml"
+grep -qE "edit 1: .*: [1-9]" "$work/art/alone/log" || fail "art: its first edit added no snow"
 
 dem="$data/dem/tyrol_avaWog_5m.asc"
 if [ -f "$dem" ]; then
@@ -110,6 +168,21 @@ refused avalanches parameters.avalanche_rate_per_km2_per_day preset:default
 refused missing-terrain /nonexistent/dem.asc preset:default --terrain /nonexistent/dem.asc "${no_avalanches[@]}"
 # Found once the ranks have joined (the terrain loaded): they agree on the status.
 refused tiny-grid "cannot be baked across ranks" preset:default --set terrain.size=12 "${no_avalanches[@]}"
+
+# One rank alone fails (rank 0 makes the output folder and opens the log file): the others learn
+# it at the season's start, and every rank ends with exit 2, rank 0's one message, no hang.
+alone_fails() {  # NAME EXPECTED ARGS...
+  local name="$1" expected="$2" status=0
+  shift 2
+  mkdir -p "$work/$name"
+  (cd "$work/$name" && timeout 300 "${launch[@]}" -n 3 "$bin" bake preset:default --set terrain.size=64 "${no_avalanches[@]}" \
+     --no-cache "$@" > log 2>&1) || status=$?
+  [ "$status" = 2 ] || fail "$name: exit $status, not 2 (124: it hung)"
+  [ "$(grep -c '^snowbake: error' "$work/$name/log")" = 1 ] || { fail "$name: not one error line"; cat "$work/$name/log" >&2; }
+  grep -q -- "$expected" "$work/$name/log" || fail "$name: the message does not name $expected"
+}
+alone_fails rank0-output-folder /proc/snowbake-out --out /proc/snowbake-out
+alone_fails rank0-log-file /proc/snowbake.log --out out --log-file /proc/snowbake.log
 
 if [ "$failures" -gt 0 ]; then
   echo "bake_across_ranks_test: $failures failures" >&2

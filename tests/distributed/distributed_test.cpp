@@ -277,7 +277,7 @@ TEST(DistributedSeason, RefusesWhatIsNotAcrossRanksYetNamingIt) {
   EXPECT_EQ(distributedSeasonRefusal(c, state), "skiers");
   c = continuousSeason();
   c.edits.push_back({});
-  EXPECT_EQ(distributedSeasonRefusal(c, state), "timeline edits");
+  EXPECT_EQ(distributedSeasonRefusal(c, state), "");  // edits run across ranks
   EXPECT_NE(distributedSeasonRefusal(SeasonConfig{}, state), "");  // the defaults have avalanches and skiers
   state.noSnow.resize(20, 20, 0);
   EXPECT_EQ(distributedSeasonRefusal(continuousSeason(), state), "no-snow masks");
@@ -368,6 +368,44 @@ TEST(Ranks, DailyStaticFieldsCutFromTheWholeGridGiveTheSingleProcessBytes) {
   EXPECT_TRUE(sameBytes(gathered.temperatureBaseC, whole.temperatureBaseC));  // the last day's, cut and gathered
   EXPECT_EQ(gathered.windYMps.size(), whole.windYMps.size());  // released by the season in both, or kept in both
   EXPECT_EQ(gathered.noSnow.size(), 0u);
+}
+
+// Timeline edits of every kind, painted (weights of the whole grid, cut to each rank's) and not:
+// the single process's fields, and each edit's volume in the report bit for bit.
+TEST(Ranks, TimelineEditsGiveTheSingleProcessBytesAndVolumes) {
+  const Communicator comm = Communicator::world();
+  const int w = 150, h = 104;
+  const SnowState initial = testState(w, h);
+  SeasonConfig config = continuousSeason();
+  auto painted = std::make_shared<std::vector<float>>(static_cast<size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) (*painted)[static_cast<size_t>(y) * w + x] = 1.4f * unit(x, y, 21) - 0.2f;  // clamped to [0, 1]
+  auto edit = [&](double day, EditOp op, SnowLayer layer, float depth, bool masked, SnowLayer to = SnowLayer::Compacted) {
+    SeasonEdit e;
+    e.day = day;
+    e.args.op = op, e.args.layer = static_cast<int>(layer), e.args.toLayer = static_cast<int>(to), e.args.depthM = depth;
+    if (masked) e.weights = painted;
+    e.label = "edit " + std::to_string(config.edits.size());
+    config.edits.push_back(e);
+  };
+  edit(2.0, EditOp::Add, SnowLayer::Compacted, 0.4f, true);
+  edit(5.0, EditOp::Remove, SnowLayer::Powder, 0.3f, false);
+  edit(9.0, EditOp::Set, SnowLayer::Unstable, 1.2f, true);
+  edit(14.0, EditOp::Move, SnowLayer::Unstable, 0.5f, true, SnowLayer::Stable);
+  ASSERT_EQ(distributedSeasonRefusal(config, initial), "");
+  const Decomposition d = Decomposition::choose(comm.size(), w, h, kContinuousHalo);
+  SnowState whole = initial, local = cutLocalState(initial, d.local(comm.rank()));
+  auto reference = createCpuBackend();
+  DistributedBackend mine(createCpuBackend(), comm, d);
+  const SeasonReport expected = runSeason(*reference, whole, config);
+  const SeasonReport got = runSeason(mine, local, config);
+  ASSERT_EQ(got.edits.size(), 4u);
+  ASSERT_EQ(expected.edits.size(), 4u);
+  for (size_t k = 0; k < got.edits.size(); ++k) EXPECT_EQ(bitsOf(got.edits[k].volumeM3), bitsOf(expected.edits[k].volumeM3)) << k;
+  EXPECT_NE(expected.edits[0].volumeM3, 0.0);
+  EXPECT_EQ(bitsOf(got.editsNetM3), bitsOf(expected.editsNetM3));
+  expectSameTotals(got.final, expected.final);
+  expectGatheredFieldsAre(comm, d, local, whole, initial);
 }
 
 }  // namespace
