@@ -291,6 +291,26 @@ TEST(DistributedSeason, RefusesAStateThatIsNotTheRanksLocalGrid) {
   EXPECT_THROW(DistributedBackend(createCpuBackend(), comm, Decomposition::choose(comm.size(), 60, 40, 3)), std::invalid_argument);
 }
 
+// A season on the whole grid (one process's CPU backend) and on this rank's local grid through a
+// DistributedBackend (with `localConfig`, when given, in place of `config`).
+struct BothSeasons {
+  Decomposition d;
+  SnowState whole, local;
+  SeasonReport expected, got;
+};
+BothSeasons runBothSeasons(const Communicator& comm, const SnowState& initial, const SeasonConfig& config,
+                           const SeasonConfig* localConfig = nullptr) {
+  BothSeasons b;
+  b.d = Decomposition::choose(comm.size(), initial.spec.width, initial.spec.height, kContinuousHalo);
+  b.whole = initial;
+  b.local = cutLocalState(initial, b.d.local(comm.rank()));
+  auto reference = createCpuBackend();
+  DistributedBackend mine(createCpuBackend(), comm, b.d);
+  b.expected = runSeason(*reference, b.whole, config);
+  b.got = runSeason(mine, b.local, localConfig ? *localConfig : config);
+  return b;
+}
+
 // The season itself (its Poisson scheduler, elapsed-time steps and mass ledger) on each rank's
 // local state through a DistributedBackend: the report's ledger and totals and every evolved and
 // record field are the single process's bytes.
@@ -300,12 +320,7 @@ TEST(Ranks, SeasonOfSnowfallMeltAndTransportGivesTheSingleProcessBytesAndLedger)
   const SnowState initial = testState(w, h);
   const SeasonConfig config = continuousSeason();
   ASSERT_EQ(distributedSeasonRefusal(config, initial), "");
-  const Decomposition d = Decomposition::choose(comm.size(), w, h, kContinuousHalo);
-  SnowState whole = initial, local = cutLocalState(initial, d.local(comm.rank()));
-  auto reference = createCpuBackend();
-  DistributedBackend mine(createCpuBackend(), comm, d);
-  const SeasonReport expected = runSeason(*reference, whole, config);
-  const SeasonReport got = runSeason(mine, local, config);
+  const auto [d, whole, local, expected, got] = runBothSeasons(comm, initial, config);
   expectSameTotals(got.initial, expected.initial);
   expectSameTotals(got.final, expected.final);
   EXPECT_EQ(bitsOf(got.snowfallAddedM3), bitsOf(expected.snowfallAddedM3));
@@ -339,9 +354,7 @@ TEST(Ranks, DailyStaticFieldsCutFromTheWholeGridGiveTheSingleProcessBytes) {
       s.windXMps.values()[i] = 3.f + day * k;
     }
   };
-  const Decomposition d = Decomposition::choose(comm.size(), w, h, kContinuousHalo);
-  const CellRect cells = d.local(comm.rank());
-  SnowState whole = initial, local = cutLocalState(initial, cells);
+  const CellRect cells = Decomposition::choose(comm.size(), w, h, kContinuousHalo).local(comm.rank());
   SeasonConfig localConfig = config;
   localConfig.updateStaticFields = [&](int day, SnowState& s) {
     SnowState filled;  // the terrain alone, as bake/across_ranks.cpp lends it
@@ -350,11 +363,8 @@ TEST(Ranks, DailyStaticFieldsCutFromTheWholeGridGiveTheSingleProcessBytes) {
     config.updateStaticFields(day, filled);
     cutFields(filled, cells, [](FieldRole r) { return r == FieldRole::Static; }, s);
   };
-  ASSERT_EQ(distributedSeasonRefusal(localConfig, local), "");
-  auto reference = createCpuBackend();
-  DistributedBackend mine(createCpuBackend(), comm, d);
-  const SeasonReport expected = runSeason(*reference, whole, config);
-  const SeasonReport got = runSeason(mine, local, localConfig);
+  ASSERT_EQ(distributedSeasonRefusal(localConfig, initial), "");
+  const auto [d, whole, local, expected, got] = runBothSeasons(comm, initial, config, &localConfig);
   expectSameTotals(got.final, expected.final);
   EXPECT_EQ(bitsOf(got.snowfallAddedM3), bitsOf(expected.snowfallAddedM3));
   EXPECT_EQ(bitsOf(got.meltRemovedM3), bitsOf(expected.meltRemovedM3));
@@ -393,12 +403,7 @@ TEST(Ranks, TimelineEditsGiveTheSingleProcessBytesAndVolumes) {
   edit(9.0, EditOp::Set, SnowLayer::Unstable, 1.2f, true);
   edit(14.0, EditOp::Move, SnowLayer::Unstable, 0.5f, true, SnowLayer::Stable);
   ASSERT_EQ(distributedSeasonRefusal(config, initial), "");
-  const Decomposition d = Decomposition::choose(comm.size(), w, h, kContinuousHalo);
-  SnowState whole = initial, local = cutLocalState(initial, d.local(comm.rank()));
-  auto reference = createCpuBackend();
-  DistributedBackend mine(createCpuBackend(), comm, d);
-  const SeasonReport expected = runSeason(*reference, whole, config);
-  const SeasonReport got = runSeason(mine, local, config);
+  const auto [d, whole, local, expected, got] = runBothSeasons(comm, initial, config);
   ASSERT_EQ(got.edits.size(), 4u);
   ASSERT_EQ(expected.edits.size(), 4u);
   for (size_t k = 0; k < got.edits.size(); ++k) EXPECT_EQ(bitsOf(got.edits[k].volumeM3), bitsOf(expected.edits[k].volumeM3)) << k;
