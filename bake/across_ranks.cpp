@@ -58,7 +58,6 @@ std::string acrossRanksRefusal(const Scene& s) {
   for (const Scene::AvalancheEvent& a : s.userAvalanches) return s.sourceName + ":" + std::to_string(a.line) + ": " + "an avalanche event: a bake across ranks does not run it yet (docs/distributed.md)";
   for (const Scene::AvalancheEvent& a : s.userSkiers) return s.sourceName + ":" + std::to_string(a.line) + ": " + "a skier event: a bake across ranks does not run it yet (docs/distributed.md)";
   if (s.bedforms.enabled) return at("bedforms", "[bedforms]");
-  if (s.multipliers.noSnow) return at("multipliers.no_snow", "multipliers.no_snow");
   return "";
 }
 
@@ -102,6 +101,10 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   config.lendFrames = false;   // each frame is gathered into a copy of its own
   if (const std::string why = dist::distributedSeasonRefusal(config, state); !why.empty())
     throw std::logic_error("a season across ranks with " + why + " passed acrossRanksRefusal");
+  // A no-snow mask's snow leaves the whole grid here, its volume summed in the single process's
+  // order; the ranks' seasons then find none on their no-snow cells, whose validity they clear.
+  const bool noSnow = state.noSnow.size() == whole.cellCount() && state.noSnow.size() > 0;
+  const double noSnowRemovedM3 = noSnow ? removeSnowOfNoSnowCells(state) : 0.0;
   SnowState mine = dist::cutLocalState(state, cells);
   // The snow and the static fields are the ranks' now; the whole state keeps the terrain, which
   // the daily static fill reads.
@@ -134,6 +137,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
         progress().event("season", "frame", {{"day", jsonNumber(day)}});
       });
   frames.join();
+  if (noSnow) report.noSnowRemovedM3 = noSnowRemovedM3;
   SnowState final = gathered(mine);
   inSeason = false;
   if (comm.rank() == 0) state = std::move(final);

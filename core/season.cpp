@@ -62,17 +62,23 @@ void SeasonRun::leaveNoSnowCells() {
   noSnow_ = state_.noSnow.size() == state_.spec.cellCount() && state_.noSnow.size() > 0;
   if (!noSnow_) return;
   terrainValid_ = state_.validCell;
-  const double area = state_.spec.cellAreaM2();
-  for (size_t i = 0; i < state_.noSnow.size(); ++i) {
-    if (!state_.noSnow.values()[i]) continue;
-    if (state_.validCell.values()[i])
-      for (int l = 0; l < kSnowLayerCount; ++l) {
-        float& d = state_.layer(static_cast<SnowLayer>(l)).values()[i];
-        report_.noSnowRemovedM3 += static_cast<double>(d) * area;
-        d = 0.f;
-      }
-    state_.validCell.values()[i] = 0;
+  report_.noSnowRemovedM3 += removeSnowOfNoSnowCells(state_);
+  for (size_t i = 0; i < state_.noSnow.size(); ++i)
+    if (state_.noSnow.values()[i]) state_.validCell.values()[i] = 0;
+}
+
+double removeSnowOfNoSnowCells(SnowState& s) {
+  double removed = 0.0;
+  const double area = s.spec.cellAreaM2();
+  for (size_t i = 0; i < s.noSnow.size(); ++i) {
+    if (!s.noSnow.values()[i] || !s.validCell.values()[i]) continue;
+    for (int l = 0; l < kSnowLayerCount; ++l) {
+      float& d = s.layer(static_cast<SnowLayer>(l)).values()[i];
+      removed += static_cast<double>(d) * area;
+      d = 0.f;
+    }
   }
+  return removed;
 }
 
 // While the backend holds the snow, the host's copies of the fields it downloads are freed (the

@@ -146,6 +146,10 @@ inline float temperatureBaseC(const ModelParameters& p, float altitudeM, float e
 // Fills temperatureBaseC from the bedrock and the exposure (T = T0 + base).
 void computeTemperatureBase(SnowState& state, const ModelParameters& params);
 
+// The snow of the valid cells state.noSnow marks, removed; returns its volume (m^3), summed in
+// row order (the season's SeasonReport::noSnowRemovedM3).
+double removeSnowOfNoSnowCells(SnowState& state);
+
 // Whether a frame day is handed to onFrame: within the season, its start (0) and end included.
 inline bool frameDayInSeason(double day, double seasonDays) { return day >= 0.0 && day <= seasonDays; }
 

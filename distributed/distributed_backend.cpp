@@ -16,7 +16,6 @@ std::string distributedSeasonRefusal(const SeasonConfig& c, const SnowState& sta
   if ((p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !c.userSkiers.empty()) return "skiers";
   if (c.bedforms) return "wind bedforms";
   if (c.skiTracks) return "the ski-track texture";
-  if (state.noSnow.size() > 0) return "no-snow masks";
   return "";
 }
 

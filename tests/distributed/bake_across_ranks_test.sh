@@ -72,11 +72,11 @@ done
 # The season must have moved snow for the comparison to mean something.
 grep -qE "added [1-9]" "$work/default/alone/log" || fail "default: no snowfall"
 
-# Art direction: the art-direction preset's painted masks, initial snow, snowfall multiplier and
-# timeline edits, without its avalanches, skiers and no-snow road.
+# Art direction: the art-direction preset's painted masks, initial snow, snowfall multiplier,
+# no-snow road and timeline edits, without its avalanches and skiers.
 art="$root/presets/art_direction"
 cat > "$work/art.toml" <<TOML
-name = "across ranks: art direction without avalanches, skiers or a no-snow mask"
+name = "across ranks: art direction without avalanches or skiers"
 [terrain]
 builtin = "ridged"
 size = 128
@@ -98,6 +98,7 @@ stable = 0.2
 powder = { mask = "$art/precipitation.png", depth_m = 0.3 }
 [multipliers]
 snowfall = { file = "$art/precipitation.png", range = [0.6, 1.4] }
+no_snow = "$art/road.png"
 [[edits]]
 day = 20
 op = "add"
@@ -120,6 +121,7 @@ frames_days = [0, 46]
 TOML
 check_scene art "$work/art.toml"
 grep -qE "edit 1: .*: [1-9]" "$work/art/alone/log" || fail "art: its first edit added no snow"
+grep -qE "no-snow mask: [1-9]" "$work/art/alone/log" || fail "art: its no-snow mask removed no snow"
 
 dem="$data/dem/tyrol_avaWog_5m.asc"
 if [ -f "$dem" ]; then
