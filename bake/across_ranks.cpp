@@ -55,8 +55,11 @@ std::string acrossRanksRefusal(const Scene& s) {
     return at("parameters.avalanche_rate_per_km2_per_day", "spontaneous avalanches (parameters.avalanche_rate_per_km2_per_day > 0; set it to 0)");
   if (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0)
     return at("parameters.skiers_per_hour", "automatic skiers (parameters.skiers_per_hour > 0; set it to 0)");
-  for (const Scene::AvalancheEvent& a : s.userAvalanches) return s.sourceName + ":" + std::to_string(a.line) + ": " + "an avalanche event: a bake across ranks does not run it yet (docs/distributed.md)";
-  for (const Scene::AvalancheEvent& a : s.userSkiers) return s.sourceName + ":" + std::to_string(a.line) + ": " + "a skier event: a bake across ranks does not run it yet (docs/distributed.md)";
+  auto event = [&](const Scene::AvalancheEvent& e, const char* what) {
+    return s.sourceName + ":" + std::to_string(e.line) + ": " + what + ": a bake across ranks does not run it yet (docs/distributed.md)";
+  };
+  if (!s.userAvalanches.empty()) return event(s.userAvalanches.front(), "an avalanche event");
+  if (!s.userSkiers.empty()) return event(s.userSkiers.front(), "a skier event");
   if (s.bedforms.enabled) return at("bedforms", "[bedforms]");
   return "";
 }

@@ -167,6 +167,21 @@ refused() {  # NAME EXPECTED ARGS...
   [ ! -e "$work/$name/out" ] || fail "$name: an output folder was written"
 }
 refused avalanches parameters.avalanche_rate_per_km2_per_day preset:default
+cat > "$work/event.toml" <<'TOML'
+name = "across ranks: an avalanche event"
+[terrain]
+builtin = "ridged"
+size = 64
+cell_size_m = 10.0
+[parameters]
+avalanche_rate_per_km2_per_day = 0.0
+skiers_per_hour = 0.0
+[[events]]
+type = "avalanche"
+day = 5
+position_m = [300.0, 300.0]
+TOML
+refused avalanche-event "event.toml:[0-9]*: an avalanche event: a bake across ranks" "$work/event.toml"
 refused missing-terrain /nonexistent/dem.asc preset:default --terrain /nonexistent/dem.asc "${no_avalanches[@]}"
 # Found once the ranks have joined (the terrain loaded): they agree on the status.
 refused tiny-grid "cannot be baked across ranks" preset:default --set terrain.size=12 "${no_avalanches[@]}"
