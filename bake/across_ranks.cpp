@@ -102,7 +102,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
     };
   config.skiTracks = nullptr;  // no skiers across ranks: the texture stays as the single process leaves it
   config.lendFrames = false;   // each frame is gathered into a copy of its own
-  if (const std::string why = dist::distributedSeasonRefusal(config, state); !why.empty())
+  if (const std::string why = dist::distributedSeasonRefusal(config); !why.empty())
     throw std::logic_error("a season across ranks with " + why + " passed acrossRanksRefusal");
   // A no-snow mask's snow leaves the whole grid here, its volume summed in the single process's
   // order; the ranks' seasons then find none on their no-snow cells, whose validity they clear.
@@ -181,15 +181,9 @@ int runBakeAcrossRanks(BakeOptions options, const std::function<std::ostream&()>
   // A rank that failed before the season joins the others' agreement at its start.
   bool rank0Failed = comm.rank() == 0 && failure;
   if (failure && !seasonAgreed) rank0Failed = agreedStatuses(comm, status).front() != 0;
-  // An input error is every rank's alike, as a rule: rank 0 says it, and the others only when
-  // rank 0 did not fail.
-  bool inputError = false;
-  if (failure) try {
-      std::rethrow_exception(failure);
-    } catch (const InputError&) {
-      inputError = true;
-    } catch (...) {
-    }
+  // An input error (exit 2) is every rank's alike, as a rule: rank 0 says it, and the others only
+  // when rank 0 did not fail.
+  const bool inputError = status == 2;
   if (failure && (comm.rank() == 0 || !inputError || !rank0Failed)) std::cerr << message.str();
   // Rank 0 wrote the outputs while the others waited here: they end with the largest status. Each
   // rank's peak resident memory comes along for rank 0's log.

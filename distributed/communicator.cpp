@@ -98,13 +98,6 @@ float Communicator::maxOverRanks(float value) const {
   return out;
 }
 
-int Communicator::maxOverRanks(int value) const {
-  if (size_ == 1) return value;
-  int out = value;
-  check(MPI_Allreduce(&value, &out, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD), "MPI_Allreduce");
-  return out;
-}
-
 void Communicator::barrier() const {
   if (size_ > 1) check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier");
 }
@@ -125,7 +118,6 @@ void Communicator::exchange(const std::vector<Send>& sends, const std::vector<Re
 }
 std::vector<double> Communicator::allGather(const std::vector<double>& mine) const { return mine; }
 float Communicator::maxOverRanks(float value) const { return value; }
-int Communicator::maxOverRanks(int value) const { return value; }
 void Communicator::barrier() const {}
 void Communicator::abortAll(int status) const { std::exit(status); }
 

@@ -45,7 +45,6 @@ class Communicator {
   std::vector<double> allGather(const std::vector<double>& mine) const;
   // The largest of the ranks' values, on every rank.
   float maxOverRanks(float value) const;
-  int maxOverRanks(int value) const;
   void barrier() const;
   // Ends every rank of the launch at once with `status` (MPI_Abort): a failure while the others
   // wait in an exchange. One process alone: std::exit.

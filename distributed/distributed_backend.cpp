@@ -10,7 +10,7 @@
 
 namespace snow::dist {
 
-std::string distributedSeasonRefusal(const SeasonConfig& c, const SnowState& state) {
+std::string distributedSeasonRefusal(const SeasonConfig& c) {
   const ModelParameters& p = c.params;
   if (p.avalancheRatePerKm2PerDay > 0.0 || !c.userAvalanches.empty()) return "avalanches";
   if ((p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !c.userSkiers.empty()) return "skiers";

@@ -16,12 +16,12 @@
 
 namespace snow::dist {
 
-// Why `config` (its parameters and events) on `state` cannot run across ranks yet; empty when it
-// can. A no-snow mask's removed snow (SeasonReport::noSnowRemovedM3) is the local grid's: remove
+// Why `config` (its parameters and events) cannot run across ranks yet; empty when it can. A
+// no-snow mask's removed snow (SeasonReport::noSnowRemovedM3) is the local grid's: remove
 // it from the whole state before cutting (removeSnowOfNoSnowCells, as the bake does). The config's
 // updateStaticFields, if any, must fill the rank's local grid: cutFields (local_state.h) cuts a
 // day's whole-grid fields to it.
-std::string distributedSeasonRefusal(const SeasonConfig& config, const SnowState& state);
+std::string distributedSeasonRefusal(const SeasonConfig& config);
 
 class DistributedBackend final : public SnowBackend {
  public:

@@ -223,9 +223,6 @@ ProgressOutcome bakeOutcome(const BakeResult& r) {
   return o;
 }
 
-// The bake, its human log on stderr or in --log-file; with --progress json the last line on
-// stderr says how it ended (and errors are reported there, not as text). The scene (or level) is
-// chosen before the log is opened, so a bad list or index writes nothing.
 // A command's failure in one line on `err`, and its exit status.
 int describeFailure(std::exception_ptr failure, std::ostream& err) {
   try {
@@ -240,7 +237,7 @@ int describeFailure(std::exception_ptr failure, std::ostream& err) {
     // The memory model refuses what it predicts will not fit; this is what it did not foresee.
     const std::string stage = currentBakeStage();
     err << "snowbake: failed: out of memory" << (stage.empty() ? std::string() : " during the " + stage + " stage")
-              << " (the memory model's prediction was short: see docs/memory.md; lower run.max_memory_gb or bake a smaller grid)\n";
+        << " (the memory model's prediction was short: see docs/memory.md; lower run.max_memory_gb or bake a smaller grid)\n";
     return 1;
   } catch (const std::exception& e) {
     err << "snowbake: failed: " << e.what() << "\n";
@@ -271,6 +268,9 @@ int runBakeCommandAcrossRanks(const BakeCommand& c, const BakeOptions& bake, int
   return runBakeAcrossRanks(bake, openLog, describeFailure);
 }
 
+// The bake, its human log on stderr or in --log-file; with --progress json the last line on
+// stderr says how it ended (and errors are reported there, not as text). The scene (or level) is
+// chosen before the log is opened, so a bad list or index writes nothing.
 int runBakeCommand(const BakeCommand& c, const std::vector<std::string>& argv) {
   std::ostringstream levelNote;
   BakeOptions bake;

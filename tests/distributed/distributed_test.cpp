@@ -15,6 +15,7 @@
 #include "core/default_terrain.h"
 #include "core/parameters.h"
 #include "core/season.h"
+#include "core/ski_runs.h"
 #include "core/snow_state.h"
 #include "distributed/communicator.h"
 #include "distributed/continuous_step.h"
@@ -267,20 +268,21 @@ SeasonConfig continuousSeason() {
 }
 
 TEST(DistributedSeason, RefusesWhatIsNotAcrossRanksYetNamingIt) {
-  SnowState state = testState(20, 20);
   SeasonConfig c = continuousSeason();
-  EXPECT_EQ(distributedSeasonRefusal(c, state), "");
+  EXPECT_EQ(distributedSeasonRefusal(c), "");
   c.params.avalancheRatePerKm2PerDay = 0.1;
-  EXPECT_EQ(distributedSeasonRefusal(c, state), "avalanches");
+  EXPECT_EQ(distributedSeasonRefusal(c), "avalanches");
   c = continuousSeason();
   c.userSkiers.push_back({});
-  EXPECT_EQ(distributedSeasonRefusal(c, state), "skiers");
+  EXPECT_EQ(distributedSeasonRefusal(c), "skiers");
   c = continuousSeason();
   c.edits.push_back({});
-  EXPECT_EQ(distributedSeasonRefusal(c, state), "");  // edits run across ranks
-  EXPECT_NE(distributedSeasonRefusal(SeasonConfig{}, state), "");  // the defaults have avalanches and skiers
-  state.noSnow.resize(20, 20, 0);
-  EXPECT_EQ(distributedSeasonRefusal(continuousSeason(), state), "");  // the caller removes its snow on the whole grid
+  EXPECT_EQ(distributedSeasonRefusal(c), "");  // edits run across ranks
+  EXPECT_NE(distributedSeasonRefusal(SeasonConfig{}), "");  // the defaults have avalanches and skiers
+  c = continuousSeason();
+  SkiTracks tracks(testState(20, 20).spec, 2);
+  c.skiTracks = &tracks;
+  EXPECT_EQ(distributedSeasonRefusal(c), "the ski-track texture");
 }
 
 TEST(DistributedSeason, RefusesAStateThatIsNotTheRanksLocalGrid) {
@@ -319,7 +321,7 @@ TEST(Ranks, SeasonOfSnowfallMeltAndTransportGivesTheSingleProcessBytesAndLedger)
   const int w = 150, h = 104;
   const SnowState initial = testState(w, h);
   const SeasonConfig config = continuousSeason();
-  ASSERT_EQ(distributedSeasonRefusal(config, initial), "");
+  ASSERT_EQ(distributedSeasonRefusal(config), "");
   const auto [d, whole, local, expected, got] = runBothSeasons(comm, initial, config);
   expectSameTotals(got.initial, expected.initial);
   expectSameTotals(got.final, expected.final);
@@ -363,7 +365,7 @@ TEST(Ranks, DailyStaticFieldsCutFromTheWholeGridGiveTheSingleProcessBytes) {
     config.updateStaticFields(day, filled);
     cutFields(filled, cells, [](FieldRole r) { return r == FieldRole::Static; }, s);
   };
-  ASSERT_EQ(distributedSeasonRefusal(localConfig, initial), "");
+  ASSERT_EQ(distributedSeasonRefusal(localConfig), "");
   const auto [d, whole, local, expected, got] = runBothSeasons(comm, initial, config, &localConfig);
   expectSameTotals(got.final, expected.final);
   EXPECT_EQ(bitsOf(got.snowfallAddedM3), bitsOf(expected.snowfallAddedM3));
@@ -402,7 +404,7 @@ TEST(Ranks, TimelineEditsGiveTheSingleProcessBytesAndVolumes) {
   edit(5.0, EditOp::Remove, SnowLayer::Powder, 0.3f, false);
   edit(9.0, EditOp::Set, SnowLayer::Unstable, 1.2f, true);
   edit(14.0, EditOp::Move, SnowLayer::Unstable, 0.5f, true, SnowLayer::Stable);
-  ASSERT_EQ(distributedSeasonRefusal(config, initial), "");
+  ASSERT_EQ(distributedSeasonRefusal(config), "");
   const auto [d, whole, local, expected, got] = runBothSeasons(comm, initial, config);
   ASSERT_EQ(got.edits.size(), 4u);
   ASSERT_EQ(expected.edits.size(), 4u);
