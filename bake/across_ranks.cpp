@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/format.h"
 #include "core/stop_request.h"
@@ -48,19 +49,8 @@ std::string acrossRanksRefusal(const Scene& s) {
   auto at = [&](const std::string& key, const std::string& what) {
     return s.keyLocation(key) + ": " + what + ": a bake across ranks does not run it yet (docs/distributed.md)";
   };
-  const ModelParameters& p = s.params;
   if (s.mode != SceneMode::Season) return at("mode", "mode = \"" + std::string(s.mode == SceneMode::Occlusion ? "occlusion" : "mesh") + "\"");
   if (s.backend == BackendChoice::Cuda) return at("run.backend", "run.backend = \"cuda\"");
-  if (p.avalancheRatePerKm2PerDay > 0.0)
-    return at("parameters.avalanche_rate_per_km2_per_day", "spontaneous avalanches (parameters.avalanche_rate_per_km2_per_day > 0; set it to 0)");
-  if (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0)
-    return at("parameters.skiers_per_hour", "automatic skiers (parameters.skiers_per_hour > 0; set it to 0)");
-  auto event = [&](const Scene::AvalancheEvent& e, const char* what) {
-    return s.sourceName + ":" + std::to_string(e.line) + ": " + what + ": a bake across ranks does not run it yet (docs/distributed.md)";
-  };
-  if (!s.userAvalanches.empty()) return event(s.userAvalanches.front(), "an avalanche event");
-  if (!s.userSkiers.empty()) return event(s.userSkiers.front(), "a skier event");
-  if (s.bedforms.enabled) return at("bedforms", "[bedforms]");
   return "";
 }
 
@@ -83,10 +73,15 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   const GridSpec whole = state.spec;
   const dist::Decomposition d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
   const dist::CellRect cells = d.local(comm.rank());
+  // Avalanches, skiers and bedforms run on a replica of the whole grid on every rank, their
+  // runners on the whole state, which keeps its terrain and each day's static fields for them.
+  const bool replicated = dist::seasonNeedsReplica(config);
+  if (replicated) config.eventTerrain = &state;
+  else config.skiTracks = nullptr;  // no skiers: the texture stays as the single process leaves it
   // Each day's static fields filled on the whole grid (on a state lent the terrain alone), then cut
   // to the rank's: the fields the fill makes, and no others, as the single process's state has.
   if (config.updateStaticFields)
-    config.updateStaticFields = [fill = config.updateStaticFields, &state, cells](int day, SnowState& s) {
+    config.updateStaticFields = [fill = config.updateStaticFields, &state, cells, replicated](int day, SnowState& s) {
       SnowState filled;
       filled.spec = state.spec;
       auto lend = [&] { std::swap(filled.bedrockM, state.bedrockM), std::swap(filled.validCell, state.validCell); };
@@ -98,11 +93,12 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
         throw;
       }
       lend();
-      dist::cutFields(filled, cells, [](FieldRole r) { return r == FieldRole::Static; }, s);
+      auto isStatic = [](FieldRole r) { return r == FieldRole::Static; };
+      dist::cutFields(filled, cells, isStatic, s);
+      if (replicated) dist::cutFields(filled, dist::CellRect{0, 0, state.spec.width, state.spec.height}, isStatic, state);
     };
-  config.skiTracks = nullptr;  // no skiers across ranks: the texture stays as the single process leaves it
-  config.lendFrames = false;   // each frame is gathered into a copy of its own
-  if (const std::string why = dist::distributedSeasonRefusal(config); !why.empty())
+  config.lendFrames = false;  // each frame is gathered into a copy of its own
+  if (const std::string why = dist::distributedSeasonRefusal(config, replicated); !why.empty())
     throw std::logic_error("a season across ranks with " + why + " passed acrossRanksRefusal");
   // A no-snow mask's snow leaves the whole grid here, its volume summed in the single process's
   // order; the ranks' seasons then find none on their no-snow cells, whose validity they clear.
@@ -110,8 +106,13 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   const double noSnowRemovedM3 = noSnow ? removeSnowOfNoSnowCells(state) : 0.0;
   SnowState mine = dist::cutLocalState(state, cells);
   // The snow and the static fields are the ranks' now; the whole state keeps the terrain, which
-  // the daily static fill reads.
-  state.releaseFields([](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record || r == FieldRole::Static; });
+  // the daily static fill reads. With a replica, the season's first upload hands it the snow, and
+  // the replica's runners see the no-snow cells outside the terrain, as the rank's season does.
+  if (!replicated)
+    state.releaseFields([](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record || r == FieldRole::Static; });
+  else if (noSnow)
+    for (size_t i = 0; i < state.noSnow.size(); ++i)
+      if (state.noSnow.values()[i]) state.validCell.values()[i] = 0;
   // Every rank is here or failed on its own before: agree before the first exchange.
   const std::vector<double> statuses = agreedStatuses(comm, 0);
   if (const double worst = *std::max_element(statuses.begin(), statuses.end()); worst != 0) throw OtherRankFailed{static_cast<int>(worst)};
@@ -119,6 +120,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid; rank 0's subdomain "
       << d.owned(0).width() << " x " << d.owned(0).height() << " cells, halo " << d.halo << "\n";
   dist::DistributedBackend backend(std::move(local), comm, d);
+  if (replicated) backend.replicateEvents(createCpuBackend(), state);
   // A whole-grid state on rank 0 from every rank's owned cells.
   auto gathered = [&](const SnowState& s) {
     SnowState out = comm.rank() == 0 ? dist::wholeLike(s, whole) : SnowState();
@@ -145,6 +147,10 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   inSeason = false;
   if (comm.rank() == 0) state = std::move(final);
   progress().stage("season", 1.0);
+  if (replicated)
+    log << "season: avalanches, skiers and bedforms on every rank's replica of the whole grid, brought up to date "
+        << backend.replicaGathers() << " times (" << fixed(static_cast<double>(backend.replicaBytesSent()) / (1024.0 * 1024.0), 1)
+        << " MiB sent by rank 0)\n";
   logSeasonReport(report, scene, config, backend.name(), log);
   return report;
 }

@@ -1,6 +1,7 @@
 // A bake across the ranks of a launch (mpirun -np N snowbake bake ..., srun; docs/distributed.md).
 // Every rank loads the scene and the terrain and runs the precompute alone; the season runs
-// decomposed (each rank its subdomain, halos exchanged, every sum in the single process's order);
+// decomposed (each rank its subdomain, halos exchanged, every sum in the single process's order;
+// avalanches, skiers and bedforms on every rank's replica of the whole grid);
 // rank 0 gathers the state at the frames and the season's end and writes every output and the
 // manifest: the single process's bytes.
 //

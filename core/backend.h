@@ -136,6 +136,15 @@ class SnowBackend {
   virtual BedformStepReport bedformStep(const BedformArgs& args) = 0;
   // The bedform cohesion per cell (false, and `out` untouched, before the first bedform step).
   virtual bool bedformCohesion(Grid<float>& out) = 0;
+  // The bedform domain of the last step (one byte a cell, 1 where the bedform model runs, which
+  // wind transport and powder diffusion leave): false, and `out` untouched, before the first
+  // bedform step. A backend that runs no bedform step reads the one given to it instead (a rank's
+  // local grid, cut from the whole grid's replica; empty: none), until its next upload.
+  virtual bool bedformDomain(std::vector<uint8_t>& out) {
+    (void)out;
+    return false;
+  }
+  virtual void useBedformDomain(const std::vector<uint8_t>& domain) { (void)domain; }
 
   // Skiers (core/ski_runs.h). The route map of the bedrock by the cellular automaton
   // (RouteMapStepKernel) on the backend's device; false on host backends, where a one-pass sort

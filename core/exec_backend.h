@@ -205,6 +205,13 @@ class ExecBackend final : public SnowBackend {
     return true;
   }
 
+  bool bedformDomain(std::vector<uint8_t>& out) override {
+    if (!bed_.ready) return false;
+    exec_.download(bed_.active, out);
+    return true;
+  }
+  void useBedformDomain(const std::vector<uint8_t>& domain) override { exec_.upload(givenBedformDomain_, domain); }
+
   bool routeMapOnDevice(Grid<float>& out) override {
     if constexpr (!Exec::kDevice) {
       (void)out;
@@ -283,6 +290,7 @@ class ExecBackend final : public SnowBackend {
 #undef SNOW_UPLOAD_WITH_STATE
     avalancheFieldsReady_ = avalancheFieldsFreed_ = false;
     bed_.ready = false;
+    freeBuffer(givenBedformDomain_);
     makeScratch(true);
     scratchReleased_ = false;
     uploadStaticFields(s);
@@ -307,7 +315,7 @@ class ExecBackend final : public SnowBackend {
   SNOW_IF_VIEW(access, v.view = mayBeAbsent(FieldRole::role) ? dataIfPresent(member##_) : member##_.data();)
     SNOW_STATE_FIELDS(SNOW_VIEW_OF_FIELD)
 #undef SNOW_VIEW_OF_FIELD
-    v.bedformActive = bed_.ready ? bed_.active.data() : nullptr;
+    v.bedformActive = bed_.ready ? bed_.active.data() : dataIfPresent(givenBedformDomain_);
 #define SNOW_VIEW_OF_SCRATCH(view, Element, extent) v.view = view##_.data();
     SNOW_SCRATCH_FIELDS(SNOW_VIEW_OF_SCRATCH)
 #undef SNOW_VIEW_OF_SCRATCH
@@ -376,6 +384,7 @@ class ExecBackend final : public SnowBackend {
   uint64_t stateVersion_ = 0;
   AvalancheTouched avalancheTouched_;  // phenomena/avalanches.h
   BedformStorage<Exec> bed_;
+  Buffer<uint8_t> givenBedformDomain_;  // useBedformDomain's, read while bed_ is not ready
   SkierStorage<Exec> skiers_;
 };
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <stdexcept>
 #include <utility>
 
 #include "release_memory.h"
@@ -190,10 +191,11 @@ void SeasonRun::addStateChanges() {
 void SeasonRun::bedformStep(int slot, double day, double dt) {
   const BedformParameters& bp = *cfg_.bedforms;
   if (bedformWindiest_ < 0.0) {
+    const SnowState& t = terrain();
     double maxSpeed = 0.0;
-    for (size_t i = 0; i < state_.windXMps.size(); ++i) {
-      if (!state_.validCell.values()[i] || (bedformsMasked_ && !state_.bedformMask.values()[i])) continue;
-      const double wx = state_.windXMps.values()[i], wy = state_.windYMps.values()[i];
+    for (size_t i = 0; i < t.windXMps.size(); ++i) {
+      if (!t.validCell.values()[i] || (bedformsMasked_ && !t.bedformMask.values()[i])) continue;
+      const double wx = t.windXMps.values()[i], wy = t.windYMps.values()[i];
       maxSpeed = std::max(maxSpeed, wx * wx + wy * wy);
     }
     bedformWindiest_ = maxSpeed;
@@ -220,7 +222,8 @@ void SeasonRun::bedformStep(int slot, double day, double dt) {
 
 // Wind bedforms (phenomena/bedforms.h), hourly steps of rounds_per_hour polling rounds each.
 void SeasonRun::addBedforms() {
-  bedformsMasked_ = state_.bedformMask.size() == state_.spec.cellCount() && state_.bedformMask.size() > 0;
+  const SnowState& t = terrain();
+  bedformsMasked_ = t.bedformMask.size() == t.spec.cellCount() && t.bedformMask.size() > 0;
   if (!cfg_.bedforms) return;
   addContinuous("wind bedforms", 24.0, [this](int slot, double day, double dt) {
     if (dt > 0.0) timed(slot, [&] { bedformStep(slot, day, dt); });
@@ -298,8 +301,18 @@ SnowState SeasonRun::frameCopy() {
   SnowState frame = hostFrame();
   frame.restoreFields(downloadedWithState, cfg_.recordFields);
   backend_.download(frame);
-  if (cfg_.skiTracks) cfg_.skiTracks->fade(frame);
+  fadeSkiTracks(frame);
   return frame;
+}
+
+// The ski-track texture faded to `frame`'s snow surface, or, across ranks, to the backend's whole
+// grid (the texture's).
+void SeasonRun::fadeSkiTracks(const SnowState& frame) {
+  if (!cfg_.skiTracks) return;
+  if (!cfg_.eventTerrain) return cfg_.skiTracks->fade(frame);
+  const float* layers[4];
+  if (!backend_.hostSnowLayers(layers)) throw std::logic_error("the ski-track texture of a rank's season needs the whole grid's layers in host memory");
+  cfg_.skiTracks->fade(cfg_.eventTerrain->bedrockM, layers);
 }
 
 // Between events no step holds the backend's scratch, the avalanche runner's snapshot (none in
@@ -316,7 +329,7 @@ void SeasonRun::writeLentFrame(double day) {
   const Grid<float> hostCohesion = state_.bedformCohesion;  // a download replaces it once bedforms ran
   if (noSnow_) std::swap(state_.validCell, terrainValid_);
   backend_.downloadGiving(state_);
-  if (cfg_.skiTracks) cfg_.skiTracks->fade(state_);
+  fadeSkiTracks(state_);
   onFrame_(day, state_);
   backend_.returnState(state_);
   if (noSnow_) std::swap(state_.validCell, terrainValid_);
@@ -389,7 +402,7 @@ void SeasonRun::finish() {
   backend_.downloadGiving(state_);
   if (staticReleased_) cfg_.updateStaticFields(staticDay_, state_);  // the last day's, as they were
   if (noSnow_) state_.validCell = std::move(terrainValid_);
-  if (cfg_.skiTracks) cfg_.skiTracks->fade(state_);
+  fadeSkiTracks(state_);
   const auto stats = scheduler_.stats();
   for (size_t i = 0; i < stats.size(); ++i) {
     reports_[i].starts = stats[i].starts;

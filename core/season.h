@@ -82,6 +82,11 @@ struct SeasonConfig {
   // state.bedformMask, inside the mask; in their domain (cells whose snow bed is at most
   // max_slope_deg steep) they replace the layered wind transport and powder diffusion.
   std::optional<BedformParameters> bedforms;
+  // The whole grid's terrain, static fields and art direction, when the season's state is one
+  // rank's part of it (distributed/): the runners of avalanches, skiers and bedforms work on the
+  // whole grid's cells, which the backend steps on a replica of the whole grid (null: the state's
+  // own). The ski-track texture is then the whole grid's, faded by the backend's whole layers.
+  const SnowState* eventTerrain = nullptr;
 };
 
 struct PhenomenonReport {

@@ -88,11 +88,11 @@ void SeasonRun::stopAvalanche(int slot) {
 void SeasonRun::addAvalanches() {
   skiing_ = (p_.skiersPerHour > 0.0 && p_.skiHoursPerDay > 0.0) || !cfg_.userSkiers.empty();
   double validCells = 0;
-  for (uint8_t v : state_.validCell.values()) validCells += v;
-  const double areaKm2 = validCells * state_.spec.cellAreaM2() * 1e-6;
+  for (uint8_t v : terrain().validCell.values()) validCells += v;
+  const double areaKm2 = validCells * terrain().spec.cellAreaM2() * 1e-6;
   const double startsPerDay = p_.avalancheRatePerKm2PerDay * areaKm2;
   if (startsPerDay > 0.0 || !cfg_.userAvalanches.empty() || (skiing_ && p_.skiTriggerFactor > 0.0)) {
-    avalanche_.emplace(backend_, p_, state_);
+    avalanche_.emplace(backend_, p_, terrain());
     avalanche_->keepMaps(cfg_.avalancheMaps, cfg_.avalancheFrameIntervalS);
     PhenomenonSpec s;
     s.name = "avalanche";

@@ -37,6 +37,9 @@ class SeasonRun {
   // A body run at a step of phenomenon `slot`, over `dt` days since its previous step.
   using ContinuousBody = std::function<void(int slot, double day, double dt)>;
 
+  // The grid the runners of avalanches, skiers and bedforms work on (SeasonConfig::eventTerrain).
+  const SnowState& terrain() const { return cfg_.eventTerrain ? *cfg_.eventTerrain : state_; }
+  void fadeSkiTracks(const SnowState& frame);
   void leaveNoSnowCells();
   void releaseHostCopies();
   int addPhenomenon(PhenomenonSpec spec);

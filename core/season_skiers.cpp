@@ -62,7 +62,7 @@ void SeasonRun::addUserSkiers() {
     auto cumulative = std::make_shared<std::vector<double>>(u.startWeights->size());
     double sum = 0.0;
     for (size_t i = 0; i < cumulative->size(); ++i)
-      (*cumulative)[i] = (sum += state_.validCell.values()[i] ? std::max(0.f, (*u.startWeights)[i]) : 0.f);
+      (*cumulative)[i] = (sum += terrain().validCell.values()[i] ? std::max(0.f, (*u.startWeights)[i]) : 0.f);
     const uint64_t stream = maskedSkierDraws++;
     scheduler_.addAction(u.day, [this, u, cumulative, stream](double now) {
       const RandomKey key{cfg_.seed};
@@ -72,7 +72,7 @@ void SeasonRun::addUserSkiers() {
           const Philox4x32 r = key.draw(stream, static_cast<uint32_t>(k) * 16u + attempt, RngStream::SkierStartMask);
           const long long i = pickByCumulativeWeight(*cumulative, uniformOpenDouble(r.v[0], r.v[1]));
           if (i < 0) break;
-          const int x = static_cast<int>(i % state_.spec.width), y = static_cast<int>(i / state_.spec.width);
+          const int w = terrain().spec.width, x = static_cast<int>(i % w), y = static_cast<int>(i / w);
           if (!ski_->canStart(x, y)) continue;
           starts.push_back({x, y, 0, true});
           break;
@@ -89,7 +89,7 @@ void SeasonRun::addUserSkiers() {
 // at its event.
 void SeasonRun::addSkiers() {
   if (!skiing_) return;
-  ski_.emplace(backend_, p_, state_, cfg_.skiTracks);
+  ski_.emplace(backend_, p_, terrain(), cfg_.skiTracks);
   if (p_.skiersPerHour > 0.0 && p_.skiHoursPerDay > 0.0) {
     PhenomenonSpec s;
     s.name = "skier";

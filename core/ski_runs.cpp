@@ -147,8 +147,14 @@ void SkiTracks::fadeCell(int cell, float now) {
 }
 
 void SkiTracks::fade(const SnowState& s) {
+  const float* layers[4] = {s.compactedM.data(), s.stableM.data(), s.unstableM.data(), s.powderM.data()};
+  fade(s.bedrockM, layers);
+}
+
+void SkiTracks::fade(const Grid<float>& bedrock, const float* const layers[4]) {
   for (size_t c = 0; c < lastSurface_.size(); ++c)
-    if (!std::isnan(lastSurface_[c])) fadeCell(static_cast<int>(c), s.bedrockM.values()[c] + s.depthM(c % spec_.width, c / spec_.width));
+    if (!std::isnan(lastSurface_[c]))  // SnowState::depthM's sum
+      fadeCell(static_cast<int>(c), bedrock.values()[c] + (layers[0][c] + layers[1][c] + layers[2][c] + layers[3][c]));
 }
 
 void SkiTracks::stamp(const Path2& track, double depthM, double widthM, const std::function<float(int)>& surface) {

@@ -89,6 +89,8 @@ class SkiTracks {
   void stamp(const Path2& track, double depthM, double widthM, const std::function<float(int cell)>& surface);
   // Fades every cell with tracks by the rise of its snow surface since it was last looked at.
   void fade(const SnowState& state);
+  // The same from the bedrock and the four snow layers (C, S, U, P) of every cell.
+  void fade(const Grid<float>& bedrock, const float* const layers[4]);
   // The same for one cell.
   void fadeCell(int cell, float surfaceNow);
 

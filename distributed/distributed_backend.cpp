@@ -7,15 +7,24 @@
 #include "continuous_step.h"
 #include "exact_sum.h"
 #include "halo_exchange.h"
+#include "whole_replica.h"
 
 namespace snow::dist {
 
-std::string distributedSeasonRefusal(const SeasonConfig& c) {
+bool seasonNeedsReplica(const SeasonConfig& c) {
+  const ModelParameters& p = c.params;
+  return p.avalancheRatePerKm2PerDay > 0.0 || !c.userAvalanches.empty() || (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) ||
+         !c.userSkiers.empty() || c.bedforms.has_value();
+}
+
+std::string distributedSeasonRefusal(const SeasonConfig& c, bool replicated) {
+  if (replicated) return c.eventTerrain ? "" : "a replica of the whole grid but no SeasonConfig::eventTerrain";
   const ModelParameters& p = c.params;
   if (p.avalancheRatePerKm2PerDay > 0.0 || !c.userAvalanches.empty()) return "avalanches";
   if ((p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !c.userSkiers.empty()) return "skiers";
   if (c.bedforms) return "wind bedforms";
   if (c.skiTracks) return "the ski-track texture";
+  if (c.eventTerrain) return "SeasonConfig::eventTerrain but no replica of the whole grid";
   return "";
 }
 
@@ -44,16 +53,165 @@ void DistributedBackend::checkLocalGrid(const GridSpec& spec) const {
                                 std::to_string(l.width()) + " x " + std::to_string(l.height()));
 }
 
+void DistributedBackend::replicateEvents(std::unique_ptr<SnowBackend> replica, SnowState& whole) {
+  if (whole.spec.width != d_.width || whole.spec.height != d_.height)
+    throw std::invalid_argument("DistributedBackend::replicateEvents: the whole state is not the decomposition's grid");
+  replica_ = std::move(replica);
+  whole_ = &whole;
+  replicaUploaded_ = false;
+}
+
 void DistributedBackend::upload(const SnowState& s) {
   checkLocalGrid(s.spec);
   spec_ = s.spec;
+  if (replica_ && !replicaUploaded_) throw std::logic_error("DistributedBackend: the replica's first upload is uploadTaking's");
   local_->upload(s);
+  if (replica_) current_ = Current::Local;
 }
 
 void DistributedBackend::uploadTaking(SnowState& s) {
   checkLocalGrid(s.spec);
   spec_ = s.spec;
+  if (replica_) uploadReplica(s);
   local_->uploadTaking(s);
+}
+
+// The whole state's snow to the replica, with the record fields the rank's season keeps (as its
+// state holds them now: zero where the whole state has none).
+void DistributedBackend::uploadReplica(const SnowState& local) {
+  SnowState& w = *whole_;
+#define SNOW_KEEP_RECORD(member, view, Element, role, access, fill)   \
+  if constexpr (FieldRole::role == FieldRole::Record) {               \
+    if (local.member.size() == 0) w.member = Grid<Element>();         \
+    else if (w.member.size() == 0) w.member.resize(w.spec.width, w.spec.height, fill); \
+  }
+  SNOW_STATE_FIELDS(SNOW_KEEP_RECORD)
+#undef SNOW_KEEP_RECORD
+  replica_->uploadTaking(w);
+  replicaUploaded_ = true;
+  current_ = Current::Both;
+}
+
+namespace {
+bool snowOrRecord(FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; }
+}  // namespace
+
+// The replica's steps (an avalanche's, a skier batch, bedforms) into the local grid.
+void DistributedBackend::localUpToDate() {
+  if (current_ != Current::Replica) return;
+  cutFromReplica(d_, comm_.rank(), *replica_, *local_, snowOrRecord);
+  current_ = Current::Both;
+}
+
+// The local grids' steps into the replica, on every rank at once: the ranks' events are the same.
+SnowBackend& DistributedBackend::replicaUpToDate(const char* what) {
+  if (!replica_ || !replicaUploaded_) notYet(what);
+  if (current_ == Current::Local) {
+    using Clock = std::chrono::steady_clock;
+    const auto t0 = Clock::now();
+    replicaBytes_ += gatherIntoReplica(comm_, d_, *local_, *replica_, snowOrRecord);
+    exchangeS_ += std::chrono::duration<double>(Clock::now() - t0).count();
+    ++replicaGathers_;
+    current_ = Current::Both;
+  }
+  return *replica_;
+}
+
+void DistributedBackend::uploadStaticFields(const SnowState& s) {
+  local_->uploadStaticFields(s);
+  if (replica_ && replicaUploaded_) replica_->uploadStaticFields(*whole_);
+}
+
+// A frame's (or the season's end's) bedform cohesion, cut from the replica once bedforms ran.
+void DistributedBackend::addBedformCohesion(SnowState& s) {
+  Grid<float> whole;
+  if (!replica_ || !replicaUploaded_ || !replica_->bedformCohesion(whole)) return;
+  const CellRect at = d_.local(comm_.rank());
+  s.bedformCohesion.resize(at.width(), at.height());
+  copyCells(at, CellRect{0, 0, d_.width, d_.height}, whole.data(), at, s.bedformCohesion.data(), sizeof(float));
+}
+
+void DistributedBackend::download(SnowState& s) {
+  localUpToDate();
+  local_->download(s);
+  addBedformCohesion(s);
+}
+
+void DistributedBackend::downloadGiving(SnowState& s) {
+  localUpToDate();
+  // The replica stays the snow's record after the local grids give theirs away (the season's end
+  // fades the ski-track texture by it).
+  if (replica_ && replicaUploaded_) replicaUpToDate("avalanches and skiers");
+  local_->downloadGiving(s);
+  addBedformCohesion(s);
+}
+
+void* DistributedBackend::hostField(SnowField f) {
+  localUpToDate();
+  return local_->hostField(f);
+}
+
+void* DistributedBackend::hostScratch(ScratchField f) { return local_->hostScratch(f); }
+
+void DistributedBackend::releaseRouteMap() {
+  if (replica_) replica_->releaseRouteMap();
+}
+
+void DistributedBackend::releaseScratch(bool avalancheFields) {
+  local_->releaseScratch(avalancheFields);
+  if (replica_) replica_->releaseScratch(avalancheFields);
+}
+
+bool DistributedBackend::hostSnowLayers(const float* layers[4]) {
+  return replicaUpToDate("avalanches and skiers").hostSnowLayers(layers);
+}
+
+void DistributedBackend::readCells(int x0, int y0, int cols, int rows, std::vector<float>& depth, std::vector<float>& unstable) {
+  replicaUpToDate("avalanches and skiers").readCells(x0, y0, cols, rows, depth, unstable);
+}
+
+void DistributedBackend::downloadBox(SnowBox& box, bool peaks) { replicaUpToDate("avalanches").downloadBox(box, peaks); }
+
+BedformStepReport DistributedBackend::bedformStep(const BedformArgs& a) {
+  fireBeforeWrite();
+  SnowBackend& replica = replicaUpToDate("wind bedforms");
+  const BedformStepReport r = replica.bedformStep(a);
+  current_ = Current::Replica;
+  // The step's domain, which the rank's wind transport and powder diffusion leave.
+  std::vector<uint8_t> whole, mine;
+  if (replica.bedformDomain(whole)) {
+    const CellRect at = d_.local(comm_.rank());
+    mine.resize(at.cells());
+    copyCells(at, CellRect{0, 0, d_.width, d_.height}, whole.data(), at, mine.data(), sizeof(uint8_t));
+    local_->useBedformDomain(mine);
+  }
+  return r;
+}
+
+bool DistributedBackend::bedformCohesion(Grid<float>& out) { return replicaUpToDate("wind bedforms").bedformCohesion(out); }
+
+void DistributedBackend::uploadRouteMap(const Grid<float>& route) { replicaUpToDate("skiers").uploadRouteMap(route); }
+
+void DistributedBackend::skierBatch(const SkierArgs& a, std::vector<SkierAgent>& agents, std::vector<std::vector<double>>& paths) {
+  fireBeforeWrite();
+  replicaUpToDate("skiers").skierBatch(a, agents, paths);
+  current_ = Current::Replica;
+}
+
+void DistributedBackend::avalancheRelease(const std::vector<uint8_t>& moving, const AvalancheArgs& a) {
+  replicaUpToDate("avalanches").avalancheRelease(moving, a);
+  current_ = Current::Replica;
+}
+
+std::vector<float> DistributedBackend::avalancheSteps(const AvalancheArgs& a, int substeps) {
+  std::vector<float> stats = replicaUpToDate("avalanches").avalancheSteps(a, substeps);
+  current_ = Current::Replica;
+  return stats;
+}
+
+void DistributedBackend::avalancheSettle(const AvalancheArgs& a) {
+  replicaUpToDate("avalanches").avalancheSettle(a);
+  current_ = Current::Replica;
 }
 
 void* DistributedBackend::field(SnowField f) {
@@ -89,14 +247,18 @@ double DistributedBackend::deltaVolume() {
 
 double DistributedBackend::snowfall(const SnowfallArgs& a) {
   fireBeforeWrite();
+  localUpToDate();
   local_->snowfall(a);
+  wroteLocal();
   refreshHalo();
   return deltaVolume();
 }
 
 double DistributedBackend::melt(const MeltArgs& a) {
   fireBeforeWrite();
+  localUpToDate();
   local_->melt(a);
+  wroteLocal();
   refreshHalo();
   return deltaVolume();
 }
@@ -104,12 +266,16 @@ double DistributedBackend::melt(const MeltArgs& a) {
 // Powder diffusion writes the powder alone, whose halo its last substep's hook has refreshed.
 void DistributedBackend::powderDiffusion(const PowderDiffusionArgs& a) {
   fireBeforeWrite();
+  localUpToDate();
   local_->powderDiffusion(a);
+  wroteLocal();
 }
 
 void DistributedBackend::windTransport(const WindTransportArgs& a) {
   fireBeforeWrite();
+  localUpToDate();
   local_->windTransport(a);
+  wroteLocal();
   refreshHalo();
 }
 
@@ -124,13 +290,17 @@ double DistributedBackend::applyEdit(const EditArgs& a, const std::vector<float>
     local.resize(mine.cells());
     copyCells(mine, whole, weights.data(), mine, local.data(), sizeof(float));
   }
-  local_->applyEdit(a, local);  // per cell: the halo's cells come out as their owners' (no refresh)
+  localUpToDate();
+  local_->applyEdit(a, local);
+  wroteLocal();  // per cell: the halo's cells come out as their owners' (no refresh)
   return deltaVolume();
 }
 
 void DistributedBackend::stabilityChange(const StabilityArgs& a) {
   fireBeforeWrite();
+  localUpToDate();
   local_->stabilityChange(a);
+  wroteLocal();
   refreshHalo();
 }
 
@@ -139,6 +309,7 @@ double DistributedBackend::layerSum(SnowField layer) {
 }
 
 LayerTotals DistributedBackend::totals() {
+  localUpToDate();
   const double area = spec_.cellAreaM2();
   LayerTotals t;
   t.compactedM3 = layerSum(SnowField::compactedM) * area;
@@ -149,6 +320,7 @@ LayerTotals DistributedBackend::totals() {
 }
 
 float DistributedBackend::maxTemperatureBaseC() {
+  localUpToDate();
   return exactMax(comm_, d_, static_cast<const float*>(field(SnowField::temperatureBaseC)),
                   static_cast<const uint8_t*>(field(SnowField::validCell)));
 }

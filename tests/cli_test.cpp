@@ -175,19 +175,19 @@ TEST(Cli, UsageErrorsExitTwoAndHelpExitsZero) {
   fs::remove_all(dir);
 }
 
-// mpirun -np 2 (or srun -n 2): a scene the bake across ranks cannot run yet (here, avalanches) is
+// mpirun -np 2 (or srun -n 2): a scene the bake across ranks cannot run yet (here, the CUDA backend) is
 // refused by each process with exit 2 before any work, naming the key, and so is every command
 // but bake, info and help (each would run N times over). The bakes it runs: distributed tests.
 TEST(Cli, LaunchOfSeveralProcessesRefusesWhatCannotRunAcrossRanksBeforeWritingAnything) {
   const fs::path dir = workDir();
   setenv("OMPI_COMM_WORLD_SIZE", "2", 1);
-  const ProcessResult r = snowbake(dir, "bake preset:default --set terrain.size=64 --out " + (dir / "out").string());
+  const ProcessResult r = snowbake(dir, "bake preset:default --set terrain.size=64 --set 'run.backend=\"cuda\"' --out " + (dir / "out").string());
   const ProcessResult info = snowbake(dir, "help scene");
   const ProcessResult plan = snowbake(dir, "plan preset:default");
   unsetenv("OMPI_COMM_WORLD_SIZE");
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("started as 2 processes"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("preset:default: spontaneous avalanches (parameters.avalanche_rate_per_km2_per_day"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("run.backend=\"cuda\":1: run.backend = \"cuda\": a bake across ranks does not run it yet"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
   EXPECT_EQ(info.status, 0);  // reading commands still run
@@ -195,7 +195,7 @@ TEST(Cli, LaunchOfSeveralProcessesRefusesWhatCannotRunAcrossRanksBeforeWritingAn
   EXPECT_NE(plan.err.find("only `snowbake bake` runs across ranks"), std::string::npos) << plan.err;
   setenv("SLURM_STEP_ID", "0", 1);  // srun -n 3, whatever its MPI plugin
   setenv("SLURM_STEP_NUM_TASKS", "3", 1);
-  const ProcessResult srun = snowbake(dir, "bake preset:default --set terrain.size=64 --out " + (dir / "out").string());
+  const ProcessResult srun = snowbake(dir, "bake preset:default --set terrain.size=64 --set 'run.backend=\"cuda\"' --out " + (dir / "out").string());
   setenv("SLURM_STEP_ID", "batch", 1);  // a batch script of a job with 3 tasks: one process
   const ProcessResult batch = snowbake(dir, "help scene");
   unsetenv("SLURM_STEP_ID");

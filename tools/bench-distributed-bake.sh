@@ -7,18 +7,22 @@
 # and checks that every output file has the single process's bytes.
 # --weak: weak scaling instead, SIZE² cells a rank (1 rank SIZE², 2 ranks about 1.41 SIZE², 4
 # ranks 2 SIZE²); no byte check (the grids differ).
-#   tools/bench-distributed-bake.sh [--weak] [BUILD=build] [SIZE=1024] [DAYS=30]
+# --events: the default preset with its spontaneous avalanches and skiers, which every rank runs
+# on its replica of the whole grid; the last column says how often the replica was brought up to
+# date and what rank 0 sent for it.
+#   tools/bench-distributed-bake.sh [--weak] [--events] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong
+mode=strong events=0
 if [ "${1:-}" = --weak ]; then mode=weak; shift; fi
+if [ "${1:-}" = --events ]; then events=1; shift; fi
 build="${1:-build}" size="${2:-1024}" days="${3:-30}"
 bin="$(realpath "$build/snowbake")"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-args=(bake preset:default --set "season.days=$days" --set 'outputs.frames_days=[]'
-      --set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0 --no-cache --quiet --out out)
+args=(bake preset:default --set "season.days=$days" --set 'outputs.frames_days=[]' --no-cache --quiet --out out)
+[ "$events" = 1 ] || args+=(--set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0)
 # run RANKS SIZE: bakes into $work/RANKS-SIZE; prints its table row ($one: the alone bake's peak).
 run() {
   local ranks="$1" size="$2" dir="$work/$1-$2" peaks largest season total
@@ -34,8 +38,9 @@ run() {
   season="$(sed -n 's/^season: .* on cpu (\([0-9.]*\) s)$/\1/p' "$dir/log")"
   total="$(sed -n 's/^total: \([0-9.]*\) s$/\1/p' "$dir/log")"
   largest="$(echo "$peaks" | tr ',' '\n' | sort -g | tail -1 | tr -d ' ')"
-  printf '| %s | %s² | %s | %s | %s | %s | %s |\n' "$ranks" "$size" "$([ "$ranks" = 1 ] && echo 2 || echo 1)" "$season" "$total" "$peaks" \
-    "$(awk -v a="$largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }')"
+  replica="$(sed -n 's/^season: .*brought up to date \([0-9]*\) times (\([0-9.]*\) MiB sent by rank 0)$/\1 times, \2 MiB/p' "$dir/log")"
+  printf '| %s | %s² | %s | %s | %s | %s | %s | %s |\n' "$ranks" "$size" "$([ "$ranks" = 1 ] && echo 2 || echo 1)" "$season" "$total" "$peaks" \
+    "$(awk -v a="$largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }')" "${replica:--}"
 }
 # same RANKS SIZE: every output file but the manifest has the alone bake's bytes.
 same() {
@@ -45,10 +50,11 @@ same() {
   done
 }
 
-echo "bake across ranks ($mode): the default preset without avalanches and skiers, 10 m cells, $days days;" \
+echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers, 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
-printf '| %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" "largest rank / one process"
-echo "|---|---|---|---|---|---|---|"
+printf '| %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" "largest rank / one process" \
+  "replica gathers"
+echo "|---|---|---|---|---|---|---|---|"
 one=""
 if [ "$mode" = strong ]; then
   for ranks in 1 2 4; do

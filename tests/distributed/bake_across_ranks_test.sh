@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # mpiexec -n N snowbake bake gives the single process's files, byte for byte, for N = 1..4
-# (docs/distributed.md): the default preset with its avalanches and skiers off (sun, a wind that
-# moves snow, frames, every default output), and a real DEM with NODATA from ../shared/data
-# (skipped with a message when absent), and art direction (painted masks, initial snow, a snowfall
-# multiplier, timeline edits). Their manifests differ in the "memory" line alone (the
-# measured peak varies from run to run). Then what a launch refuses: a scene with avalanches, and
-# a missing terrain, each exit 2 with one message and nothing written.
+# (docs/distributed.md): the default preset with its spontaneous avalanches and skiers (some set
+# off by skiers, their ski-track texture), frames written beside the season or after it; the
+# art-direction preset whole (painted masks, initial snow, multipliers, no-snow road, timeline
+# edits, a masked avalanche event and a skier group); the bedform window; and a real DEM with NODATA
+# from ../shared/data (skipped with a message when absent). Their manifests differ in the "memory"
+# line alone (the measured peak varies from run to run). Then what a launch refuses (the CUDA
+# backend, a missing terrain, a grid too small for the ranks), each exit 2 with one message and
+# nothing written, and a failure on rank 0 alone.
 #   bash bake_across_ranks_test.sh SNOWBAKE MPIEXEC DATA_DIR [MPIEXEC_FLAGS...]
 set -euo pipefail
 bin="$(realpath "$1")" mpiexec="$2" data="$3"
@@ -61,67 +63,34 @@ check_scene() {  # NAME SCENE [ARGS...]
 }
 
 no_avalanches=(--set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0)
-check_scene default preset:default --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' "${no_avalanches[@]}"
+default=(preset:default --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]')
+check_scene default "${default[@]}"
+# The season must have moved snow, released avalanches and run skiers for the comparison to mean
+# something; across ranks they ran on the whole grid's replica.
+grep -qE "added [1-9]" "$work/default/alone/log" || fail "default: no snowfall"
+grep -qE "avalanche day .* cells released" "$work/default/alone/log" || fail "default: no avalanche released"
+grep -qE "skiers: [0-9]+ .*, [1-9][0-9]* skied" "$work/default/alone/log" || fail "default: nobody skied"
+grep -qE "[1-9][0-9]* set off an avalanche" "$work/default/alone/log" || fail "default: no skier set off an avalanche"
+grep -q "replica of the whole grid, brought up to date [1-9]" "$work/default/2/log" || fail "default on 2 ranks: no replica"
 # The frames gathered on rank 0 and written beside the season, or held until its end.
 for timing in beside after_season; do
-  frames=(preset:default --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' --set "run.frame_writing=\"$timing\"")
-  bake "$timing" "$work/$timing/alone" alone "${frames[@]}" "${no_avalanches[@]}" &&
-    bake "$timing" "$work/$timing/3" 3 "${frames[@]}" "${no_avalanches[@]}" &&
+  frames=("${default[@]}" --set "run.frame_writing=\"$timing\"")
+  bake "$timing" "$work/$timing/alone" alone "${frames[@]}" &&
+    bake "$timing" "$work/$timing/3" 3 "${frames[@]}" &&
     same "frames $timing on 3 ranks" "$work/$timing/alone" "$work/$timing/3"
 done
-# The season must have moved snow for the comparison to mean something.
-grep -qE "added [1-9]" "$work/default/alone/log" || fail "default: no snowfall"
 
-# Art direction: the art-direction preset's painted masks, initial snow, snowfall multiplier,
-# no-snow road and timeline edits, without its avalanches and skiers.
-art="$root/presets/art_direction"
-cat > "$work/art.toml" <<TOML
-name = "across ranks: art direction without avalanches or skiers"
-[terrain]
-builtin = "ridged"
-size = 128
-cell_size_m = 10.0
-[season]
-start_date = 2025-12-01
-days = 50
-[[weather.keyframe]]
-day = 0
-sea_level_temperature_c = 5.0
-wind_direction_deg = 280
-wind_speed_mps = 8.0
-[masks.release]
-file = "$art/release_zone.png"
-[masks.ski_area]
-file = "$art/ski_area.png"
-[initial_snow]
-stable = 0.2
-powder = { mask = "$art/precipitation.png", depth_m = 0.3 }
-[multipliers]
-snowfall = { file = "$art/precipitation.png", range = [0.6, 1.4] }
-no_snow = "$art/road.png"
-[[edits]]
-day = 20
-op = "add"
-layer = "compacted"
-depth_m = 0.4
-mask = "ski_area"
-[[edits]]
-day = 45
-op = "set"
-layer = "unstable"
-depth_m = 1.2
-mask = "release"
-[parameters]
-rain_snow_limit_m = 1200.0
-avalanche_rate_per_km2_per_day = 0.0
-skiers_per_hour = 0.0
-[outputs]
-layers = ["depth", "compacted", "unstable", "powder", "preview"]
-frames_days = [0, 46]
-TOML
-check_scene art "$work/art.toml"
+# The art-direction preset at a quarter of its size: its painted masks, initial snow, snowfall
+# multiplier, no-snow road and skier spawn, timeline edits, the masked avalanche and skier events,
+# spontaneous avalanches and skiers.
+check_scene art "$root/presets/art_direction.toml" --set terrain.size=128 --set season.days=52
 grep -qE "edit 1: .*: [1-9]" "$work/art/alone/log" || fail "art: its first edit added no snow"
 grep -qE "no-snow mask: [1-9]" "$work/art/alone/log" || fail "art: its no-snow mask removed no snow"
+grep -qE "skiers: [0-9]+ \(20 from the scene\)" "$work/art/alone/log" || fail "art: its skier group did not ski"
+
+# The bedform window (periodic, slab hops across every subdomain's border), shortened.
+check_scene bedforms "$root/presets/bedforms.toml" --set terrain.size=96 --set season.days=2 --set 'outputs.frames_days=[1]'
+grep -qE "wind bedforms: [0-9]+ cells, [1-9][0-9]* rounds, [1-9][0-9]* slabs lifted" "$work/bedforms/alone/log" || fail "bedforms: no slab lifted"
 
 dem="$data/dem/tyrol_avaWog_5m.asc"
 if [ -f "$dem" ]; then
@@ -166,22 +135,7 @@ refused() {  # NAME EXPECTED ARGS...
   grep -q -- "$expected" "$work/$name/log" || fail "$name: the message does not name $expected"
   [ ! -e "$work/$name/out" ] || fail "$name: an output folder was written"
 }
-refused avalanches parameters.avalanche_rate_per_km2_per_day preset:default
-cat > "$work/event.toml" <<'TOML'
-name = "across ranks: an avalanche event"
-[terrain]
-builtin = "ridged"
-size = 64
-cell_size_m = 10.0
-[parameters]
-avalanche_rate_per_km2_per_day = 0.0
-skiers_per_hour = 0.0
-[[events]]
-type = "avalanche"
-day = 5
-position_m = [300.0, 300.0]
-TOML
-refused avalanche-event "event.toml:[0-9]*: an avalanche event: a bake across ranks" "$work/event.toml"
+refused cuda 'run.backend = "cuda": a bake across ranks' preset:default --set 'run.backend="cuda"'
 refused missing-terrain /nonexistent/dem.asc preset:default --terrain /nonexistent/dem.asc "${no_avalanches[@]}"
 # Found once the ranks have joined (the terrain loaded): they agree on the status.
 refused tiny-grid "cannot be baked across ranks" preset:default --set terrain.size=12 "${no_avalanches[@]}"

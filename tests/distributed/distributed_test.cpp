@@ -4,6 +4,7 @@
 // and 4 ranks) and assert the same bytes as one process.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -283,6 +284,22 @@ TEST(DistributedSeason, RefusesWhatIsNotAcrossRanksYetNamingIt) {
   SkiTracks tracks(testState(20, 20).spec, 2);
   c.skiTracks = &tracks;
   EXPECT_EQ(distributedSeasonRefusal(c), "the ski-track texture");
+  // With the whole grid's replica, avalanches, skiers, bedforms and the texture run; their
+  // runners need the whole grid's terrain.
+  c = continuousSeason();
+  EXPECT_FALSE(seasonNeedsReplica(c));
+  c.params.avalancheRatePerKm2PerDay = 0.1;
+  c.userSkiers.push_back({});
+  c.bedforms = BedformParameters{};
+  c.skiTracks = &tracks;
+  EXPECT_TRUE(seasonNeedsReplica(c));
+  EXPECT_NE(distributedSeasonRefusal(c, true).find("eventTerrain"), std::string::npos);
+  const SnowState terrain = testState(20, 20);
+  c.eventTerrain = &terrain;
+  EXPECT_EQ(distributedSeasonRefusal(c, true), "");
+  c = continuousSeason();
+  c.eventTerrain = &terrain;
+  EXPECT_NE(distributedSeasonRefusal(c).find("no replica"), std::string::npos);
 }
 
 TEST(DistributedSeason, RefusesAStateThatIsNotTheRanksLocalGrid) {
@@ -413,6 +430,72 @@ TEST(Ranks, TimelineEditsGiveTheSingleProcessBytesAndVolumes) {
   EXPECT_EQ(bitsOf(got.editsNetM3), bitsOf(expected.editsNetM3));
   expectSameTotals(got.final, expected.final);
   expectGatheredFieldsAre(comm, d, local, whole, initial);
+}
+
+// Avalanches (spontaneous and a user's), skiers (automatic and a user's group, drawing the
+// ski-track texture) and wind bedforms on the whole grid's replica every rank holds
+// (DistributedBackend::replicateEvents), the continuous phenomena decomposed: the single
+// process's report, fields and texture, bit for bit.
+TEST(Ranks, AvalanchesSkiersAndBedformsOnTheWholeGridsReplicaGiveTheSingleProcessBytes) {
+  const Communicator comm = Communicator::world();
+  const int w = 150, h = 104;
+  const SnowState initial = testState(w, h);
+  SeasonConfig config = continuousSeason();
+  config.params.avalancheRatePerKm2PerDay = 3.0;
+  config.params.skiersPerHour = 3.0;
+  config.userAvalanches.push_back({6.5, 40, 30, false, nullptr});
+  config.userSkiers.push_back({9.25, 100, 20, 3, nullptr});
+  BedformParameters bed;
+  bed.hopLengthM = 20.0;
+  bed.maxSlopeDeg = 40.0;
+  bed.roundsPerHour = 1.0;
+  config.bedforms = bed;
+  SkiTracks tracksAlone(initial.spec, 2), tracksRanks(initial.spec, 2);
+  config.skiTracks = &tracksAlone;
+  ASSERT_TRUE(seasonNeedsReplica(config));
+  SnowState whole = initial;
+  auto reference = createCpuBackend();
+  const SeasonReport expected = runSeason(*reference, whole, config);
+
+  const Decomposition d = Decomposition::choose(comm.size(), w, h, kContinuousHalo);
+  SnowState terrain = initial;  // the replica's whole state: terrain and static fields for the runners
+  SnowState local = cutLocalState(initial, d.local(comm.rank()));
+  SeasonConfig localConfig = config;
+  localConfig.skiTracks = &tracksRanks;
+  localConfig.eventTerrain = &terrain;
+  ASSERT_EQ(distributedSeasonRefusal(localConfig, true), "");
+  DistributedBackend mine(createCpuBackend(), comm, d);
+  mine.replicateEvents(createCpuBackend(), terrain);
+  const SeasonReport got = runSeason(mine, local, localConfig);
+
+  ASSERT_GE(expected.avalanches.size(), 2u);
+  ASSERT_EQ(got.avalanches.size(), expected.avalanches.size());
+  for (size_t k = 0; k < got.avalanches.size(); ++k) {
+    EXPECT_EQ(bitsOf(got.avalanches[k].releasedM3), bitsOf(expected.avalanches[k].releasedM3)) << "avalanche " << k;
+    EXPECT_EQ(got.avalanches[k].footprintCells, expected.avalanches[k].footprintCells) << "avalanche " << k;
+  }
+  ASSERT_GT(expected.skiers.size(), 3u);
+  ASSERT_EQ(got.skiers.size(), expected.skiers.size());
+  for (size_t k = 0; k < got.skiers.size(); ++k) EXPECT_EQ(got.skiers[k].path, expected.skiers[k].path) << "skier " << k;
+  EXPECT_GT(expected.bedforms.slabsEroded, 0);
+  EXPECT_EQ(got.bedforms.slabsEroded, expected.bedforms.slabsEroded);
+  EXPECT_EQ(got.bedforms.rounds, expected.bedforms.rounds);
+  EXPECT_EQ(got.events, expected.events);
+  EXPECT_EQ(bitsOf(got.snowfallAddedM3), bitsOf(expected.snowfallAddedM3));
+  expectSameTotals(got.final, expected.final);
+  SnowState gathered = initial;  // and the bedform cohesion, cut from the replica into the local grid's download
+  gathered.bedformCohesion.resize(w, h, 0.f);
+  expectGatheredFieldsAre(comm, d, local, whole, gathered);
+  EXPECT_TRUE(sameBytes(tracksRanks.depth(), tracksAlone.depth()));
+  EXPECT_GT(*std::max_element(tracksAlone.depth().values().begin(), tracksAlone.depth().values().end()), 0.f);
+  SnowState cohesion = gathered;
+  gatherOwned(comm, d, local, cohesion);
+  if (comm.rank() == 0) {
+    EXPECT_TRUE(sameBytes(cohesion.bedformCohesion, whole.bedformCohesion));
+  }
+  if (comm.size() > 1) {
+    EXPECT_GT(mine.replicaGathers(), 0u);
+  }
 }
 
 }  // namespace
