@@ -7,6 +7,8 @@
 //   template <class T> using Buffer = ...;  // the storage ExecBackend keeps per field
 //   template <class K> void forEachCell(int width, int height, const K& kernel);
 //   template <class K> void forEachCellOfColour(int width, int height, int colour, const K& kernel);
+//   template <class K> void forEachCellInColourOrder(int width, int height, const K& kernel);
+//     (the five colours' passes, one after the other, or any order that gives their bytes)
 //   template <class F, class G> void forEachCellThen(int width, int height, const F& first, const G& second);
 //     (first on every cell, then second)
 //   double sum(const float* values, const uint8_t* valid, int width, int height);  // fixed order
@@ -110,6 +112,10 @@ class SerialExec : public HostStorage {
   void forEachCellOfColour(int width, int height, int colour, const K& kernel) {
     for (int y = 0; y < height; ++y)
       for (int x = firstColumnOfColour(y, colour); x < width; x += 5) kernel(x, y);
+  }
+  template <class K>
+  void forEachCellInColourOrder(int width, int height, const K& kernel) {
+    for (int colour = 0; colour < kColours; ++colour) forEachCellOfColour(width, height, colour, kernel);
   }
   double sum(const float* values, const uint8_t* valid, int width, int height) {
     double s = 0.0;

@@ -11,4 +11,9 @@ SNOW_HD SNOW_INLINE int cellColour(int x, int y) { return (x + 2 * y) % 5; }
 // In row y the cells of colour c start at this column and repeat every 5.
 SNOW_HD SNOW_INLINE int firstColumnOfColour(int y, int colour) { return ((colour - 2 * y) % 5 + 5) % 5; }
 
+constexpr int kColours = 5;
+// Two cells whose crosses overlap lie at most this many rows apart: an executor may run the
+// colours' passes in any order that keeps every such pair in colour order (forEachCellInColourOrder).
+constexpr int kColourReachRows = 2;
+
 }  // namespace snow

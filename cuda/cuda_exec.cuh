@@ -160,6 +160,10 @@ class CudaExec {
     forEachCellOfColourKernel<<<grid, block>>>(kernel, width, height, colour);
     check(cudaGetLastError(), "forEachCellOfColour launch");
   }
+  template <class K>
+  void forEachCellInColourOrder(int width, int height, const K& kernel) {
+    for (int colour = 0; colour < kColours; ++colour) forEachCellOfColour(width, height, colour, kernel);
+  }
   double sum(const float* values, const uint8_t* valid, int width, int height) {
     rowSums_.resize(static_cast<size_t>(height));
     rowSumKernel<<<(height + 127) / 128, 128>>>(values, valid, width, height, rowSums_.data());

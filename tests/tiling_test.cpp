@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <vector>
 
+#include "core/colour_wavefront.h"
 #include "core/serial_exec.h"
 #include "core/tiling.h"
 
@@ -48,4 +50,43 @@ TEST(CrossTiling, MatchesThePaperFigure) {
   EXPECT_EQ(cellColour(3, 1), 0);
   EXPECT_EQ(firstColumnOfColour(1, 0), 3);
   EXPECT_EQ(firstColumnOfColour(0, 0), 0);
+}
+
+// colourWavefront (the TBB executor's colour passes): every row and colour once; every pair of
+// rows within kColourReachRows in colour order, whatever order its bands and seams run in; and no
+// two tasks that may run side by side touching such a pair of different colours.
+TEST(CrossTiling, ColourWavefrontKeepsEveryOverlappingPairInColourOrder) {
+  for (int height : {0, 1, 7, 35, 36, 71, 72, 200, 333}) {
+    for (bool reversed : {false, true}) {
+      const size_t n = static_cast<size_t>(height) * kColours;
+      std::vector<int> when(n, -1), task(n, -1), phase(n, -1);
+      int clock = 0, phases = 0, current = -1;
+      auto forEach = [&](int count, const auto& run) {
+        ++phases;
+        for (int i = 0; i < count; ++i) {
+          current = reversed ? count - 1 - i : i;
+          run(current);
+        }
+      };
+      colourWavefront(height, kColourMinBandRows, forEach, [&](int y, int colour) {
+        ASSERT_TRUE(y >= 0 && y < height && colour >= 0 && colour < kColours) << y << " " << colour;
+        const size_t i = static_cast<size_t>(y) * kColours + colour;
+        ASSERT_EQ(when[i], -1) << "row " << y << " colour " << colour << " twice";
+        when[i] = clock++, task[i] = current, phase[i] = phases;
+      });
+      ASSERT_EQ(clock, height * kColours) << "height " << height;
+      for (int y = 0; y < height; ++y)
+        for (int k = 0; k < kColours; ++k)
+          for (int j = 0; j < kColours; ++j)
+            for (int z = std::max(0, y - kColourReachRows); z <= std::min(height - 1, y + kColourReachRows); ++z) {
+              if (j == k) continue;  // crosses of one colour never overlap
+              const size_t a = static_cast<size_t>(y) * kColours + k, b = static_cast<size_t>(z) * kColours + j;
+              if (k < j)
+                ASSERT_LT(when[a], when[b]) << "height " << height << (reversed ? ", tasks reversed" : "") << ": colour " << k
+                                            << " on row " << y << " after colour " << j << " on row " << z;
+              ASSERT_FALSE(phase[a] == phase[b] && task[a] != task[b])
+                  << "height " << height << ": rows " << y << " and " << z << " in two tasks side by side";
+            }
+    }
+  }
 }

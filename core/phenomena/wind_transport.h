@@ -30,7 +30,6 @@ struct WindTransportArgs {
   float dtDays = 0.5f;
   float erosionRate = 0.1f;          // k_erosion, m s day^-1 (see above)
   float shadowToleranceM = 0.1f;     // W_z more than this above the snow: in the wind shadow
-  int colour = 0;
 };
 
 struct WindTransportKernel {
@@ -93,11 +92,7 @@ inline WindTransportArgs makeWindTransportArgs(const ModelParameters& p, double 
 template <class Exec>
 void runWindTransport(Exec& exec, const SnowFieldsView& v, const WindTransportArgs& a) {
   exec.forEachCell(v.width, v.height, PowderSnapshotKernel{v});
-  WindTransportArgs pass = a;
-  for (int colour = 0; colour < 5; ++colour) {
-    pass.colour = colour;
-    exec.forEachCellOfColour(v.width, v.height, colour, WindTransportKernel{v, pass});
-  }
+  exec.forEachCellInColourOrder(v.width, v.height, WindTransportKernel{v, a});
 }
 
 }  // namespace snow
