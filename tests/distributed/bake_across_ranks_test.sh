@@ -88,6 +88,16 @@ grep -qE "edit 1: .*: [1-9]" "$work/art/alone/log" || fail "art: its first edit 
 grep -qE "no-snow mask: [1-9]" "$work/art/alone/log" || fail "art: its no-snow mask removed no snow"
 grep -qE "skiers: [0-9]+ \(20 from the scene\)" "$work/art/alone/log" || fail "art: its skier group did not ski"
 
+# A frame whose instant falls inside an avalanche (the preset's masked release moved to 43 s
+# before day 45, which it outlasts; one process sets the frame aside until it settles), on 2 ranks.
+sed -e "s#\"art_direction/#\"$root/presets/art_direction/#g" -e '/^type = "avalanche"$/{n;s/^day = 45$/day = 44.9995/}' \
+  "$root/presets/art_direction.toml" > "$work/mid.toml"
+grep -q '^day = 44.9995$' "$work/mid.toml" || fail "mid-avalanche: the release's day was not moved"
+mid=("$work/mid.toml" --set terrain.size=128 --set season.days=50 --set 'outputs.frames_days=[45]')
+bake mid "$work/mid/alone" alone "${mid[@]}" && bake mid "$work/mid/2" 2 "${mid[@]}" &&
+  same "a frame inside an avalanche on 2 ranks" "$work/mid/alone" "$work/mid/2"
+grep -qE "avalanche day 45.00 .* \(user\)" "$work/mid/alone/log" || fail "mid-avalanche: the release did not run across day 45"
+
 # The bedform window (periodic, slab hops across every subdomain's border), shortened.
 check_scene bedforms "$root/presets/bedforms.toml" --set terrain.size=96 --set season.days=2 --set 'outputs.frames_days=[1]'
 grep -qE "wind bedforms: [0-9]+ cells, [1-9][0-9]* rounds, [1-9][0-9]* slabs lifted" "$work/bedforms/alone/log" || fail "bedforms: no slab lifted"
