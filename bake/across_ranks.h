@@ -42,7 +42,9 @@ void checkRanksSuitTheGrid(const GridSpec& spec);
 
 // The season across the ranks on rank `state`'s whole grid (every rank holds it, as the precompute
 // left it): on rank 0, `state` is then the gathered final state and each frame day went to
-// `frames`; the other ranks' `state` is left as it was. `local` is the rank's CPU backend.
+// `frames`; the other ranks' `state` keeps the terrain (and, with avalanches, skiers or bedforms,
+// the last day's static fields, its no-snow cells outside the terrain). `local` is the rank's CPU
+// backend.
 SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, SeasonConfig config,
                                   FrameWriter& frames, std::ostream& log);
 

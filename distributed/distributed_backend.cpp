@@ -64,9 +64,9 @@ void DistributedBackend::replicateEvents(std::unique_ptr<SnowBackend> replica, S
 void DistributedBackend::upload(const SnowState& s) {
   checkLocalGrid(s.spec);
   spec_ = s.spec;
-  if (replica_ && !replicaUploaded_) throw std::logic_error("DistributedBackend: the replica's first upload is uploadTaking's");
+  // A second upload would have to reset the replica's avalanche, skier and bedform state too.
+  if (replica_) throw std::logic_error("DistributedBackend: a season with the whole grid's replica uploads once, by uploadTaking");
   local_->upload(s);
-  if (replica_) current_ = Current::Local;
 }
 
 void DistributedBackend::uploadTaking(SnowState& s) {
@@ -146,8 +146,10 @@ void DistributedBackend::downloadGiving(SnowState& s) {
   addBedformCohesion(s);
 }
 
+// Writable: the replica is brought up to date from the local grids before its next step.
 void* DistributedBackend::hostField(SnowField f) {
   localUpToDate();
+  wroteLocal();
   return local_->hostField(f);
 }
 
@@ -188,7 +190,11 @@ BedformStepReport DistributedBackend::bedformStep(const BedformArgs& a) {
   return r;
 }
 
-bool DistributedBackend::bedformCohesion(Grid<float>& out) { return replicaUpToDate("wind bedforms").bedformCohesion(out); }
+// The replica's own field (no snow): read without a gather, which every rank would have to join.
+bool DistributedBackend::bedformCohesion(Grid<float>& out) {
+  if (!replica_ || !replicaUploaded_) notYet("wind bedforms");
+  return replica_->bedformCohesion(out);
+}
 
 void DistributedBackend::uploadRouteMap(const Grid<float>& route) { replicaUpToDate("skiers").uploadRouteMap(route); }
 

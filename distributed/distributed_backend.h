@@ -87,7 +87,8 @@ class DistributedBackend final : public SnowBackend {
   std::vector<float> avalancheSteps(const AvalancheArgs& a, int substeps) override;
   void avalancheSettle(const AvalancheArgs& a) override;
 
-  // Bytes this rank has sent to refresh halos, and seconds spent doing it (and waiting before).
+  // Bytes this rank has sent to refresh halos, and seconds spent doing it (and waiting before);
+  // the seconds include bringing the replica up to date, whose bytes are replicaBytesSent's.
   size_t bytesSent() const { return bytesSent_; }
   double exchangeSeconds() const { return exchangeS_; }
   double waitSeconds() const { return waitS_; }

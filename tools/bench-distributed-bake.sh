@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # A bake across ranks against one process (docs/distributed.md): the default preset with its
-# avalanches and skiers off (the scenes a bake across ranks runs today), SIZE² cells of 10 m, DAYS
+# avalanches and skiers off (the decomposed season alone; --events keeps them), SIZE² cells of 10 m, DAYS
 # days, baked alone (2 threads) and by `mpiexec -n N` (N = 2, 4; one thread a rank, oversubscribed
 # past the cores), no cache. Prints each run's season and total seconds and its peak resident
 # memory per process (the alone bake's manifest; a bake across ranks' log gathers every rank's),
@@ -14,8 +14,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=strong events=0
-if [ "${1:-}" = --weak ]; then mode=weak; shift; fi
-if [ "${1:-}" = --events ]; then events=1; shift; fi
+while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ]; do
+  if [ "$1" = --weak ]; then mode=weak; else events=1; fi
+  shift
+done
 build="${1:-build}" size="${2:-1024}" days="${3:-30}"
 bin="$(realpath "$build/snowbake")"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1

@@ -496,6 +496,8 @@ TEST(Ranks, AvalanchesSkiersAndBedformsOnTheWholeGridsReplicaGiveTheSingleProces
   if (comm.size() > 1) {
     EXPECT_GT(mine.replicaGathers(), 0u);
   }
+  // A second upload would leave the replica's avalanche, skier and bedform state behind.
+  EXPECT_THROW(mine.upload(local), std::logic_error);
 }
 
 }  // namespace
