@@ -8,6 +8,7 @@
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/format.h"
+#include "core/release_memory.h"
 #include "core/stop_request.h"
 #include "distributed/communicator.h"
 #include "distributed/continuous_step.h"
@@ -18,6 +19,7 @@
 #include "frame_writer.h"
 #include "memory_trace.h"
 #include "progress.h"
+#include "scene/layers.h"
 #include "stages.h"
 
 namespace snow {
@@ -30,6 +32,10 @@ bool acrossRanks = false;
 bool inSeason = false;
 
 bool seasonAgreed = false;  // the ranks have agreed at the season's start
+
+// The season's peak resident memory per rank, in a window of its own (memory_trace.h).
+bool peakWindows = false;
+double seasonPeakBytes = 0.0;
 
 // Another rank failed before the season: this one ends with its status, having said nothing.
 struct OtherRankFailed {
@@ -67,8 +73,59 @@ void checkRanksSuitTheGrid(const GridSpec& spec) {
   }
 }
 
-SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, SeasonConfig config,
-                                  FrameWriter& frames, std::ostream& log) {
+namespace {
+
+// Each day's static fields filled on the whole grid (on a state lent the terrain alone), then cut
+// to the rank's and to the whole state the replica's runners read: the fields the fill makes, and
+// no others, as the single process's state has.
+std::function<void(int, SnowState&)> wholeThenCutFill(std::function<void(int, SnowState&)> fill, SnowState& whole, dist::CellRect cells) {
+  return [fill = std::move(fill), &whole, cells](int day, SnowState& s) {
+    SnowState filled;
+    filled.spec = whole.spec;
+    auto lend = [&] { std::swap(filled.bedrockM, whole.bedrockM), std::swap(filled.validCell, whole.validCell); };
+    lend();
+    try {
+      fill(day, filled);
+    } catch (...) {
+      lend();
+      throw;
+    }
+    lend();
+    auto isStatic = [](FieldRole r) { return r == FieldRole::Static; };
+    dist::cutFields(filled, cells, isStatic, s);
+    dist::cutFields(filled, dist::CellRect{0, 0, whole.spec.width, whole.spec.height}, isStatic, whole);
+  };
+}
+
+// Without a replica: each day's static fields filled on the rank's local grid from its own cells
+// of the precompute, `mine` (the fill makeSeasonConfig makes, dailyStaticFill: each cell's
+// temperature and wind are its own, so the bytes are the whole grid's). The whole grid's
+// precompute is freed, but on rank 0 where its layers read it.
+void fillFromOwnCells(Precomputed& pre, Precomputed& mine, dist::CellRect cells, const ModelParameters& params, bool keepWhole,
+                      uint8_t outputNeeds, SeasonConfig& config) {
+  mine = pre.window(cells.x0, cells.y0, cells.width(), cells.height());
+  config.updateStaticFields = dailyStaticFill(mine, params);
+  if (pre.exposure && !(keepWhole && (outputNeeds & kNeedsSun))) pre.exposure->release();
+  if (pre.wind && !(keepWhole && (outputNeeds & kNeedsWind))) pre.wind->releaseFields();
+}
+
+// The season's own peak resident memory per rank, below the precompute's: a window of the
+// kernel's count from its start (startSeasonPeak) to its end, then one for what follows.
+void startSeasonPeak() {
+  releaseFreedMemory();
+  peakWindows = startPeakWindow();
+}
+void endSeasonPeak() {
+  if (!peakWindows) return;
+  seasonPeakBytes = peakInWindow();
+  releaseFreedMemory();
+  startPeakWindow();  // what follows: rank 0's outputs
+}
+
+}  // namespace
+
+SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, Precomputed& pre,
+                                  uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log) {
   const dist::Communicator comm = dist::Communicator::world();
   const GridSpec whole = state.spec;
   const dist::Decomposition d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
@@ -76,27 +133,14 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   // Avalanches, skiers and bedforms run on a replica of the whole grid on every rank, their
   // runners on the whole state, which keeps its terrain and each day's static fields for them.
   const bool replicated = dist::seasonNeedsReplica(config);
-  if (replicated) config.eventTerrain = &state;
-  else config.skiTracks = nullptr;  // no skiers: the texture stays as the single process leaves it
-  // Each day's static fields filled on the whole grid (on a state lent the terrain alone), then cut
-  // to the rank's: the fields the fill makes, and no others, as the single process's state has.
-  if (config.updateStaticFields)
-    config.updateStaticFields = [fill = config.updateStaticFields, &state, cells, replicated](int day, SnowState& s) {
-      SnowState filled;
-      filled.spec = state.spec;
-      auto lend = [&] { std::swap(filled.bedrockM, state.bedrockM), std::swap(filled.validCell, state.validCell); };
-      lend();
-      try {
-        fill(day, filled);
-      } catch (...) {
-        lend();
-        throw;
-      }
-      lend();
-      auto isStatic = [](FieldRole r) { return r == FieldRole::Static; };
-      dist::cutFields(filled, cells, isStatic, s);
-      if (replicated) dist::cutFields(filled, dist::CellRect{0, 0, state.spec.width, state.spec.height}, isStatic, state);
-    };
+  Precomputed mineOfPre;  // without a replica: the rank's cells of the exposure and the wind
+  if (replicated) {
+    config.eventTerrain = &state;
+    if (config.updateStaticFields) config.updateStaticFields = wholeThenCutFill(config.updateStaticFields, state, cells);
+  } else {
+    config.skiTracks = nullptr;  // no skiers: the texture stays as the single process leaves it
+    fillFromOwnCells(pre, mineOfPre, cells, scene.params, comm.rank() == 0, outputNeeds, config);
+  }
   config.lendFrames = false;  // each frame is gathered into a copy of its own
   if (const std::string why = dist::distributedSeasonRefusal(config, replicated); !why.empty())
     throw std::logic_error("a season across ranks with " + why + " passed acrossRanksRefusal");
@@ -105,11 +149,14 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   const bool noSnow = state.noSnow.size() == whole.cellCount() && state.noSnow.size() > 0;
   const double noSnowRemovedM3 = noSnow ? removeSnowOfNoSnowCells(state) : 0.0;
   SnowState mine = dist::cutLocalState(state, cells);
-  // The snow and the static fields are the ranks' now; the whole state keeps the terrain, which
-  // the daily static fill reads. With a replica, the season's first upload hands it the snow, and
-  // the replica's runners see the no-snow cells outside the terrain, as the rank's season does.
+  // Every field is the ranks' now; rank 0 gathers the whole state at the frames and the end. With
+  // a replica, the season's first upload hands it the snow, and the replica's runners see the
+  // no-snow cells outside the terrain, as the rank's season does.
+  // Rank 0 keeps the terrain where its frames and outputs read the whole wind (its altitude: the
+  // fields' size, and W_z on calm days).
+  const bool keepTerrain = comm.rank() == 0 && (outputNeeds & kNeedsWind);
   if (!replicated)
-    state.releaseFields([](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record || r == FieldRole::Static; });
+    state.releaseFields([keepTerrain](FieldRole r) { return !(keepTerrain && r == FieldRole::Terrain); });
   else if (noSnow)
     for (size_t i = 0; i < state.noSnow.size(); ++i)
       if (state.noSnow.values()[i]) state.validCell.values()[i] = 0;
@@ -117,41 +164,48 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   const std::vector<double> statuses = agreedStatuses(comm, 0);
   if (const double worst = *std::max_element(statuses.begin(), statuses.end()); worst != 0) throw OtherRankFailed{static_cast<int>(worst)};
   inSeason = true;
+  startSeasonPeak();
   log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid; rank 0's subdomain "
       << d.owned(0).width() << " x " << d.owned(0).height() << " cells, halo " << d.halo << "\n";
-  dist::DistributedBackend backend(std::move(local), comm, d);
-  if (replicated) backend.replicateEvents(createCpuBackend(), state);
-  // A whole-grid state on rank 0 from every rank's owned cells.
-  auto gathered = [&](const SnowState& s) {
-    SnowState out = comm.rank() == 0 ? dist::wholeLike(s, whole) : SnowState();
-    dist::gatherOwned(comm, d, s, out);
-    return out;
-  };
-  progress().stage("season", 0.0);
-  SeasonReport report = runSeason(
-      backend, mine, config,
-      [&](double f) {
-        throwIfStopRequested();  // once a simulated day: MPI_Abort ends every rank with 130
-        progress().stage("season", f);
-      },
-      [&](double day, SnowState& s) {
-        throwIfStopRequested();
-        SnowState frame = gathered(s);
-        if (comm.rank() != 0) return;
-        frames.write(day, frame);
-        progress().event("season", "frame", {{"day", jsonNumber(day)}});
-      });
-  frames.join();
-  if (noSnow) report.noSnowRemovedM3 = noSnowRemovedM3;
-  SnowState final = gathered(mine);
-  inSeason = false;
-  if (comm.rank() == 0) state = std::move(final);
-  progress().stage("season", 1.0);
-  if (replicated)
-    log << "season: avalanches, skiers and bedforms on every rank's replica of the whole grid, brought up to date "
-        << backend.replicaGathers() << " times (" << fixed(static_cast<double>(backend.replicaBytesSent()) / (1024.0 * 1024.0), 1)
-        << " MiB sent by rank 0)\n";
-  logSeasonReport(report, scene, config, backend.name(), log);
+  SeasonReport report;
+  {  // the backend and its scratch live for the season alone
+    dist::DistributedBackend backend(std::move(local), comm, d);
+    if (replicated) backend.replicateEvents(createCpuBackend(), state);
+    // A whole-grid state on rank 0 from every rank's owned cells.
+    auto gathered = [&](const SnowState& s) {
+      SnowState out = comm.rank() == 0 ? dist::wholeLike(s, whole) : SnowState();
+      dist::gatherOwned(comm, d, s, out);
+      return out;
+    };
+    progress().stage("season", 0.0);
+    report = runSeason(
+        backend, mine, config,
+        [&](double f) {
+          throwIfStopRequested();  // once a simulated day: MPI_Abort ends every rank with 130
+          progress().stage("season", f);
+        },
+        [&](double day, SnowState& s) {
+          throwIfStopRequested();
+          SnowState frame = gathered(s);
+          if (comm.rank() != 0) return;
+          frames.write(day, frame);
+          progress().event("season", "frame", {{"day", jsonNumber(day)}});
+        });
+    frames.join();
+    if (noSnow) report.noSnowRemovedM3 = noSnowRemovedM3;
+    SnowState final = gathered(mine);
+    inSeason = false;
+    if (comm.rank() == 0) state = std::move(final);
+    progress().stage("season", 1.0);
+    if (replicated)
+      log << "season: avalanches, skiers and bedforms on every rank's replica of the whole grid, brought up to date "
+          << backend.replicaGathers() << " times (" << fixed(static_cast<double>(backend.replicaBytesSent()) / (1024.0 * 1024.0), 1)
+          << " MiB sent by rank 0)\n";
+    logSeasonReport(report, scene, config, backend.name(), log);
+  }
+  mine = SnowState();
+  mineOfPre = Precomputed();
+  endSeasonPeak();
   return report;
 }
 
@@ -165,6 +219,7 @@ int runBakeAcrossRanks(BakeOptions options, const std::function<std::ostream&()>
                                                    : std::string("this snowbake was built without MPI (docs/distributed.md)")));
   acrossRanks = true;
   seasonAgreed = false;
+  peakWindows = false;
   std::ostream nowhere(nullptr);
   std::ostream* log = &nowhere;
   int status = 0;
@@ -193,15 +248,30 @@ int runBakeAcrossRanks(BakeOptions options, const std::function<std::ostream&()>
   if (failure && (comm.rank() == 0 || !inputError || !rank0Failed)) std::cerr << message.str();
   // Rank 0 wrote the outputs while the others waited here: they end with the largest status. Each
   // rank's peak resident memory comes along for rank 0's log.
-  const std::vector<double> all = comm.allGather({static_cast<double>(status), readProcessMemory().peakBytes});
+  const std::vector<double> all = comm.allGather({static_cast<double>(status), readProcessMemory().peakBytes,
+                                                  peakWindows ? seasonPeakBytes : -1.0, peakWindows ? peakInWindow() : -1.0});
   const int mine = status;
   status = 0;
-  for (int r = 0; r < comm.size(); ++r) status = std::max(status, static_cast<int>(all[2 * r]));
+  constexpr int kEach = 4;  // status, peak, the season's peak, the peak after the season
+  for (int r = 0; r < comm.size(); ++r) status = std::max(status, static_cast<int>(all[kEach * r]));
   if (comm.rank() == 0 && mine == 0 && status != 0) std::cerr << "snowbake: stopped: another rank failed (exit " << status << ")\n";
   if (comm.rank() == 0 && status == 0) {
+    auto perRank = [&](int k) {
+      for (int r = 0; r < comm.size(); ++r) *log << (r ? ", " : " ") << fixed(all[kEach * r + k] / (1024.0 * 1024.0), 0);
+      *log << " MiB";
+    };
     *log << "memory: peak resident per rank";
-    for (int r = 0; r < comm.size(); ++r) *log << (r ? ", " : " ") << fixed(all[2 * r + 1] / (1024.0 * 1024.0), 0);
-    *log << " MiB\n";
+    perRank(1);
+    *log << "\n";
+    bool windows = true;  // every rank measured the season's (one kernel for all, as a rule)
+    for (int r = 0; r < comm.size(); ++r) windows = windows && all[kEach * r + 2] >= 0.0;
+    if (windows) {
+      *log << "memory: peak resident per rank in the season";
+      perRank(2);
+      *log << "; after it";
+      perRank(3);
+      *log << " (rank 0 writes the outputs)\n";
+    }
   }
   acrossRanks = false;
   return status;

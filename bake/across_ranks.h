@@ -11,6 +11,7 @@
 // failure during the season, while the others wait in an exchange, ends every rank at once with
 // its status (MPI_Abort).
 #pragma once
+#include <cstdint>
 #include <exception>
 #include <functional>
 #include <ostream>
@@ -22,6 +23,7 @@
 
 namespace snow {
 
+struct Precomputed;
 struct SeasonConfig;
 struct SeasonReport;
 class FrameWriter;
@@ -42,11 +44,13 @@ void checkRanksSuitTheGrid(const GridSpec& spec);
 
 // The season across the ranks on rank `state`'s whole grid (every rank holds it, as the precompute
 // left it): on rank 0, `state` is then the gathered final state and each frame day went to
-// `frames`; the other ranks' `state` keeps the terrain (and, with avalanches, skiers or bedforms,
-// the last day's static fields, its no-snow cells outside the terrain). `local` is the rank's CPU
-// backend.
-SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, SeasonConfig config,
-                                  FrameWriter& frames, std::ostream& log);
+// `frames`. Without avalanches, skiers or bedforms each rank fills its static fields from its own
+// cells of `pre` and frees the whole state and the whole `pre` (rank 0 keeps what the layers in
+// `outputNeeds` read); with them, every rank keeps the whole state for the replica (the terrain,
+// the last day's static fields, its no-snow cells outside the terrain). `local` is the rank's
+// CPU backend.
+SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, Precomputed& pre,
+                                  uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log);
 
 // runBake on every rank of the launch, rank 0 logging to openLog() (opened once the ranks have
 // joined, so its failure is every rank's); `describe` writes a failure's message to the stream

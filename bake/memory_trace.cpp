@@ -1,5 +1,6 @@
 #include "memory_trace.h"
 
+#include <algorithm>
 #include <fstream>
 #include <mutex>
 
@@ -11,9 +12,11 @@ std::vector<StageMemory>& trace() {
   static std::vector<StageMemory> t;
   return t;
 }
-}  // namespace
 
-ProcessMemory readProcessMemory() {
+double peakBeforeWindow = 0.0;  // the process's peak when the kernel's count was last reset
+
+// VmRSS and VmHWM as the kernel counts them (the latter since the last reset).
+ProcessMemory readKernelMemory() {
   ProcessMemory m;
   std::ifstream status("/proc/self/status");
   for (std::string line; std::getline(status, line);) {
@@ -22,6 +25,25 @@ ProcessMemory readProcessMemory() {
   }
   return m;
 }
+}  // namespace
+
+ProcessMemory readProcessMemory() {
+  ProcessMemory m = readKernelMemory();
+  const std::lock_guard lock(traceMutex);
+  m.peakBytes = std::max(m.peakBytes, peakBeforeWindow);
+  return m;
+}
+
+bool startPeakWindow() {
+  const std::lock_guard lock(traceMutex);  // no reader sees the reset before the peak is kept
+  const double before = std::max(readKernelMemory().peakBytes, peakBeforeWindow);
+  std::ofstream clear("/proc/self/clear_refs");
+  if (!(clear << "5" << std::flush)) return false;  // "5": reset the peak resident set
+  peakBeforeWindow = before;
+  return true;
+}
+
+double peakInWindow() { return readKernelMemory().peakBytes; }
 
 void noteStageMemory(const char* stage) {
   const ProcessMemory m = readProcessMemory();

@@ -11,8 +11,16 @@ struct ProcessMemory {
   double residentBytes = 0;  // VmRSS
   double peakBytes = 0;      // VmHWM
 };
-// Zeros where /proc/self/status is absent.
+// Zeros where /proc/self/status is absent. The peak is the process's, across peak windows.
 ProcessMemory readProcessMemory();
+
+// A window of the kernel's peak count, to tell one phase's peak from an earlier phase's (a bake
+// across ranks: the season's per rank, below the whole precompute's). Starting one resets VmHWM
+// through /proc/self/clear_refs, which also resets what getrusage and `time -v` report as the
+// maximum resident set; false where the kernel refuses (the window is then the whole process's).
+bool startPeakWindow();
+// VmHWM since the window started: the phase's own peak.
+double peakInWindow();
 
 struct StageMemory {
   std::string stage;

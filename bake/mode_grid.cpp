@@ -177,7 +177,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
     FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, memoryPlan.timing);
     config.lendFrames = frames.lendsFrames();
     config.spillFolder = options.outDir;
-    report = bakingAcrossRanks() ? runSeasonAcrossRanks(scene, std::move(backend), state, config, frames, log)
+    report = bakingAcrossRanks() ? runSeasonAcrossRanks(scene, std::move(backend), state, pre, needs, config, frames, log)
                                  : runSeasonStage(scene, *backend, state, config, frames, log);
     backend.reset();  // its copies of the state and its scratch, freed before the outputs
     // No writer reads the state's static fields, nor the exposure samples unless a layer reads the sun.

@@ -71,15 +71,18 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
     config.bedforms = scene.bedforms.params;
     if (!config.windTransport) log << "bedforms: the scene has no wind; only the cohesion of the snow will change\n";
   }
-  // The static fields refreshed daily when they change through the season: the temperature from
-  // each day's exposure, and the wind with several keyframe states (or calm keyframes among windy ones).
-  const bool windChanges = pre.wind->varies();
-  if (pre.exposure || windChanges)
-    config.updateStaticFields = [&pre, &params = scene.params, windChanges](int day, SnowState& s) {
-      if (pre.exposure) pre.temperatureForDay(day, s, params);
-      if (windChanges) pre.windForDay(day, s);
-    };
+  config.updateStaticFields = dailyStaticFill(pre, scene.params);
   return config;
+}
+
+std::function<void(int, SnowState&)> dailyStaticFill(const Precomputed& pre, const ModelParameters& params) {
+  // The wind changes with several keyframe states, or calm keyframes among windy ones.
+  const bool windChanges = pre.wind && pre.wind->varies();
+  if (!pre.exposure && !windChanges) return {};
+  return [&pre, params, windChanges](int day, SnowState& s) {
+    if (pre.exposure) pre.temperatureForDay(day, s, params);
+    if (windChanges) pre.windForDay(day, s);
+  };
 }
 
 void checkBedformsSuitTheGrid(const Scene& scene, const GridSpec& spec) {

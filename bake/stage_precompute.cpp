@@ -99,6 +99,13 @@ void Precomputed::windForDay(int day, SnowState& s) const {
   s.windLoadingMps2 = std::move(f.windLoadingMps2);
 }
 
+Precomputed Precomputed::window(int x0, int y0, int width, int height) const {
+  Precomputed out;
+  if (exposure) out.exposure = exposure->window(x0, y0, width, height);
+  if (wind) out.wind = wind->window(x0, y0, width, height);
+  return out;
+}
+
 StageDecision sunExposureDecision(const Scene& scene) {
   if (scene.mode == SceneMode::Occlusion) return {false, "occlusion mode"};
   if (!scene.sunExposure) return {false, "precompute.sun = false"};

@@ -3,6 +3,7 @@
 // mode_mesh.cpp) are drivers that chain them.
 #pragma once
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -59,7 +60,13 @@ struct Precomputed {
   void temperatureForDay(int day, SnowState& s, const ModelParameters& params) const;
   // The day's wind (calm: no wind, W_z on the ground).
   void windForDay(int day, SnowState& s) const;
+  // One rectangle of cells of each (a rank's local grid, across ranks): its days' fields are
+  // those cells' bytes of this one's.
+  Precomputed window(int x0, int y0, int width, int height) const;
 };
+// The season's daily refresh of the static fields from `pre` (SeasonConfig::updateStaticFields;
+// empty where they never change): the temperature from each day's exposure, a wind that varies.
+std::function<void(int, SnowState&)> dailyStaticFill(const Precomputed& pre, const ModelParameters& params);
 // The sun exposure's settings, and the cache key of its grids (every input they depend on).
 ExposureSettings exposureSettings(const Scene& scene, const BakeTerrain& terrain);
 std::string exposureCacheKey(const Grid<float>& bedrockM, const Grid<uint8_t>& valid, const GridSpec& spec,

@@ -27,8 +27,9 @@ bool seasonNeedsReplica(const SeasonConfig& config);
 // `replicated`, with) the whole grid's replica; empty when it can. A
 // no-snow mask's removed snow (SeasonReport::noSnowRemovedM3) is the local grid's: remove
 // it from the whole state before cutting (removeSnowOfNoSnowCells, as the bake does). The config's
-// updateStaticFields, if any, must fill the rank's local grid: cutFields (local_state.h) cuts a
-// day's whole-grid fields to it.
+// updateStaticFields, if any, must fill the rank's local grid: from the rank's cells of the
+// precompute (the bake without a replica), or a day's whole-grid fields cut to it (cutFields,
+// local_state.h).
 std::string distributedSeasonRefusal(const SeasonConfig& config, bool replicated = false);
 
 class DistributedBackend final : public SnowBackend {

@@ -13,7 +13,8 @@ namespace snow::dist {
 // north-west corner (north-up: y runs south).
 SnowState cutLocalState(const SnowState& whole, const CellRect& cells);
 // The fields of `whole` whose role `pick` accepts, cut into `local` (the local grid at `cells`,
-// sized anew): a day's static fields, filled on the whole grid, for a rank's season.
+// sized anew): a day's static fields, filled on the whole grid, for a rank's season beside the
+// whole grid's replica.
 void cutFields(const SnowState& whole, const CellRect& cells, const std::function<bool(FieldRole)>& pick, SnowState& local);
 // A state of the whole grid `spec` holding, zeroed, every field `local` holds: the root's
 // gatherOwned target, which then has the single process's fields and no others.

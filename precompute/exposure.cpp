@@ -10,6 +10,7 @@
 
 #include "core/bracket.h"
 #include "core/errors.h"
+#include "core/grid_window.h"
 #include "core/util.h"
 #include "horizon.h"
 #include "solar.h"
@@ -207,6 +208,18 @@ void Exposure::release() {
   skyHours = Grid<float>();
   days = std::vector<DailyExposure>();
   released = true;
+}
+
+Exposure Exposure::window(int x0, int y0, int width, int height) const {
+  Exposure out;
+  out.timings = timings;
+  out.folded = folded;
+  out.released = released;
+  out.skyHours = gridWindow(skyHours, x0, y0, width, height);
+  for (const DailyExposure& d : days)
+    out.days.push_back({d.seasonDay, d.dayOfYear, gridWindow(d.sunHours, x0, y0, width, height),
+                        gridWindow(d.indirectHours, x0, y0, width, height)});
+  return out;
 }
 
 Grid<float> Exposure::totalAt(double seasonDay) const {

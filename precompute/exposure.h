@@ -64,6 +64,9 @@ struct Exposure {
   // season); totalAt then throws.
   void release();
   bool released = false;
+  // One rectangle of its cells (a rank's local grid, across ranks): its totalAt gives those
+  // cells' bytes of this one's, each cell's sum being its own.
+  Exposure window(int x0, int y0, int width, int height) const;
 };
 
 // Unit surface normals (x east, y north, z up) from central differences that skip NODATA.

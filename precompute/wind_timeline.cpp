@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "core/bracket.h"
+#include "core/grid_window.h"
 #include "core/hash.h"
 
 namespace snow {
@@ -30,7 +31,7 @@ std::string windCacheKey(const Grid<float>& altitude, const Grid<uint8_t>& valid
 WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec,
                            const WeatherTimeline& weather, const ModelParameters& params, const PrecomputeCache& cache,
                            const WindSolverOptions& options, std::ostream* log)
-    : altitude_(altitude), weather_(weather) {
+    : altitude_(&altitude), weather_(weather) {
   for (const auto& k : weather.keyframes) {
     if (!(k.state.windSpeedMps > 0.0)) {
       keyframeState_.push_back(-1);
@@ -90,13 +91,33 @@ void WindTimeline::releaseFields() {
   released_ = true;
 }
 
+WindTimeline WindTimeline::window(int x0, int y0, int width, int height) const {
+  auto cut = [&](const Grid<float>& g) { return gridWindow(g, x0, y0, width, height); };
+  WindTimeline out;
+  out.windowAltitude_ = cut(altitude());
+  out.weather_ = weather_;
+  out.states_ = states_;
+  out.keyframeState_ = keyframeState_;
+  out.computed_ = computed_, out.cached_ = cached_, out.released_ = released_;
+  for (const WindField& f : fields_) {
+    WindField c;
+    c.windXMps = cut(f.windXMps), c.windYMps = cut(f.windYMps), c.windEffectZM = cut(f.windEffectZM);
+    c.verticalSpeedMps = cut(f.verticalSpeedMps);
+    c.stats = f.stats;
+    out.fields_.push_back(std::move(c));
+  }
+  for (const Grid<float>& g : loading_) out.loading_.push_back(cut(g));
+  return out;
+}
+
 WindFieldsAtDay WindTimeline::at(double day) const {
   if (released_ && !states_.empty()) throw std::logic_error("WindTimeline::at: the wind fields were released");
   WindFieldsAtDay out;
-  const int w = altitude_.width(), h = altitude_.height();
+  const Grid<float>& altitude = this->altitude();
+  const int w = altitude.width(), h = altitude.height();
   out.windXMps.resize(w, h, 0.f);
   out.windYMps.resize(w, h, 0.f);
-  out.windEffectZM = altitude_;
+  out.windEffectZM = altitude;
   out.windLoadingMps2.resize(w, h, 0.f);
   if (states_.empty()) return out;
   // The bracketing keyframes and the weight of the later one, as WeatherTimeline::at uses.
@@ -108,7 +129,7 @@ WindFieldsAtDay WindTimeline::at(double day) const {
     if (weight <= 0.0) return;
     if (state < 0) {  // calm keyframe: no wind, the surface on the ground
       for (size_t i = 0; i < out.windEffectZM.size(); ++i)
-        out.windEffectZM.values()[i] += static_cast<float>(weight * altitude_.values()[i]);
+        out.windEffectZM.values()[i] += static_cast<float>(weight * altitude.values()[i]);
       return;
     }
     const WindField& f = fields_[state];

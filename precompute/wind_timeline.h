@@ -43,9 +43,15 @@ class WindTimeline {
   // Frees the fields once nothing will read them (a constant wind the state holds, no output
   // reading wind); at() then throws.
   void releaseFields();
+  // One rectangle of its cells (a rank's local grid, across ranks), the altitude included: its
+  // at() gives those cells' bytes of this one's (the loading made on the whole grid, then cut).
+  WindTimeline window(int x0, int y0, int width, int height) const;
 
  private:
-  const Grid<float>& altitude_;
+  WindTimeline() = default;
+  const Grid<float>& altitude() const { return altitude_ ? *altitude_ : windowAltitude_; }
+  const Grid<float>* altitude_ = nullptr;  // the terrain's; null in a window, which holds its own
+  Grid<float> windowAltitude_;
   WeatherTimeline weather_;
   std::vector<WindState> states_;
   std::vector<WindField> fields_;

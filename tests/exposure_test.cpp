@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/grid_window.h"
 #include "core/util.h"
 #include "precompute/exposure.h"
 #include "precompute/horizon.h"
@@ -210,6 +211,21 @@ TEST(Exposure, SeasonSamplesInterpolateBetweenDays) {
   const float d0 = e.days[0].sunHours(5, 5), d1 = e.days[1].sunHours(5, 5);
   EXPECT_NEAR(e.totalAt(15.0)(5, 5), e.skyHours(5, 5) + 0.5f * (d0 + d1), 1e-4f);
   EXPECT_GT(e.totalAt(120.0)(5, 5), e.totalAt(20.0)(5, 5));  // March is sunnier than December
+}
+
+// A rank's window of the exposure samples (a bake across ranks): every season day's total is the
+// whole's cells, byte for byte, folded or not.
+TEST(Exposure, AWindowGivesItsCellsOfTheWholeTotalOnEveryDay) {
+  const Field f = makeField(24, 20, 10.0, [](double x, double y) { return 800.0 + 3.0 * x + 40.0 * std::sin(y / 30.0); });
+  ExposureSettings s;
+  s.seasonDays = 120;
+  Exposure whole = computeExposure(nullptr, f.heights, f.valid, f.spec, ModelParameters{}, s);
+  for (bool folded : {false, true}) {
+    if (folded) whole.foldIndirect();
+    const Exposure window = whole.window(3, 5, 17, 9);
+    for (double day : {0.0, 15.0, 61.0, 119.0})
+      EXPECT_EQ(gridWindow(whole.totalAt(day), 3, 5, 17, 9), window.totalAt(day)) << day << (folded ? " folded" : "");
+  }
 }
 
 // The indirect term's documented decision: senders are not tested for visibility; the cosines

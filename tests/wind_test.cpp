@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "core/default_terrain.h"
+#include "core/grid_window.h"
 #include "precompute/wind.h"
 #include "precompute/wind_timeline.h"
 
@@ -253,6 +254,32 @@ TEST(WindTimeline, OneFieldPerDistinctStateBlendedBetweenKeyframes) {
   for (int i : {0, 100, 1000, 2000})
     EXPECT_NEAR(mid.windEffectZM.values()[i],
                 0.5f * (t.field(0).windEffectZM.values()[i] + t.field(1).windEffectZM.values()[i]), 1e-3f);
+}
+
+// A rank's window of the timeline (a bake across ranks): on every day, calm ones included, the
+// window's fields are the whole timeline's fields' cells, byte for byte.
+TEST(WindTimeline, AWindowGivesItsCellsOfTheWholeFieldsOnEveryDay) {
+  DefaultTerrainOptions o;
+  o.size = 40;
+  GridSpec spec;
+  const Grid<float> a = generateDefaultTerrain(o, &spec);
+  Grid<uint8_t> valid(40, 40, 1);
+  valid(20, 20) = 0;
+  WeatherTimeline w = twoWinds();
+  w.keyframes[1].state.windSpeedMps = 0;  // a calm keyframe between the windy ones
+  const WindTimeline whole(a, valid, spec, w, ModelParameters{}, PrecomputeCache("", false));
+  ASSERT_TRUE(whole.varies());
+  const WindTimeline window = whole.window(7, 11, 25, 19);
+  for (double day : {0.0, 4.0, 10.0, 14.5, 20.0, 30.0}) {
+    const WindFieldsAtDay all = whole.at(day), part = window.at(day);
+    auto same = [&](const Grid<float>& wholeField, const Grid<float>& windowField) {
+      return gridWindow(wholeField, 7, 11, 25, 19) == windowField;
+    };
+    EXPECT_TRUE(same(all.windXMps, part.windXMps)) << day;
+    EXPECT_TRUE(same(all.windYMps, part.windYMps)) << day;
+    EXPECT_TRUE(same(all.windEffectZM, part.windEffectZM)) << day;
+    EXPECT_TRUE(same(all.windLoadingMps2, part.windLoadingMps2)) << day;
+  }
 }
 
 TEST(WindTimeline, CacheReusedWhenInputsAreUnchanged) {

@@ -4,7 +4,9 @@
 # days, baked alone (2 threads) and by `mpiexec -n N` (N = 2, 4; one thread a rank, oversubscribed
 # past the cores), no cache. Prints each run's season and total seconds and its peak resident
 # memory per process (the alone bake's manifest; a bake across ranks' log gathers every rank's),
-# and checks that every output file has the single process's bytes.
+# each rank's peak in the season alone (below the precompute's, which every rank still runs whole;
+# against the one process's whole peak), and checks that every output file has the single
+# process's bytes.
 # --weak: weak scaling instead, SIZE² cells a rank (1 rank SIZE², 2 ranks about 1.41 SIZE², 4
 # ranks 2 SIZE²); no byte check (the grids differ).
 # --events: the default preset with its spontaneous avalanches and skiers, which every rank runs
@@ -27,7 +29,7 @@ args=(bake preset:default --set "season.days=$days" --set 'outputs.frames_days=[
 [ "$events" = 1 ] || args+=(--set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0)
 # run RANKS SIZE: bakes into $work/RANKS-SIZE; prints its table row ($one: the alone bake's peak).
 run() {
-  local ranks="$1" size="$2" dir="$work/$1-$2" peaks largest season total
+  local ranks="$1" size="$2" dir="$work/$1-$2" peaks largest season total season_peaks season_largest
   mkdir -p "$dir"
   if [ "$ranks" = 1 ]; then
     (cd "$dir" && "$bin" "${args[@]}" --set "terrain.size=$size" --threads 2 > log 2>&1)
@@ -40,9 +42,12 @@ run() {
   season="$(sed -n 's/^season: .* on cpu (\([0-9.]*\) s)$/\1/p' "$dir/log")"
   total="$(sed -n 's/^total: \([0-9.]*\) s$/\1/p' "$dir/log")"
   largest="$(echo "$peaks" | tr ',' '\n' | sort -g | tail -1 | tr -d ' ')"
+  season_peaks="$(sed -n 's/^memory: peak resident per rank in the season \(.*\) MiB; after it.*$/\1/p' "$dir/log")"
+  season_largest="$(echo "$season_peaks" | tr ',' '\n' | sort -g | tail -1 | tr -d ' ')"
   replica="$(sed -n 's/^season: .*brought up to date \([0-9]*\) times (\([0-9.]*\) MiB sent by rank 0)$/\1 times, \2 MiB/p' "$dir/log")"
-  printf '| %s | %s² | %s | %s | %s | %s | %s | %s |\n' "$ranks" "$size" "$([ "$ranks" = 1 ] && echo 2 || echo 1)" "$season" "$total" "$peaks" \
-    "$(awk -v a="$largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }')" "${replica:--}"
+  printf '| %s | %s² | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$ranks" "$size" "$([ "$ranks" = 1 ] && echo 2 || echo 1)" "$season" "$total" \
+    "$peaks" "$(awk -v a="$largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }')" "${season_peaks:--}" \
+    "$([ -n "$season_largest" ] && awk -v a="$season_largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }' || echo -)" "${replica:--}"
 }
 # same RANKS SIZE: every output file but the manifest has the alone bake's bytes.
 same() {
@@ -54,9 +59,9 @@ same() {
 
 echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers, 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
-printf '| %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" "largest rank / one process" \
-  "replica gathers"
-echo "|---|---|---|---|---|---|---|---|"
+printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" \
+  "largest rank / one process" "season's peak MiB per rank" "largest / one process" "replica gathers"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 one=""
 if [ "$mode" = strong ]; then
   for ranks in 1 2 4; do

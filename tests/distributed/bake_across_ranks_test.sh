@@ -102,6 +102,47 @@ grep -qE "avalanche day 45.00 .* \(user\)" "$work/mid/alone/log" || fail "mid-av
 check_scene bedforms "$root/presets/bedforms.toml" --set terrain.size=96 --set season.days=2 --set 'outputs.frames_days=[1]'
 grep -qE "wind bedforms: [0-9]+ cells, [1-9][0-9]* rounds, [1-9][0-9]* slabs lifted" "$work/bedforms/alone/log" || fail "bedforms: no slab lifted"
 
+# Without avalanches, skiers or bedforms each rank fills each day's static fields from its own
+# cells of the precompute and frees the whole grid's: a wind that varies (two states and a calm
+# keyframe), and the sun and wind layers rank 0 reads from the whole grid's it keeps.
+cat > "$work/winds.toml" <<TOML
+name = "across ranks: a varying wind and no events"
+[terrain]
+builtin = "ridged"
+size = 96
+cell_size_m = 10.0
+[season]
+start_date = 2025-12-01
+days = 60
+[[weather.keyframe]]
+day = 0
+sea_level_temperature_c = 4.0
+wind_direction_deg = 280
+wind_speed_mps = 8.0
+[[weather.keyframe]]
+day = 25
+wind_speed_mps = 0.0
+[[weather.keyframe]]
+day = 45
+sea_level_temperature_c = 8.0
+wind_direction_deg = 190
+wind_speed_mps = 12.0
+[parameters]
+avalanche_rate_per_km2_per_day = 0.0
+skiers_per_hour = 0.0
+[outputs]
+layers = ["depth", "wind_shadow_depth", "wind_speed", "wind_scour", "sun_exposure", "temperature", "preview"]
+frames_days = [20, 40]
+TOML
+check_scene winds "$work/winds.toml"
+grep -q "precompute: wind, 2 states" "$work/winds/alone/log" || fail "winds: not two wind states"
+grep -q "replica" "$work/winds/2/log" && fail "winds on 2 ranks: a replica without events"
+# The season's peak per rank, where the kernel lets a process reset its peak count.
+if (echo 5 > /proc/self/clear_refs) 2> /dev/null; then
+  grep -qE "^memory: peak resident per rank in the season [0-9]+, [0-9]+ MiB; after it [0-9]+, [0-9]+ MiB" "$work/winds/2/log" ||
+    fail "winds on 2 ranks: no season peak per rank in the log"
+fi
+
 dem="$data/dem/tyrol_avaWog_5m.asc"
 if [ -f "$dem" ]; then
   cat > "$work/dem.toml" <<TOML
