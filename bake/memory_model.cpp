@@ -32,10 +32,10 @@ constexpr double kGiB = 1024.0 * kMiB;
 constexpr double kLibraryBytes = 140.0 * kMiB;
 // Measured: bytes a cell the horizon sweep's per-thread line buffers hold beside the counted
 // grids; Embree's terrain (a grid geometry: 12 bytes of vertex a cell and its BVH) a cell, and its
-// BVH bytes per occluder triangle. Counted: the wind solver's upwind links (24), ground speed (8),
-// W_z and W_sz in double (16) and free stream (8), beside the wind fields.
+// BVH bytes per occluder triangle. Counted: the wind solver's W_z and W_sz in double (16) and
+// free stream (8), beside the wind fields (its links and ground speeds are made as it needs them).
 constexpr double kSweepScratchPerCell = 16.0;
-constexpr double kWindSolverPerCell = 56.0;
+constexpr double kWindSolverPerCell = 24.0;
 constexpr double kEmbreeGridBytesPerCell = 28.0;
 constexpr double kEmbreeBytesPerTriangle = 120.0;
 // Mesh mode's snow body: three grids of float leaves (2 KiB and their masks) per leaf slot.

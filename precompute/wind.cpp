@@ -5,7 +5,6 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <optional>
 #include <cmath>
 
 #include "core/util.h"
@@ -47,41 +46,34 @@ Upwind upwindOf(int x, int y, int w, int h, double vx, double vy, const GridSpec
   return u;
 }
 
+// The discrete equations, their coefficients made per cell as each update needs them from the
+// free stream, the ground wind and the altitude (the same doubles as stored ones: 8 bytes a cell
+// held, the free stream, where links and ground speeds held 32).
 class WindSystem {
  public:
   WindSystem(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const Grid<float>& groundX,
              const Grid<float>& groundY, const Grid<float>& freeX, const Grid<float>& freeY, double c)
-      : w_(spec.width), h_(spec.height), c_(c), altitude_(altitude.values()), valid_(valid.values()) {
-    const size_t n = static_cast<size_t>(w_) * h_;
-    upwind_.resize(n);
-    groundSpeed_.resize(n);
-    for (int y = 0; y < h_; ++y)
-      for (int x = 0; x < w_; ++x) {
-        const size_t i = static_cast<size_t>(y) * w_ + x;
-        upwind_[i] = upwindOf(x, y, w_, h_, freeX(x, y), freeY(x, y), spec, valid);
-        // W . grad A with the terrain-following wind, upwind like everything else.
-        const Upwind g = upwindOf(x, y, w_, h_, groundX(x, y), groundY(x, y), spec, valid);
-        double speed = 0.0;
-        if (g.ux >= 0) speed += g.ax * (altitude_[i] - altitude_[g.ux]);
-        if (g.uy >= 0) speed += g.ay * (altitude_[i] - altitude_[g.uy]);
-        groundSpeed_[i] = speed;
-      }
-  }
+      : w_(spec.width), h_(spec.height), c_(c), spec_(spec), altitude_(altitude), valid_(valid), groundX_(groundX),
+        groundY_(groundY), freeX_(freeX), freeY_(freeY) {}
 
   void initialise(std::vector<double>& wz, std::vector<double>& wsz) const {
-    wz.assign(altitude_.begin(), altitude_.end());
-    wsz = groundSpeed_;
+    wz.assign(altitude_.values().begin(), altitude_.values().end());
+    wsz.resize(wz.size());
+    for (int y = 0; y < h_; ++y)
+      for (int x = 0; x < w_; ++x) wsz[index(x, y)] = groundSpeed(x, y);
   }
 
-  // One Gauss-Seidel update of cell i (the paper's three steps); returns the larger change.
-  double update(size_t i, std::vector<double>& wz, std::vector<double>& wsz) const {
-    if (!valid_[i]) return 0.0;
-    const Upwind& u = upwind_[i];
+  // One Gauss-Seidel update of cell (x, y) (the paper's three steps); returns the larger change.
+  double update(int x, int y, std::vector<double>& wz, std::vector<double>& wsz) const {
+    const size_t i = index(x, y);
+    if (!valid_.values()[i]) return 0.0;
+    const Upwind u = upwindOf(x, y, w_, h_, freeX_(x, y), freeY_(x, y), spec_, valid_);
     const double a = u.ax + u.ay;
+    const double ground = altitude_.values()[i];
     double newSz, newZ;
     if (a <= 0.0) {  // calm, or an inflow boundary: the surface is the ground
-      newZ = altitude_[i];
-      newSz = groundSpeed_[i];  // 0: no upwind neighbour to differ from
+      newZ = ground;
+      newSz = groundSpeed(x, y);  // 0: no upwind neighbour to differ from
     } else {
       // 1. W_sz from W . grad W_sz = -c, independently of W_z;
       double sz = -c_, z = 0.0;
@@ -91,9 +83,9 @@ class WindSystem {
       // 2. W_z from W . grad W_z = W_sz with the new W_sz;
       newZ = (newSz + z) / a;
       // 3. corrected where the surface meets the ground.
-      if (newZ <= altitude_[i]) {
-        newZ = altitude_[i];
-        newSz = groundSpeed_[i];
+      if (newZ <= ground) {
+        newZ = ground;
+        newSz = groundSpeed(x, y);
       }
     }
     const double change = std::max(std::abs(newZ - wz[i]), std::abs(newSz - wsz[i]));
@@ -106,12 +98,23 @@ class WindSystem {
   int height() const { return h_; }
 
  private:
+  size_t index(int x, int y) const { return static_cast<size_t>(y) * w_ + x; }
+  // W . grad A with the terrain-following wind, upwind like everything else.
+  double groundSpeed(int x, int y) const {
+    const Upwind g = upwindOf(x, y, w_, h_, groundX_(x, y), groundY_(x, y), spec_, valid_);
+    const double here = altitude_.values()[index(x, y)];
+    double speed = 0.0;
+    if (g.ux >= 0) speed += g.ax * (here - altitude_.values()[g.ux]);
+    if (g.uy >= 0) speed += g.ay * (here - altitude_.values()[g.uy]);
+    return speed;
+  }
+
   int w_, h_;
   double c_;
-  const std::vector<float>& altitude_;
-  const std::vector<uint8_t>& valid_;
-  std::vector<Upwind> upwind_;
-  std::vector<double> groundSpeed_;
+  const GridSpec& spec_;
+  const Grid<float>& altitude_;
+  const Grid<uint8_t>& valid_;
+  const Grid<float>&groundX_, &groundY_, &freeX_, &freeY_;
 };
 
 double redBlackHalf(const WindSystem& sys, int colour, std::vector<double>& wz, std::vector<double>& wsz) {
@@ -120,7 +123,7 @@ double redBlackHalf(const WindSystem& sys, int colour, std::vector<double>& wz, 
       tbb::blocked_range<int>(0, sys.height(), 16), 0.0,
       [&](const tbb::blocked_range<int>& rows, double acc) {
         for (int y = rows.begin(); y < rows.end(); ++y)
-          for (int x = (colour + y) & 1; x < w; x += 2) acc = std::max(acc, sys.update(static_cast<size_t>(y) * w + x, wz, wsz));
+          for (int x = (colour + y) & 1; x < w; x += 2) acc = std::max(acc, sys.update(x, y, wz, wsz));
         return acc;
       },
       [](double a, double b) { return std::max(a, b); });
@@ -133,7 +136,7 @@ double sweep(const WindSystem& sys, bool xForward, bool yForward, std::vector<do
     const int y = yForward ? k : h - 1 - k;
     for (int j = 0; j < w; ++j) {
       const int x = xForward ? j : w - 1 - j;
-      change = std::max(change, sys.update(static_cast<size_t>(y) * w + x, wz, wsz));
+      change = std::max(change, sys.update(x, y, wz, wsz));
     }
   }
   return change;
@@ -208,8 +211,7 @@ WindSolveStats solveWindEffectSurface(const Grid<float>& altitude, const Grid<ui
                                       const Grid<float>& freeY, double c, const WindSolverOptions& o, Grid<float>& windEffectZ,
                                       Grid<float>& verticalSpeed) {
   const auto t0 = WallClock::now();
-  std::optional<WindSystem> system(std::in_place, altitude, valid, spec, groundX, groundY, freeX, freeY, c);
-  const WindSystem& sys = *system;
+  const WindSystem sys(altitude, valid, spec, groundX, groundY, freeX, freeY, c);
   std::vector<double> wz, wsz;
   sys.initialise(wz, wsz);
   WindSolveStats stats;
@@ -237,13 +239,14 @@ WindSolveStats solveWindEffectSurface(const Grid<float>& altitude, const Grid<ui
   // The residual of the discrete equations: how far one more update would move any cell (each
   // cell updated, then put back: its neighbours see the solution, not a copy of it).
   double residual = 0.0;
-  for (size_t i = 0; i < wz.size(); ++i) {
-    const double z = wz[i], sz = wsz[i];
-    residual = std::max(residual, sys.update(i, wz, wsz));
-    wz[i] = z, wsz[i] = sz;
-  }
+  for (int y = 0; y < spec.height; ++y)
+    for (int x = 0; x < spec.width; ++x) {
+      const size_t i = static_cast<size_t>(y) * spec.width + x;
+      const double z = wz[i], sz = wsz[i];
+      residual = std::max(residual, sys.update(x, y, wz, wsz));
+      wz[i] = z, wsz[i] = sz;
+    }
   stats.residual = residual;
-  system.reset();  // its 32 bytes a cell, before the float fields are made
   windEffectZ.resize(spec.width, spec.height);
   verticalSpeed.resize(spec.width, spec.height);
   for (size_t i = 0; i < wz.size(); ++i) {
