@@ -158,8 +158,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   if (!replicated)
     state.releaseFields([keepTerrain](FieldRole r) { return !(keepTerrain && r == FieldRole::Terrain); });
   else if (noSnow)
-    for (size_t i = 0; i < state.noSnow.size(); ++i)
-      if (state.noSnow.values()[i]) state.validCell.values()[i] = 0;
+    leaveNoSnowCellsOutside(state);
   // Every rank is here or failed on its own before: agree before the first exchange.
   const std::vector<double> statuses = agreedStatuses(comm, 0);
   if (const double worst = *std::max_element(statuses.begin(), statuses.end()); worst != 0) throw OtherRankFailed{static_cast<int>(worst)};

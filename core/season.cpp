@@ -64,8 +64,12 @@ void SeasonRun::leaveNoSnowCells() {
   if (!noSnow_) return;
   terrainValid_ = state_.validCell;
   report_.noSnowRemovedM3 += removeSnowOfNoSnowCells(state_);
-  for (size_t i = 0; i < state_.noSnow.size(); ++i)
-    if (state_.noSnow.values()[i]) state_.validCell.values()[i] = 0;
+  leaveNoSnowCellsOutside(state_);
+}
+
+void leaveNoSnowCellsOutside(SnowState& s) {
+  for (size_t i = 0; i < s.noSnow.size(); ++i)
+    if (s.noSnow.values()[i]) s.validCell.values()[i] = 0;
 }
 
 double removeSnowOfNoSnowCells(SnowState& s) {

@@ -154,6 +154,8 @@ void computeTemperatureBase(SnowState& state, const ModelParameters& params);
 // The snow of the valid cells state.noSnow marks, removed; returns its volume (m^3), summed in
 // row order (the season's SeasonReport::noSnowRemovedM3).
 double removeSnowOfNoSnowCells(SnowState& state);
+// The cells state.noSnow marks, outside the snow domain from here on: their validity cleared.
+void leaveNoSnowCellsOutside(SnowState& state);
 
 // Whether a frame day is handed to onFrame: within the season, its start (0) and end included.
 inline bool frameDayInSeason(double day, double seasonDays) { return day >= 0.0 && day <= seasonDays; }

@@ -5,24 +5,29 @@
 #include <string>
 
 #include "continuous_step.h"
+#include "core/grid_window.h"
 #include "exact_sum.h"
 #include "halo_exchange.h"
 #include "whole_replica.h"
 
 namespace snow::dist {
 
-bool seasonNeedsReplica(const SeasonConfig& c) {
-  const ModelParameters& p = c.params;
-  return p.avalancheRatePerKm2PerDay > 0.0 || !c.userAvalanches.empty() || (p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) ||
-         !c.userSkiers.empty() || c.bedforms.has_value();
-}
-
-std::string distributedSeasonRefusal(const SeasonConfig& c, bool replicated) {
-  if (replicated) return c.eventTerrain ? "" : "a replica of the whole grid but no SeasonConfig::eventTerrain";
+namespace {
+// The first of the season's phenomena that run on the whole grid's replica, or null.
+const char* replicatedPhenomenon(const SeasonConfig& c) {
   const ModelParameters& p = c.params;
   if (p.avalancheRatePerKm2PerDay > 0.0 || !c.userAvalanches.empty()) return "avalanches";
   if ((p.skiersPerHour > 0.0 && p.skiHoursPerDay > 0.0) || !c.userSkiers.empty()) return "skiers";
   if (c.bedforms) return "wind bedforms";
+  return nullptr;
+}
+}  // namespace
+
+bool seasonNeedsReplica(const SeasonConfig& c) { return replicatedPhenomenon(c) != nullptr; }
+
+std::string distributedSeasonRefusal(const SeasonConfig& c, bool replicated) {
+  if (replicated) return c.eventTerrain ? "" : "a replica of the whole grid but no SeasonConfig::eventTerrain";
+  if (const char* phenomenon = replicatedPhenomenon(c)) return phenomenon;
   if (c.skiTracks) return "the ski-track texture";
   if (c.eventTerrain) return "SeasonConfig::eventTerrain but no replica of the whole grid";
   return "";
@@ -92,14 +97,10 @@ void DistributedBackend::uploadReplica(const SnowState& local) {
   current_ = Current::Both;
 }
 
-namespace {
-bool snowOrRecord(FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; }
-}  // namespace
-
 // The replica's steps (an avalanche's, a skier batch, bedforms) into the local grid.
 void DistributedBackend::localUpToDate() {
   if (current_ != Current::Replica) return;
-  cutFromReplica(d_, comm_.rank(), *replica_, *local_, snowOrRecord);
+  cutFromReplica(d_, comm_.rank(), *replica_, *local_, downloadedWithState);
   current_ = Current::Both;
 }
 
@@ -109,7 +110,7 @@ SnowBackend& DistributedBackend::replicaUpToDate(const char* what) {
   if (current_ == Current::Local) {
     using Clock = std::chrono::steady_clock;
     const auto t0 = Clock::now();
-    replicaBytes_ += gatherIntoReplica(comm_, d_, *local_, *replica_, snowOrRecord);
+    replicaBytes_ += gatherIntoReplica(comm_, d_, *local_, *replica_, downloadedWithState);
     exchangeS_ += std::chrono::duration<double>(Clock::now() - t0).count();
     ++replicaGathers_;
     current_ = Current::Both;
@@ -127,8 +128,7 @@ void DistributedBackend::addBedformCohesion(SnowState& s) {
   Grid<float> whole;
   if (!replica_ || !replicaUploaded_ || !replica_->bedformCohesion(whole)) return;
   const CellRect at = d_.local(comm_.rank());
-  s.bedformCohesion.resize(at.width(), at.height());
-  copyCells(at, CellRect{0, 0, d_.width, d_.height}, whole.data(), at, s.bedformCohesion.data(), sizeof(float));
+  s.bedformCohesion = gridWindow(whole, at.x0, at.y0, at.width(), at.height());
 }
 
 void DistributedBackend::download(SnowState& s) {
@@ -237,9 +237,8 @@ void DistributedBackend::refreshHalo(bool powderOnly) {
     waitS_ += since(t);
   }
   const auto t0 = Clock::now();
-  auto evolved = [](FieldRole r) { return r == FieldRole::Evolved || r == FieldRole::Record; };
   if (powderOnly) bytesSent_ += exchangeHalo(comm_, d_, plan_, field(SnowField::powderM), sizeof(float));
-  else bytesSent_ += exchangeBackendHalos(comm_, d_, plan_, *local_, evolved);
+  else bytesSent_ += exchangeBackendHalos(comm_, d_, plan_, *local_, downloadedWithState);
   exchangeS_ += since(t0);
 }
 

@@ -4,14 +4,13 @@
 #pragma once
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
 
 #include "bake/bake.h"
+#include "temp_dir.h"
 
 namespace snow::test {
 
@@ -23,14 +22,10 @@ struct Bake {
 
 inline Bake bakeSceneText(const std::string& name, const std::string& sceneText) {
   Bake b;
-  // One folder per test, name and process: ctest runs tests in parallel processes, and two test
-  // runs on one machine must not share folders.
+  // A folder of its own (ctest runs tests in parallel processes, two test runs on one machine must
+  // not share one), removed when the test program passes (temp_dir.h): bakes are tens of MB.
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  b.dir = std::filesystem::temp_directory_path() /
-          ("snowbake_" + name + "_" + (info ? std::string(info->test_suite_name()) + "." + info->name() : std::string("main")) + "_" +
-           std::to_string(::getpid()));
-  std::filesystem::remove_all(b.dir);
-  std::filesystem::create_directories(b.dir);
+  b.dir = uniqueTempDir(name + "_" + (info ? std::string(info->test_suite_name()) + "." + info->name() : std::string("main")));
   const std::string scene = (b.dir / "scene.toml").string();
   std::ofstream(scene) << sceneText;
   BakeOptions o;

@@ -145,8 +145,7 @@ namespace {
 
 // A 2 m ground with a 0.5 m block on it, as OBJ (z up).
 std::string writeBlockObj() {
-  const auto dir = std::filesystem::temp_directory_path() / ("snowbake_mesh_mode_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const auto dir = test::uniqueTempDir("mesh_mode");
   const std::string path = (dir / "block.obj").string();
   std::ofstream o(path);
   o << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\n"                         // ground 1-4
@@ -194,8 +193,7 @@ namespace {
 // Snow on a season's [[occluders]]: a 20 m box held high over the builtin range gets a snow body
 // whose top stands the terrain's snow depth round it above the box (the same snowfall).
 TEST(MeshSnowBake, OccludersOnATerrainGetSnowAsDeepAsTheTerrainRoundThem) {
-  const auto dir = std::filesystem::temp_directory_path() / ("snowbake_occluder_snow_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
+  const auto dir = test::uniqueTempDir("occluder_snow");
   const std::string obj = (dir / "box.obj").string();
   {
     TriangleMesh m;
