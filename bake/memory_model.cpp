@@ -323,7 +323,10 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   const double rayScene = cells * kEmbreeGridBytesPerCell + static_cast<double>(occluderTriangles) * kEmbreeBytesPerTriangle;
   // The sun exposure, then the wind (the sun's working set freed between them); the record fields
   // are made after both.
-  MemoryPhase pre{"precompute: sun exposure", {terrain, stateOwner, staticOwner}};
+  // The static fields are made by the precompute's fill of day 0: the exposure and the
+  // temperature base after the sun, the wind's after the wind (bake/stage_precompute.cpp).
+  const MemoryOwner staticBeforeWind{"snow state: static fields", cells * 8.0, "terrain.size", G::StaticFields};
+  MemoryPhase pre{"precompute: sun exposure", {terrain, stateOwner}};
   if (samples > 0) {
     // The sky's horizon grids (one an azimuth), or the shadows' sweep (three grids, the normals,
     // a bit a cell for each sun position above the horizon: precompute/horizon.h).
@@ -337,7 +340,7 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   }
   p.phases.push_back(pre);
   if (windStates > 0) {
-    MemoryPhase windPhase{"precompute: wind", {terrain, stateOwner, staticOwner, computedExposure, wind,
+    MemoryPhase windPhase{"precompute: wind", {terrain, stateOwner, staticBeforeWind, computedExposure, wind,
                                                {"wind solver", cells * kWindSolverPerCell, "weather.keyframe", G::PrecomputeWork}}};
     if (samples <= 0) windPhase.owners[3].bytes = 0.0;
     p.phases.push_back(windPhase);

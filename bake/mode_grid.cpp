@@ -141,8 +141,9 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
   // The record fields stay zero until the season, which makes those an output reads
-  // (SeasonConfig::recordFields): not held through the precompute's peak.
-  state.releaseFields([](FieldRole r) { return r == FieldRole::Record; });
+  // (SeasonConfig::recordFields), and the static fields are made by the precompute's fill of day
+  // 0: neither held through the precompute's sweeps.
+  state.releaseFields([](FieldRole r) { return r == FieldRole::Record || r == FieldRole::Static; });
   Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   // A constant wind's fields are the state's copy from here on, unless a layer reads the wind.

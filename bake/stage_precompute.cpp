@@ -88,6 +88,7 @@ std::string exposureCacheKey(const Grid<float>& bedrockM, const Grid<uint8_t>& v
 
 void Precomputed::temperatureForDay(int day, SnowState& s, const ModelParameters& params) const {
   if (exposure) s.exposureHours = exposure->totalAt(day);
+  else if (s.exposureHours.size() != s.spec.cellCount()) s.exposureHours.resize(s.spec.width, s.spec.height, 0.f);  // no sun: none
   computeTemperatureBase(s, params);
 }
 
