@@ -102,7 +102,7 @@ class WindSystem {
   // W . grad A with the terrain-following wind, upwind like everything else.
   double groundSpeed(int x, int y) const {
     const Upwind g = upwindOf(x, y, w_, h_, groundX_(x, y), groundY_(x, y), spec_, valid_);
-    const double here = altitude_.values()[index(x, y)];
+    const float here = altitude_.values()[index(x, y)];  // the differences in float, as the terrain
     double speed = 0.0;
     if (g.ux >= 0) speed += g.ax * (here - altitude_.values()[g.ux]);
     if (g.uy >= 0) speed += g.ay * (here - altitude_.values()[g.uy]);

@@ -5,6 +5,7 @@
 #include <gdal_priv.h>
 #include <ogr_spatialref.h>
 #include <gtest/gtest.h>
+#include <unistd.h>  // getpid
 
 #include <cmath>
 #include <filesystem>

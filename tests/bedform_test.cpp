@@ -2,6 +2,7 @@
 // any wind direction, determinism, the forms themselves (barchans: horns downwind, sizes,
 // migration, steep lee faces) and cohesion freezing them; the scene option in a season.
 #include <tbb/global_control.h>
+#include <unistd.h>  // getpid
 
 #include <cmath>
 #include <fstream>

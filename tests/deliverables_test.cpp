@@ -1,6 +1,7 @@
 // Engine deliverables: [outputs.tiles] (every convention on the builtin range and a real DEM),
 // [outputs.ranges] (season, fixed, NODATA) and their scene errors.
 #include <gtest/gtest.h>
+#include <unistd.h>  // getpid
 
 #include <OpenImageIO/imageio.h>
 

@@ -1,6 +1,7 @@
 // Farm runs (docs/farm.md): one level of a scene list per task, and a precompute cache that many
 // processes share. The Slurm job array itself is tests/farm/slurm_array_test.sh.
 #include <gtest/gtest.h>
+#include <unistd.h>  // getpid
 
 #include <fcntl.h>
 #include <sys/stat.h>

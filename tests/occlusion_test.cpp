@@ -3,6 +3,7 @@
 // sun weights of Eqs. 2-3, meshes per vertex, and the mode through the whole bake.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <unistd.h>  // getpid
 
 #include <OpenImageIO/imageio.h>
 

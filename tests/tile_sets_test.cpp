@@ -3,6 +3,7 @@
 // set's own size (outputs.tiles.resize) writes its tiles at that size beside the untiled files
 // at the grid's; bad sizes are scene errors (exit 2) naming file, line and key.
 #include <gtest/gtest.h>
+#include <unistd.h>  // getpid
 
 #include <OpenImageIO/imageio.h>
 #include <sys/wait.h>
