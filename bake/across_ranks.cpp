@@ -16,6 +16,8 @@
 #include "distributed/distributed_backend.h"
 #include "distributed/launch.h"
 #include "distributed/local_state.h"
+#include "distributed/wind_across_ranks.h"
+#include "art_direction.h"
 #include "frame_writer.h"
 #include "memory_trace.h"
 #include "progress.h"
@@ -26,12 +28,12 @@ namespace snow {
 
 namespace {
 
-// Set while the launch's MPI is up for a bake, and while the season exchanges (its failures
-// end every rank at once: the others wait in an exchange).
+// Set while the launch's MPI is up for a bake, and while the ranks exchange (the wind's solve, the
+// season: a failure then ends every rank at once, the others waiting in an exchange).
 bool acrossRanks = false;
-bool inSeason = false;
+bool inExchanges = false;
 
-bool seasonAgreed = false;  // the ranks have agreed at the season's start
+bool seasonAgreed = false;  // the ranks have agreed at the season's start, the last agreement
 
 // The season's peak resident memory per rank, in a window of its own (memory_trace.h).
 bool peakWindows = false;
@@ -42,12 +44,25 @@ struct OtherRankFailed {
   int status;
 };
 
-// The agreement at the season's start: every rank's status (0: fine), in rank order. A rank that
-// failed before it joins from runBakeAcrossRanks; every rank calls it once.
-std::vector<double> agreedStatuses(const dist::Communicator& comm, int status) {
-  seasonAgreed = true;
+// An agreement before the ranks exchange (each wind state's solve on the local grids, the season's
+// start): every rank's status (0: fine), in rank order. A rank that failed joins the next one from
+// runBakeAcrossRanks, where every other rank ends.
+std::vector<double> agreedStatuses(const dist::Communicator& comm, int status, bool seasonStart) {
+  seasonAgreed = seasonAgreed || seasonStart;
   return comm.allGather({static_cast<double>(status)});
 }
+void agreeBeforeExchanges(const dist::Communicator& comm, bool seasonStart) {
+  const std::vector<double> statuses = agreedStatuses(comm, 0, seasonStart);
+  if (const double worst = *std::max_element(statuses.begin(), statuses.end()); worst != 0) throw OtherRankFailed{static_cast<int>(worst)};
+}
+// inExchanges for a scope; still set when a failure leaves it (the others wait in an exchange).
+struct Exchanging {
+  int failing = std::uncaught_exceptions();
+  Exchanging() { inExchanges = true; }
+  ~Exchanging() {
+    if (std::uncaught_exceptions() == failing) inExchanges = false;
+  }
+};
 
 }  // namespace
 
@@ -99,14 +114,32 @@ std::function<void(int, SnowState&)> wholeThenCutFill(std::function<void(int, Sn
 
 // Without a replica: each day's static fields filled on the rank's local grid from its own cells
 // of the precompute, `mine` (the fill makeSeasonConfig makes, dailyStaticFill: each cell's
-// temperature and wind are its own, so the bytes are the whole grid's). The whole grid's
-// precompute is freed, but on rank 0 where its layers read it.
+// temperature and wind are its own, so the bytes are the whole grid's): a part the precompute
+// made on the local grid as it is, a whole grid's cut. The whole grid's precompute is freed, but
+// on rank 0 where its layers read it.
 void fillFromOwnCells(Precomputed& pre, Precomputed& mine, dist::CellRect cells, const ModelParameters& params, bool keepWhole,
                       uint8_t outputNeeds, SeasonConfig& config) {
-  mine = pre.window(cells.x0, cells.y0, cells.width(), cells.height());
+  if (pre.exposure)
+    mine.exposure = pre.exposure->cells == cells ? *pre.exposure : pre.exposure->window(cells.x0, cells.y0, cells.width(), cells.height());
+  if (pre.wind) mine.wind = pre.wind->cells() == cells ? *pre.wind : pre.wind->window(cells.x0, cells.y0, cells.width(), cells.height());
   config.updateStaticFields = dailyStaticFill(mine, params);
   if (pre.exposure && !(keepWhole && (outputNeeds & kNeedsSun))) pre.exposure->release();
   if (pre.wind && !(keepWhole && (outputNeeds & kNeedsWind))) pre.wind->releaseFields();
+}
+
+// Whether the season runs on the replica (dist::seasonNeedsReplica of the config makeSeasonConfig
+// will make), before the precompute: the scene's and art direction's events, its bedforms.
+bool seasonOnReplica(const Scene& scene, const ArtDirectionPlan& art) {
+  SeasonConfig c;
+  c.params = scene.params;
+  c.userAvalanches = art.avalanches;
+  c.userSkiers = art.skiers;
+  for (const Scene::AvalancheEvent& a : scene.userAvalanches)
+    if (!a.mask) c.userAvalanches.push_back({a.day, 0, 0, false, nullptr});
+  for (const Scene::AvalancheEvent& a : scene.userSkiers)
+    if (!a.mask) c.userSkiers.push_back({a.day, 0, 0, a.count, nullptr});
+  if (scene.bedforms.enabled) c.bedforms = scene.bedforms.params;
+  return dist::seasonNeedsReplica(c);
 }
 
 // The season's own peak resident memory per rank, below the precompute's: a window of the
@@ -124,6 +157,23 @@ void endSeasonPeak() {
 
 }  // namespace
 
+PrecomputeParts rankPrecomputeParts(const Scene& scene, const ArtDirectionPlan& art, const GridSpec& spec, uint8_t outputNeeds) {
+  PrecomputeParts parts;
+  if (!acrossRanks || seasonOnReplica(scene, art)) return parts;
+  const dist::Communicator comm = dist::Communicator::world();
+  const dist::Decomposition d = dist::Decomposition::choose(comm.size(), spec.width, spec.height, dist::kContinuousHalo);
+  const dist::CellRect cells = d.local(comm.rank());
+  if (!(comm.rank() == 0 && (outputNeeds & kNeedsSun))) parts.exposure = cells;
+  if (!(outputNeeds & kNeedsWind))
+    parts.wind = WindPart{cells, [comm, d](const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& s, const WindState& state,
+                                           const ModelParameters& p, const WindSolverOptions& o, WindField& f, Grid<float>& loading) {
+                            agreeBeforeExchanges(comm, false);
+                            const Exchanging exchanging;
+                            return dist::solveWindOnLocalGrid(comm, d, altitude, valid, s, state, p, o, f, loading);
+                          }};
+  return parts;
+}
+
 SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, Precomputed& pre,
                                   uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log) {
   const dist::Communicator comm = dist::Communicator::world();
@@ -133,6 +183,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   // Avalanches, skiers and bedforms run on a replica of the whole grid on every rank, their
   // runners on the whole state, which keeps its terrain and each day's static fields for them.
   const bool replicated = dist::seasonNeedsReplica(config);
+  if (replicated && pre.partsOnRanks) throw std::logic_error("a season on the replica with a precompute made in parts");
   Precomputed mineOfPre;  // without a replica: the rank's cells of the exposure and the wind
   if (replicated) {
     config.eventTerrain = &state;
@@ -149,6 +200,11 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   const bool noSnow = state.noSnow.size() == whole.cellCount() && state.noSnow.size() > 0;
   const double noSnowRemovedM3 = noSnow ? removeSnowOfNoSnowCells(state) : 0.0;
   SnowState mine = dist::cutLocalState(state, cells);
+  if (pre.partsOnRanks) {  // the day-0 static fields runPrecompute fills on a single process's state
+    mineOfPre.temperatureForDay(0, mine, scene.params);
+    mineOfPre.windForDay(0, mine);
+    if (!mineOfPre.wind->varies() && !(outputNeeds & kNeedsWind)) mineOfPre.wind->releaseFields();  // as runGridBake does
+  }
   // Every field is the ranks' now; rank 0 gathers the whole state at the frames and the end. With
   // a replica, the season's first upload hands it the snow, and the replica's runners see the
   // no-snow cells outside the terrain, as the rank's season does.
@@ -160,9 +216,8 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   else if (noSnow)
     leaveNoSnowCellsOutside(state);
   // Every rank is here or failed on its own before: agree before the first exchange.
-  const std::vector<double> statuses = agreedStatuses(comm, 0);
-  if (const double worst = *std::max_element(statuses.begin(), statuses.end()); worst != 0) throw OtherRankFailed{static_cast<int>(worst)};
-  inSeason = true;
+  agreeBeforeExchanges(comm, true);
+  inExchanges = true;
   startSeasonPeak();
   log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid; rank 0's subdomain "
       << d.owned(0).width() << " x " << d.owned(0).height() << " cells, halo " << d.halo << "\n";
@@ -193,7 +248,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
     frames.join();
     if (noSnow) report.noSnowRemovedM3 = noSnowRemovedM3;
     SnowState final = gathered(mine);
-    inSeason = false;
+    inExchanges = false;
     if (comm.rank() == 0) state = std::move(final);
     progress().stage("season", 1.0);
     if (replicated)
@@ -233,14 +288,14 @@ int runBakeAcrossRanks(BakeOptions options, const std::function<std::ostream&()>
     failure = std::current_exception();
     if (comm.rank() != 0) message << "[rank " << comm.rank() << "] ";
     status = describe(failure, message);
-    if (inSeason) {  // the others wait in an exchange
+    if (inExchanges) {  // the others wait in an exchange
       std::cerr << message.str();
       comm.abortAll(status);
     }
   }
   // A rank that failed before the season joins the others' agreement at its start.
   bool rank0Failed = comm.rank() == 0 && failure;
-  if (failure && !seasonAgreed) rank0Failed = agreedStatuses(comm, status).front() != 0;
+  if (failure && !seasonAgreed) rank0Failed = agreedStatuses(comm, status, true).front() != 0;
   // An input error (exit 2) is every rank's alike, as a rule: rank 0 says it, and the others only
   // when rank 0 did not fail.
   const bool inputError = status == 2;

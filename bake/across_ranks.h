@@ -1,15 +1,16 @@
 // A bake across the ranks of a launch (mpirun -np N snowbake bake ..., srun; docs/distributed.md).
-// Every rank loads the scene and the terrain and runs the precompute alone; the season runs
-// decomposed (each rank its subdomain, halos exchanged, every sum in the single process's order;
-// avalanches, skiers and bedforms on every rank's replica of the whole grid);
-// rank 0 gathers the state at the frames and the season's end and writes every output and the
-// manifest: the single process's bytes.
+// Every rank loads the scene and the terrain and makes its local grid's part of the precompute
+// (the whole grid's where the season runs on the replica or rank 0's layers read it); the season
+// runs decomposed (each rank its subdomain, halos exchanged, every sum in the single process's
+// order; avalanches, skiers and bedforms on every rank's replica of the whole grid); rank 0
+// gathers the state at the frames and the season's end and writes every output and the manifest:
+// the single process's bytes.
 //
-// Failures: before the season and after it the ranks work alone, and they agree on the exit
-// status at the season's start and at the end (the largest of theirs), so a bad input ends every
-// rank with exit 2 and one message (rank 0's; another rank's own when rank 0 did not fail); a
-// failure during the season, while the others wait in an exchange, ends every rank at once with
-// its status (MPI_Abort).
+// Failures: the ranks work alone but for the wind's solve and the season, and they agree on the
+// exit status before each wind state's solve, at the season's start and at the end (the largest of
+// theirs), so a bad input ends every rank with exit 2 and one message (rank 0's; another rank's
+// own when rank 0 did not fail); a failure while the others wait in an exchange ends every rank at
+// once with its status (MPI_Abort).
 #pragma once
 #include <cstdint>
 #include <exception>
@@ -23,7 +24,9 @@
 
 namespace snow {
 
+struct ArtDirectionPlan;
 struct Precomputed;
+struct PrecomputeParts;
 struct SeasonConfig;
 struct SeasonReport;
 class FrameWriter;
@@ -42,11 +45,18 @@ bool writesOutputs();
 // Refuses (InputError) a grid that `ranks` subdomains cannot split: each needs the season's halo.
 void checkRanksSuitTheGrid(const GridSpec& spec);
 
+// The parts of the precompute this rank makes on its local grid alone (none when not across
+// ranks, or where the season runs on the replica, which reads the whole grid's): the exposure,
+// but on rank 0 where a layer in `outputNeeds` reads the sun; the wind on every rank alike (its
+// solve exchanges), unless a layer reads the wind.
+PrecomputeParts rankPrecomputeParts(const Scene& scene, const ArtDirectionPlan& art, const GridSpec& spec, uint8_t outputNeeds);
+
 // The season across the ranks on rank `state`'s whole grid (every rank holds it, as the precompute
 // left it): on rank 0, `state` is then the gathered final state and each frame day went to
 // `frames`. Without avalanches, skiers or bedforms each rank fills its static fields from its own
 // cells of `pre` and frees the whole state and the whole `pre` (rank 0 keeps what the layers in
-// `outputNeeds` read); with them, every rank keeps the whole state for the replica (the terrain,
+// `outputNeeds` read), its day-0 static fields filled there where the precompute made parts
+// (Precomputed::partsOnRanks); with them, every rank keeps the whole state for the replica (the terrain,
 // the last day's static fields, its no-snow cells outside the terrain). `local` is the rank's
 // CPU backend.
 SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, Precomputed& pre,

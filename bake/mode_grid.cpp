@@ -27,9 +27,12 @@ namespace fs = std::filesystem;
 namespace {
 
 // The state on the terrain, with art direction's initial snow, multipliers and masks.
+// The terrain and the snow alone: the record fields are made by the season (those an output
+// reads, SeasonConfig::recordFields) and the static fields by the precompute's fill of day 0, so
+// neither is held through the art direction and the precompute's sweeps.
 SnowState initialState(const BakeTerrain& t) {
   SnowState state;
-  state.allocate(t.info().spec);
+  state.allocate(t.info().spec, [](FieldRole r) { return r != FieldRole::Record && r != FieldRole::Static; });
   state.bedrockM = t.terrain.heightsM;
   state.validCell = t.terrain.valid;
   return state;
@@ -140,15 +143,12 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   checkBedformsSuitTheGrid(scene, state.spec);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
-  // The record fields stay zero until the season, which makes those an output reads
-  // (SeasonConfig::recordFields), and the static fields are made by the precompute's fill of day
-  // 0: neither held through the precompute's sweeps.
-  state.releaseFields([](FieldRole r) { return r == FieldRole::Record || r == FieldRole::Static; });
-  Precomputed pre = runPrecompute(scene, terrain, state, cache, log);
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
-  // A constant wind's fields are the state's copy from here on, unless a layer reads the wind.
   const uint8_t needs = layersNeeds(layers);
-  if (!pre.wind->varies() && !(needs & kNeedsWind)) pre.wind->releaseFields();
+  Precomputed pre = runPrecompute(scene, terrain, state, cache, rankPrecomputeParts(scene, art, state.spec, needs), log);
+  // A constant wind's fields are the state's copy from here on, unless a layer reads the wind
+  // (across ranks with parts, each rank's local state's: runSeasonAcrossRanks).
+  if (!pre.wind->varies() && !(needs & kNeedsWind) && !pre.partsOnRanks) pre.wind->releaseFields();
 
   // Across ranks, each rank's season runs on the CPU (acrossRanksRefusal refuses run.backend = "cuda").
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : bakingAcrossRanks() ? createCpuBackend() : chooseBackend(scene.backend, log);

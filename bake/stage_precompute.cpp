@@ -11,22 +11,30 @@ namespace snow {
 namespace {
 
 // Sun exposure, from the cache when every input is unchanged.
+// Sun exposure, from the cache when every input is unchanged. On a rank's local grid (`cells`),
+// its own entry: the key of the whole grid's and the cells.
 Exposure loadOrComputeExposure(const SnowState& state, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,
-                               const ExposureSettings& es, const PrecomputeCache& cache, std::ostream& log) {
-  const std::string key = exposureCacheKey(state.bedrockM, state.validCell, state.spec, occluders, p, es);
+                               const ExposureSettings& es, const PrecomputeCache& cache, const std::optional<CellRect>& cells,
+                               std::ostream& log) {
+  std::string key = exposureCacheKey(state.bedrockM, state.validCell, state.spec, occluders, p, es);
+  if (cells) key += "-cells-" + std::to_string(cells->x0) + "-" + std::to_string(cells->y0) + "-" + std::to_string(cells->x1) + "-" +
+                    std::to_string(cells->y1);
+  const CellRect extent = cells.value_or(CellRect::whole(state.spec));
   // The sample days are fixed by the settings: list them, then fill the grids from the cache.
   Exposure e;
   e.days = exposureSampleDays(es);
   std::vector<Grid<float>*> grids{&e.skyHours};
   for (auto& d : e.days) grids.push_back(&d.sunHours), grids.push_back(&d.indirectHours);
-  if (cache.load("exposure", key, state.spec.width, state.spec.height, grids)) {
-    log << "  sun exposure: from the cache\n";
+  if (cache.load("exposure", key, extent.width(), extent.height(), grids)) {
+    e.cells = cells;
+    log << "  sun exposure: from the cache" << (cells ? " (each rank its local grid's)" : "") << "\n";
     progress().event("precompute", "exposure", {{"status", jsonText("cached")}});
     return e;
   }
   std::unique_ptr<RayScene> scene;
   if (!es.horizonSweep) scene = std::make_unique<RayScene>(state.bedrockM, state.spec, occluders);
-  e = computeExposure(scene.get(), state.bedrockM, state.validCell, state.spec, p, es);
+  e = computeExposure(scene.get(), state.bedrockM, state.validCell, state.spec, p, es, cells);
+  if (cells) log << "  sun exposure: each rank its local grid (rank 0's " << cells->width() << " x " << cells->height() << " cells)\n";
   const ExposureTimings& t = e.timings;
   if (es.horizonSweep)
     log << "  sun exposure (horizon sweep): horizons " << fixed(t.horizonSeconds, 2) << " s, direct " << fixed(t.sunSeconds, 2)
@@ -43,12 +51,12 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
 }
 
 void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const PrecomputeCache& cache,
-                        Precomputed& pre, std::ostream& log) {
+                        const std::optional<CellRect>& cells, Precomputed& pre, std::ostream& log) {
   const auto t0 = WallClock::now();
   const ExposureSettings es = exposureSettings(scene, terrain);
   if (scene.sunMethod == SunMethod::Horizon && !terrain.occluders.empty())
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
-  pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, log);
+  pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, cells, log);
   pre.exposure->foldIndirect();  // the season and the layers read I_sun + I_ind only
   log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", "
       << pre.exposure->days.size() << " sample days) (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
@@ -120,23 +128,24 @@ StageDecision windDecision(const Scene& scene) {
 }
 
 Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
-                          std::ostream& log) {
+                          const PrecomputeParts& parts, std::ostream& log) {
   progress().stage("precompute", 0.0);
   Precomputed pre;
+  pre.partsOnRanks = parts.any();
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   const StageDecision sun = sunExposureDecision(scene), windStage = windDecision(scene);
   if (sun.runs)
-    precomputeExposure(scene, terrain, state, cache, pre, log);
+    precomputeExposure(scene, terrain, state, cache, parts.exposure, pre, log);
   else if (occlusionMode)
     log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
   else
     log << "precompute: sun exposure off (precompute.sun = false): temperature from altitude alone\n";
   if (!sun.runs) progress().event("precompute", "exposure", {{"status", jsonText("skipped")}, {"why", jsonText(sun.why)}});
-  pre.temperatureForDay(0, state, scene.params);
+  if (!pre.partsOnRanks) pre.temperatureForDay(0, state, scene.params);
   const auto t0 = WallClock::now();
   const WeatherTimeline calm;
   pre.wind.emplace(state.bedrockM, state.validCell, state.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
-                   WindSolverOptions{}, &log);
+                   WindSolverOptions{}, &log, parts.wind ? &*parts.wind : nullptr);
   const WindTimeline& wind = *pre.wind;
   if (windStage.runs)
     progress().event("precompute", "wind", {{"status", jsonText(wind.computedStates() ? "computed" : "cached")},
@@ -147,11 +156,14 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   } else if (windStage.runs) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " (" << wind.computedStates()
         << " computed, " << wind.cachedStates() << " from the cache"
-        << (cache.enabled() ? " " + cache.directory() : std::string(", cache off")) << ") (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+        << (parts.wind          ? std::string(", on each rank's local grid: no cache")
+            : cache.enabled()   ? " " + cache.directory()
+                                : std::string(", cache off"))
+        << ") (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   } else {
     log << "precompute: no wind in the season: wind field skipped\n";
   }
-  pre.windForDay(0, state);
+  if (!pre.partsOnRanks) pre.windForDay(0, state);
   progress().stage("precompute", 1.0);
   return pre;
 }

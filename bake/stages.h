@@ -56,6 +56,9 @@ StageDecision windDecision(const Scene& scene);
 struct Precomputed {
   std::optional<Exposure> exposure;
   std::optional<WindTimeline> wind;  // a calm timeline in occlusion mode
+  // A part was made on a rank's local grid alone (PrecomputeParts): the whole state's static
+  // fields are not filled for day 0; each rank fills its local grid's.
+  bool partsOnRanks = false;
   // T = T0 + k_t A + k_i I (§4.1), the exposure of the day interpolated between samples.
   void temperatureForDay(int day, SnowState& s, const ModelParameters& params) const;
   // The day's wind (calm: no wind, W_z on the ground).
@@ -71,8 +74,15 @@ std::function<void(int, SnowState&)> dailyStaticFill(const Precomputed& pre, con
 ExposureSettings exposureSettings(const Scene& scene, const BakeTerrain& terrain);
 std::string exposureCacheKey(const Grid<float>& bedrockM, const Grid<uint8_t>& valid, const GridSpec& spec,
                              const std::vector<TriangleMesh>& occluders, const ModelParameters& p, const ExposureSettings& es);
+// Across ranks, the parts of the precompute a rank makes on its local grid alone (across_ranks.h:
+// rankPrecomputeParts); none: the whole grid's.
+struct PrecomputeParts {
+  std::optional<CellRect> exposure;
+  std::optional<WindPart> wind;
+  bool any() const { return exposure || wind; }
+};
 Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
-                          std::ostream& log);
+                          const PrecomputeParts& parts, std::ostream& log);
 
 // stage_backend.cpp: the season's backend (--backend, run.backend: cpu, cuda or auto).
 std::unique_ptr<SnowBackend> chooseBackend(BackendChoice wanted, std::ostream& log);

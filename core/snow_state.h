@@ -60,9 +60,14 @@ struct SnowState {
   // Allocates every field for `s` (each with its fill: no snow, all cells valid, static fields
   // zero); the optional fields are left as they are.
   void allocate(const GridSpec& s) {
+    allocate(s, [](FieldRole) { return true; });
+  }
+  // The same for the fields whose role `pick(role)` accepts; the others stay absent.
+  template <class Pick>
+  void allocate(const GridSpec& s, Pick pick) {
     spec = s;
 #define SNOW_ALLOCATE(member, view, Element, role, access, fill) \
-  if (!optionalField(FieldRole::role)) member.resize(s.width, s.height, fill);
+  if (!optionalField(FieldRole::role) && pick(FieldRole::role)) member.resize(s.width, s.height, fill);
     SNOW_STATE_FIELDS(SNOW_ALLOCATE)
 #undef SNOW_ALLOCATE
   }

@@ -9,12 +9,6 @@
 
 namespace snow::dist {
 
-CellRect CellRect::intersect(const CellRect& o) const {
-  CellRect r{std::max(x0, o.x0), std::max(y0, o.y0), std::min(x1, o.x1), std::min(y1, o.y1)};
-  if (r.empty()) return CellRect{};
-  return r;
-}
-
 namespace {
 int cut(int extent, int parts, int k) { return static_cast<int>(static_cast<int64_t>(extent) * k / parts); }
 int lowerToMultiple(int v) { return v - v % kLocalOriginMultiple; }

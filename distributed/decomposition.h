@@ -5,21 +5,11 @@
 #include <cstddef>
 #include <vector>
 
+#include "core/grid_window.h"
+
 namespace snow::dist {
 
-// Cells [x0, x1) × [y0, y1) of the whole grid.
-struct CellRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  int width() const { return x1 - x0; }
-  int height() const { return y1 - y0; }
-  bool empty() const { return x1 <= x0 || y1 <= y0; }
-  size_t cells() const { return empty() ? 0 : static_cast<size_t>(width()) * static_cast<size_t>(height()); }
-  bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
-  // Where whole-grid cell (x, y) lies in a row-major grid of this rectangle's cells.
-  size_t offsetOf(int x, int y) const { return static_cast<size_t>(y - y0) * static_cast<size_t>(width()) + static_cast<size_t>(x - x0); }
-  CellRect intersect(const CellRect& o) const;
-  bool operator==(const CellRect&) const = default;
-};
+using snow::CellRect;  // core/grid_window.h
 
 // Local grids start on whole-grid cells whose coordinates are multiples of this: the 5-colour
 // cross tiling (core/tiling.h) then gives every local cell its whole-grid colour, so the

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "core/bracket.h"
@@ -29,20 +30,21 @@ std::array<float, 3> rayOrigin(const RayScene& scene, int i, int j, const std::a
 }  // namespace
 
 
-void terrainNormals(const Grid<float>& a, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out) {
+void terrainNormals(const Grid<float>& a, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out,
+                    std::optional<CellRect> cells) {
   const int w = spec.width, h = spec.height;
-  out.assign(static_cast<size_t>(w) * h, {0.f, 0.f, 1.f});
-  for (int j = 0; j < h; ++j)
-    for (int i = 0; i < w; ++i) {
+  const CellRect r = cells.value_or(CellRect::whole(spec));
+  out.assign(r.cells(), {0.f, 0.f, 1.f});
+  for (int j = r.y0; j < r.y1; ++j)
+    for (int i = r.x0; i < r.x1; ++i) {
       auto ok = [&](int x, int y) { return x >= 0 && y >= 0 && x < w && y < h && valid(x, y); };
-      const bool l = ok(i - 1, j), r = ok(i + 1, j), u = ok(i, j - 1), d = ok(i, j + 1);
-      const double aL = l ? a(i - 1, j) : a(i, j), aR = r ? a(i + 1, j) : a(i, j);
+      const bool l = ok(i - 1, j), rt = ok(i + 1, j), u = ok(i, j - 1), d = ok(i, j + 1);
+      const double aL = l ? a(i - 1, j) : a(i, j), aR = rt ? a(i + 1, j) : a(i, j);
       const double aN = u ? a(i, j - 1) : a(i, j), aS = d ? a(i, j + 1) : a(i, j);
-      const double gx = (l || r) ? (aR - aL) / ((l && r ? 2.0 : 1.0) * spec.cellSizeXM) : 0.0;
+      const double gx = (l || rt) ? (aR - aL) / ((l && rt ? 2.0 : 1.0) * spec.cellSizeXM) : 0.0;
       const double gyNorth = (u || d) ? (aN - aS) / ((u && d ? 2.0 : 1.0) * spec.cellSizeYM) : 0.0;  // rows run south
       const double norm = std::sqrt(1.0 + gx * gx + gyNorth * gyNorth);
-      out[static_cast<size_t>(j) * w + i] = {static_cast<float>(-gx / norm), static_cast<float>(-gyNorth / norm),
-                                             static_cast<float>(1.0 / norm)};
+      out[r.offsetOf(i, j)] = {static_cast<float>(-gx / norm), static_cast<float>(-gyNorth / norm), static_cast<float>(1.0 / norm)};
     }
 }
 
@@ -147,13 +149,16 @@ Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights
 // slopes is not seen (documented in docs/precompute.md).
 std::vector<Grid<float>> computeIndirectSunForDays(const std::vector<const Grid<float>*>& suns, const Grid<float>& heights,
                                                    const Grid<uint8_t>& valid, const GridSpec& spec, int directions, int rings,
-                                                   double radiusM, double kIndOverKSun) {
+                                                   double radiusM, double kIndOverKSun, std::optional<CellRect> receiverCells,
+                                                   std::optional<CellRect> senderCells) {
   const int w = spec.width, h = spec.height;
+  const CellRect rc = receiverCells.value_or(CellRect::whole(spec)), sc = senderCells.value_or(CellRect::whole(spec));
   const size_t n = suns.size();
-  std::vector<Grid<float>> ind(n, Grid<float>(w, h, 0.f));
+  std::vector<Grid<float>> ind(n, Grid<float>(rc.width(), rc.height(), 0.f));
   if (n == 0 || directions <= 0 || rings <= 0 || kIndOverKSun == 0.0) return ind;
-  std::vector<std::array<float, 3>> normals;
-  terrainNormals(heights, valid, spec, normals);
+  if (rc.intersect(sc) != rc) throw std::invalid_argument("computeIndirectSunForDays: the receivers are not among the senders' cells");
+  std::vector<std::array<float, 3>> normals;  // the senders' cells, the receivers' among them
+  terrainNormals(heights, valid, spec, normals, sc);
   const double dr = radiusM / rings;
   // The sample pattern is the same round every cell: its offsets and areas once, not a sine
   // and cosine per cell and sample.
@@ -171,12 +176,12 @@ std::vector<Grid<float>> computeIndirectSunForDays(const std::vector<const Grid<
   }
   // Every sample day at once: the geometry of a receiver and a sender (their cosines and
   // distance) does not depend on the day, only the sender's sun does.
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 0, w), [&](const tbb::blocked_range2d<int>& r) {
+  tbb::parallel_for(tbb::blocked_range2d<int>(rc.y0, rc.y1, rc.x0, rc.x1), [&](const tbb::blocked_range2d<int>& r) {
     std::vector<double> sum(n);
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
         if (!valid(i, j)) continue;
-        const auto& nr = normals[static_cast<size_t>(j) * w + i];
+        const auto& nr = normals[sc.offsetOf(i, j)];
         const double px = (i + 0.5) * spec.cellSizeXM, py = (h - j - 0.5) * spec.cellSizeYM, pz = heights(i, j);
         std::fill(sum.begin(), sum.end(), 0.0);
         for (const Sample& sample : pattern) {
@@ -184,16 +189,17 @@ std::vector<Grid<float>> computeIndirectSunForDays(const std::vector<const Grid<
           const int si = static_cast<int>(std::floor(sx / spec.cellSizeXM));
           const int sj = h - 1 - static_cast<int>(std::floor(sy / spec.cellSizeYM));
           if (si < 0 || sj < 0 || si >= w || sj >= h || !valid(si, sj) || (si == i && sj == j)) continue;
+          if (!sc.contains(si, sj)) throw std::logic_error("computeIndirectSunForDays: a sender outside the senders' cells");
           const double vx = (si + 0.5) * spec.cellSizeXM - px, vy = (h - sj - 0.5) * spec.cellSizeYM - py, vz = heights(si, sj) - pz;
           const double d2 = vx * vx + vy * vy + vz * vz, d = std::sqrt(d2);
           const double cosR = (nr[0] * vx + nr[1] * vy + nr[2] * vz) / d;
-          const auto& ns = normals[static_cast<size_t>(sj) * w + si];
+          const auto& ns = normals[sc.offsetOf(si, sj)];
           const double cosS = -(ns[0] * vx + ns[1] * vy + ns[2] * vz) / d;
           if (cosR <= 0.0 || cosS <= 0.0) continue;
-          const size_t sender = static_cast<size_t>(sj) * w + si;
+          const size_t sender = sc.offsetOf(si, sj);
           for (size_t k = 0; k < n; ++k) sum[k] += sample.area * suns[k]->values()[sender] * cosS * cosR / (kPi * d2);
         }
-        for (size_t k = 0; k < n; ++k) ind[k](i, j) = static_cast<float>(kIndOverKSun * sum[k]);
+        for (size_t k = 0; k < n; ++k) ind[k](i - rc.x0, j - rc.y0) = static_cast<float>(kIndOverKSun * sum[k]);
       }
   });
   return ind;
@@ -216,6 +222,8 @@ Exposure Exposure::window(int x0, int y0, int width, int height) const {
   out.folded = folded;
   out.released = released;
   out.skyHours = gridWindow(skyHours, x0, y0, width, height);
+  const CellRect base = cells.value_or(CellRect{0, 0, skyHours.width(), skyHours.height()});
+  out.cells = CellRect{base.x0 + x0, base.y0 + y0, base.x0 + x0 + width, base.y0 + y0 + height};
   for (const DailyExposure& d : days)
     out.days.push_back({d.seasonDay, d.dayOfYear, gridWindow(d.sunHours, x0, y0, width, height),
                         gridWindow(d.indirectHours, x0, y0, width, height)});
@@ -274,30 +282,43 @@ ExposureTerms exposureTermsFor(const ModelParameters& p) {
   return t;
 }
 
+CellRect indirectSenderCells(const CellRect& receivers, const GridSpec& spec, double radiusM) {
+  const int cx = static_cast<int>(std::ceil(radiusM / spec.cellSizeXM)) + 1, cy = static_cast<int>(std::ceil(radiusM / spec.cellSizeYM)) + 1;
+  return receivers.widened(cx, cy, CellRect::whole(spec));
+}
+
 // A skipped term's zeros are the bytes computing it gives, without its rays.
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
-                         const ModelParameters& p, const ExposureSettings& s) {
+                         const ModelParameters& p, const ExposureSettings& s, std::optional<CellRect> cells) {
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
+  if (cells && !s.horizonSweep) {  // the rays' path: the whole grid, then its cells
+    const Exposure whole = computeExposure(scene, heights, valid, spec, p, s);
+    return whole.window(cells->x0, cells->y0, cells->width(), cells->height());
+  }
+  const CellRect mine = cells.value_or(CellRect::whole(spec));
   Exposure e;
   const ExposureTerms terms = exposureTermsFor(p);
   e.timings.skipped = terms.skipped;
-  const auto zeros = [&] { return Grid<float>(spec.width, spec.height, 0.f); };  // made only for a skipped term
+  const auto zeros = [&] { return Grid<float>(mine.width(), mine.height(), 0.f); };  // made only for a skipped term
   auto t0 = WallClock::now();
   if (!terms.sky) {
     e.skyHours = zeros();
   } else if (s.horizonSweep) {
     // The sky's horizons are freed before the shadows' four times as many are swept, and those
     // one azimuth after another (directSunForDaysBySweep): never all held at once.
-    const std::vector<Grid<float>> skyHorizons = computeHorizonsBySweep(heights, valid, spec, s.quality.azimuths);
+    const std::vector<Grid<float>> skyHorizons = computeHorizonsBySweep(heights, valid, spec, s.quality.azimuths, mine);
     e.timings.horizonSeconds = elapsedSeconds(t0);
     t0 = WallClock::now();
-    e.skyHours = skyFromHorizons(skyHorizons, valid, p.skyAmbientWeightHours);
+    const Grid<uint8_t> validOfCells = cells ? gridWindow(valid, mine) : Grid<uint8_t>();
+    e.skyHours = skyFromHorizons(skyHorizons, cells ? validOfCells : valid, p.skyAmbientWeightHours);
   } else {
     e.skyHours = computeSkyExposure(*scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
                                     &e.timings.skyRays);
   }
   e.timings.skySeconds = elapsedSeconds(t0);
   const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
+  // The direct sun of the cells and, for their indirect term, of its senders around them.
+  const CellRect lit = terms.indirect ? indirectSenderCells(mine, spec, s.quality.indirectRadiusM) : mine;
   t0 = WallClock::now();
   e.days = exposureSampleDays(s);
   if (!terms.direct) {
@@ -306,7 +327,7 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
     std::vector<int> doys;
     for (const DailyExposure& day : e.days) doys.push_back(day.dayOfYear);
     std::vector<Grid<float>> suns = directSunForDaysBySweep(heights, valid, spec, 4 * s.quality.azimuths, s.latitudeDeg, doys,
-                                                            s.quality.hourStep, p.directSunWeightHours);
+                                                            s.quality.hourStep, p.directSunWeightHours, lit);
     for (size_t d = 0; d < e.days.size(); ++d) e.days[d].sunHours = std::move(suns[d]);
   } else {
     for (DailyExposure& day : e.days)
@@ -321,10 +342,13 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
     std::vector<const Grid<float>*> suns;
     for (const DailyExposure& day : e.days) suns.push_back(&day.sunHours);
     std::vector<Grid<float>> indirect = computeIndirectSunForDays(suns, heights, valid, spec, s.quality.indirectDirections,
-                                                                  s.quality.indirectRings, s.quality.indirectRadiusM, kIndOverKSun);
+                                                                  s.quality.indirectRings, s.quality.indirectRadiusM, kIndOverKSun, mine, lit);
     for (size_t k = 0; k < e.days.size(); ++k) e.days[k].indirectHours = std::move(indirect[k]);
   }
+  if (lit != mine)  // the senders' sun cut to the cells
+    for (DailyExposure& day : e.days) day.sunHours = gridWindow(day.sunHours, CellRect{mine.x0 - lit.x0, mine.y0 - lit.y0, mine.x1 - lit.x0, mine.y1 - lit.y0});
   e.timings.indirectSeconds = elapsedSeconds(t0);
+  e.cells = cells;
   return e;
 }
 

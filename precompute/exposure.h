@@ -6,10 +6,12 @@
 // Ray queries go through RayScene (Embree), so occluder meshes shade too; pure height fields use
 // the horizon-sweep fast path by default (horizon.h).
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/grid.h"
+#include "core/grid_window.h"
 #include "core/parameters.h"
 #include "ray_scene.h"
 #include "scene/sun_quality.h"
@@ -67,18 +69,25 @@ struct Exposure {
   // One rectangle of its cells (a rank's local grid, across ranks): its totalAt gives those
   // cells' bytes of this one's, each cell's sum being its own.
   Exposure window(int x0, int y0, int width, int height) const;
+  // The whole grid's cells its grids cover: nullopt for the whole grid.
+  std::optional<CellRect> cells;
 };
 
-// Unit surface normals (x east, y north, z up) from central differences that skip NODATA.
-void terrainNormals(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out);
+// Unit surface normals (x east, y north, z up) from central differences that skip NODATA; with
+// `cells`, those cells' alone, row by row.
+void terrainNormals(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, std::vector<std::array<float, 3>>& out,
+                    std::optional<CellRect> cells = std::nullopt);
 
 // The season days exposure is computed at (0, dayStep, 2 dayStep, ..., and the last day), each
 // with its day of the year: DailyExposure entries with empty grids.
 std::vector<DailyExposure> exposureSampleDays(const ExposureSettings& settings);
 
-// `scene` may be null when settings.horizonSweep is true.
+// `scene` may be null when settings.horizonSweep is true. With `cells` (a rank's local grid), the
+// grids hold those cells alone, the bytes of the whole grid's cut to them: the horizon sweep
+// sweeps the lines through them, the direct sun covers them widened by the indirect term's radius
+// (its senders); the Embree path traces the whole grid and cuts.
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
-                         const ModelParameters& params, const ExposureSettings& settings);
+                         const ModelParameters& params, const ExposureSettings& settings, std::optional<CellRect> cells = std::nullopt);
 
 // Pieces, for tests and benchmarks.
 Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
@@ -89,8 +98,13 @@ Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights
 Grid<float> computeIndirectSun(const Grid<float>& sunHours, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                                int directions, int rings, double radiusM, double kIndOverKSun);
 // The same for several days' direct sun at once (the geometry computed once): the same bytes.
+// With `receivers`, for those cells alone, the suns given on `senders` (which hold them and every
+// cell within the radius of them; indirectSenderCells).
 std::vector<Grid<float>> computeIndirectSunForDays(const std::vector<const Grid<float>*>& sunHours, const Grid<float>& heights,
                                                    const Grid<uint8_t>& valid, const GridSpec& spec, int directions, int rings,
-                                                   double radiusM, double kIndOverKSun);
+                                                   double radiusM, double kIndOverKSun, std::optional<CellRect> receivers = std::nullopt,
+                                                   std::optional<CellRect> senders = std::nullopt);
+// The cells whose direct sun the indirect term of `receivers` reads: widened by the radius and a cell.
+CellRect indirectSenderCells(const CellRect& receivers, const GridSpec& spec, double radiusM);
 
 }  // namespace snow

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/util.h"
 #include "exposure.h"
@@ -21,7 +22,7 @@ namespace {
 // hull is the sample's horizon. A cell centre lies between two neighbouring lines (one minor
 // step apart): its horizon is interpolated between theirs, so the half-cell offset of a
 // single line's sample does not shift the observer.
-void sweepAzimuth(const Grid<float>& z, const GridSpec& spec, double azimuthRad, Grid<float>& out) {
+void sweepAzimuth(const Grid<float>& z, const GridSpec& spec, double azimuthRad, const CellRect& cells, Grid<float>& out) {
   const int w = spec.width, h = spec.height;
   // Direction toward the horizon in grid steps: +i east, +j south.
   const double ex = std::sin(azimuthRad), ey = std::cos(azimuthRad);
@@ -35,13 +36,23 @@ void sweepAzimuth(const Grid<float>& z, const GridSpec& spec, double azimuthRad,
   // Line L passes minor = L + slope * m at major index m; lines -spread .. minor + spread.
   const int spread = static_cast<int>(std::ceil(std::abs(slope) * major)) + 2;
   const int lineCount = minor + 2 * spread;
-  std::vector<float> sampleHorizon(static_cast<size_t>(lineCount) * major, 0.f);
-  tbb::parallel_for(tbb::blocked_range<int>(0, lineCount, 16), [&](const tbb::blocked_range<int>& lines) {
+  // The cells asked for, on the major and minor axes, and the lines their centres lie between:
+  // a line's samples depend on that line alone, so these lines give the whole sweep's bytes.
+  const int m0 = alongI ? cells.x0 : cells.y0, m1 = alongI ? cells.x1 : cells.y1;
+  const int c0 = alongI ? cells.y0 : cells.x0, c1 = alongI ? cells.y1 : cells.x1;
+  const double coordLo = std::min(c0 - slope * m0, c0 - slope * (m1 - 1)), coordHi = std::max((c1 - 1) - slope * m0, (c1 - 1) - slope * (m1 - 1));
+  const int index0 = std::max(0, static_cast<int>(std::floor(coordLo)) + spread);
+  const int index1 = std::min(lineCount, static_cast<int>(std::floor(coordHi)) + 2 + spread);
+  const int span = m1 - m0;
+  std::vector<float> sampleHorizon(static_cast<size_t>(std::max(0, index1 - index0)) * span, 0.f);
+  tbb::parallel_for(tbb::blocked_range<int>(index0, index1, 16), [&](const tbb::blocked_range<int>& lines) {
     std::vector<std::pair<double, double>> hull;  // (distance along the line, height), nearest last
     for (int index = lines.begin(); index < lines.end(); ++index) {
       const int line = index - spread;
       hull.clear();
-      for (int k = 0; k < major; ++k) {
+      // From the far end to the cells' near edge: samples beyond it are never read.
+      const int steps = direction > 0 ? major - m0 : m1;
+      for (int k = 0; k < steps; ++k) {
         const int m = direction > 0 ? major - 1 - k : k;  // far end first
         const double r = line + slope * m;
         if (r < -1.0 || r > minor) continue;  // one line beyond the grid on each side, clamped
@@ -57,23 +68,23 @@ void sweepAzimuth(const Grid<float>& z, const GridSpec& spec, double azimuthRad,
         }
         double angle = 0.0;
         if (!hull.empty()) angle = std::max(0.0, std::atan((hull.back().second - zp) / (hull.back().first - sp)));
-        sampleHorizon[static_cast<size_t>(index) * major + m] = static_cast<float>(angle * 180.0 / kPi);
+        if (m >= m0 && m < m1) sampleHorizon[static_cast<size_t>(index - index0) * span + (m - m0)] = static_cast<float>(angle * 180.0 / kPi);
         hull.push_back({sp, zp});
       }
     }
   });
   // Each cell centre between the two lines around it.
-  tbb::parallel_for(tbb::blocked_range<int>(0, major, 16), [&](const tbb::blocked_range<int>& ms) {
+  tbb::parallel_for(tbb::blocked_range<int>(m0, m1, 16), [&](const tbb::blocked_range<int>& ms) {
     for (int m = ms.begin(); m < ms.end(); ++m)
-      for (int c = 0; c < minor; ++c) {
+      for (int c = c0; c < c1; ++c) {
         const double lineCoord = c - slope * m;  // L at which a line would pass through the centre
         const int l0 = static_cast<int>(std::floor(lineCoord));
         const float t = static_cast<float>(lineCoord - l0);
-        const float a = sampleHorizon[static_cast<size_t>(l0 + spread) * major + m];
-        const float b = sampleHorizon[static_cast<size_t>(l0 + 1 + spread) * major + m];
+        const float a = sampleHorizon[static_cast<size_t>(l0 + spread - index0) * span + (m - m0)];
+        const float b = sampleHorizon[static_cast<size_t>(l0 + 1 + spread - index0) * span + (m - m0)];
         const float v = a * (1.f - t) + b * t;
-        if (alongI) out(m, c) = v;
-        else out(c, m) = v;
+        if (alongI) out(m - cells.x0, c - cells.y0) = v;
+        else out(c - cells.x0, m - cells.y0) = v;
       }
   });
 }
@@ -81,9 +92,10 @@ void sweepAzimuth(const Grid<float>& z, const GridSpec& spec, double azimuthRad,
 }  // namespace
 
 std::vector<Grid<float>> computeHorizonsBySweep(const Grid<float>& heights, const Grid<uint8_t>& /*valid*/, const GridSpec& spec,
-                                                int count) {
-  std::vector<Grid<float>> horizons(count, Grid<float>(spec.width, spec.height, 0.f));
-  for (int k = 0; k < count; ++k) sweepAzimuth(heights, spec, (k + 0.5) * 2.0 * kPi / count, horizons[k]);
+                                                int count, std::optional<CellRect> cells) {
+  const CellRect r = cells.value_or(CellRect::whole(spec));
+  std::vector<Grid<float>> horizons(count, Grid<float>(r.width(), r.height(), 0.f));
+  for (int k = 0; k < count; ++k) sweepAzimuth(heights, spec, (k + 0.5) * 2.0 * kPi / count, r, horizons[k]);
   return horizons;
 }
 
@@ -132,9 +144,11 @@ Grid<float> directSunFromHorizons(const std::vector<Grid<float>>& horizons, cons
 }
 
 std::vector<Grid<float>> directSunForDaysBySweep(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, int n,
-                                                 double latitudeDeg, const std::vector<int>& daysOfYear, double hourStep, double kSun) {
-  const int w = spec.width, h = spec.height;
-  const size_t cells = spec.cellCount(), words = (cells + 63) / 64;
+                                                 double latitudeDeg, const std::vector<int>& daysOfYear, double hourStep, double kSun,
+                                                 std::optional<CellRect> part) {
+  const CellRect r = part.value_or(CellRect::whole(spec));
+  const int w = r.width(), h = r.height();
+  const size_t cells = r.cells(), words = (cells + 63) / 64;
   // Every sun position above the horizon, with its two azimuths and a bit a cell: lit or not.
   struct Position {
     size_t day;
@@ -171,7 +185,7 @@ std::vector<Grid<float>> directSunForDaysBySweep(const Grid<float>& heights, con
   Grid<float> first(w, h, 0.f), previous(w, h, 0.f), current(w, h, 0.f);
   auto sweep = [&](int k, Grid<float>& out) {
     out.fill(0.f);
-    sweepAzimuth(heights, spec, (k + 0.5) * 2.0 * kPi / n, out);
+    sweepAzimuth(heights, spec, (k + 0.5) * 2.0 * kPi / n, r, out);
   };
   sweep(0, first);
   previous = first;
@@ -184,14 +198,14 @@ std::vector<Grid<float>> directSunForDaysBySweep(const Grid<float>& heights, con
   previous = current = first = Grid<float>();
   // Each day's sum, hour after hour.
   std::vector<std::array<float, 3>> normals;
-  terrainNormals(heights, valid, spec, normals);
+  terrainNormals(heights, valid, spec, normals, r);
   std::vector<Grid<float>> suns(daysOfYear.size(), Grid<float>(w, h, 0.f));
   for (const Position& p : positions) {
     Grid<float>& sun = suns[p.day];
     tbb::parallel_for(tbb::blocked_range<int>(0, h, 16), [&](const tbb::blocked_range<int>& rows) {
       for (int j = rows.begin(); j < rows.end(); ++j)
         for (int i = 0; i < w; ++i) {
-          if (!valid(i, j)) continue;
+          if (!valid(r.x0 + i, r.y0 + j)) continue;
           const size_t c = static_cast<size_t>(j) * w + i;
           const auto& nv = normals[c];
           const double cosine = nv[0] * p.s.direction[0] + nv[1] * p.s.direction[1] + nv[2] * p.s.direction[2];

@@ -4,16 +4,19 @@
 // where no occluder mesh is in the scene; docs/precompute.md gives its measured agreement
 // with the Embree path.
 #pragma once
+#include <optional>
 #include <vector>
 
 #include "core/grid.h"
+#include "core/grid_window.h"
 
 namespace snow {
 
 // Horizon elevation angles in degrees (>= 0) for azimuths (k + 0.5) 360 / count, k = 0..count-1,
-// clockwise from north (the same directions as the Embree sky pass).
+// clockwise from north (the same directions as the Embree sky pass). With `cells`, grids of those
+// cells alone (a rank's local grid), the whole grid's bytes: only the lines through them are swept.
 std::vector<Grid<float>> computeHorizonsBySweep(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
-                                                int count);
+                                                int count, std::optional<CellRect> cells = std::nullopt);
 
 // I_sky = k_sky pi / N sum cos^2(phi).
 Grid<float> skyFromHorizons(const std::vector<Grid<float>>& horizonsDeg, const Grid<uint8_t>& valid, double kSkyHours);
@@ -26,8 +29,9 @@ Grid<float> directSunFromHorizons(const std::vector<Grid<float>>& horizonsDeg, c
 // directSunFromHorizons for each day of `daysOfYear` over `count` azimuths, the same bytes, with
 // the azimuths swept one after the other: two horizon grids (and the first) are held at a time,
 // not `count`, and each sun position's shadow test is kept as one bit a cell until the day's
-// sum, added in hour order as directSunFromHorizons adds it.
+// sum, added in hour order as directSunFromHorizons adds it. With `cells`, on those cells alone.
 std::vector<Grid<float>> directSunForDaysBySweep(const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec, int count,
-                                                 double latitudeDeg, const std::vector<int>& daysOfYear, double hourStep, double kSunHours);
+                                                 double latitudeDeg, const std::vector<int>& daysOfYear, double hourStep, double kSunHours,
+                                                 std::optional<CellRect> cells = std::nullopt);
 
 }  // namespace snow

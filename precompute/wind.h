@@ -8,10 +8,12 @@
 // red-black (the paper's checkerboard) or sweeping from the upwind side. Airborne, the cap is
 // carried by the free-stream wind rather than Eq. (2)'s terrain-following one (wind.cpp).
 #pragma once
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/grid.h"
+#include "core/grid_window.h"
 #include "core/parameters.h"
 
 namespace snow {
@@ -51,13 +53,15 @@ struct WindField {
 // The dominant wind vector W_d (x east, y south) for a state.
 void dominantWind(const WindState& state, double& wx, double& wy);
 
-// Eq. (2) with the venturi term, per cell, from the altitude A (bedrock).
+// Eq. (2) with the venturi term, per cell, from the altitude A (bedrock); with `cells`, grids
+// of those cells alone.
 void computeWindVectors(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WindState& state,
-                        const ModelParameters& params, Grid<float>& windX, Grid<float>& windY);
+                        const ModelParameters& params, Grid<float>& windX, Grid<float>& windY,
+                        std::optional<CellRect> cells = std::nullopt);
 
 // The free stream W_venturi = (1 + k_venturi A) W_d: the wind above the caps.
 void computeFreeStream(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WindState& state,
-                       const ModelParameters& params, Grid<float>& freeX, Grid<float>& freeY);
+                       const ModelParameters& params, Grid<float>& freeX, Grid<float>& freeY, std::optional<CellRect> cells = std::nullopt);
 
 // Solves for W_z and W_sz: on the ground W_sz = W . grad A with the terrain-following wind
 // (ground*), airborne the cap is carried by the free stream (free*); see wind.cpp for why.

@@ -30,7 +30,7 @@ std::string windCacheKey(const Grid<float>& altitude, const Grid<uint8_t>& valid
 
 WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec,
                            const WeatherTimeline& weather, const ModelParameters& params, const PrecomputeCache& cache,
-                           const WindSolverOptions& options, std::ostream* log)
+                           const WindSolverOptions& options, std::ostream* log, const WindPart* part)
     : altitude_(&altitude), weather_(weather) {
   for (const auto& k : weather.keyframes) {
     if (!(k.state.windSpeedMps > 0.0)) {
@@ -47,10 +47,27 @@ WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& val
     }
     keyframeState_.push_back(index);
   }
+  if (part) {
+    cells_ = part->cells;
+    windowAltitude_ = gridWindow(altitude, part->cells);
+    altitude_ = nullptr;
+  }
   for (const WindState& s : states_) {
     WindField f;
+    Grid<float> loading;
     const std::string key = windCacheKey(altitude, valid, spec, s, params, options);
-    if (cache.load("wind", key, spec.width, spec.height, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps})) {
+    if (part) {
+      if (!part->solve(altitude, valid, spec, s, params, options, f, loading)) {  // the whole grid's, then its cells
+        const WindField whole = computeWindField(altitude, valid, spec, s, params, options);
+        const CellRect& c = part->cells;
+        f.windXMps = gridWindow(whole.windXMps, c), f.windYMps = gridWindow(whole.windYMps, c);
+        f.windEffectZM = gridWindow(whole.windEffectZM, c), f.verticalSpeedMps = gridWindow(whole.verticalSpeedMps, c);
+        f.stats = whole.stats;
+        f.stats.ordering += " of the whole grid (the free stream turns)";
+        loading = gridWindow(windLoading(whole, valid, spec), c);
+      }
+      ++computed_;
+    } else if (cache.load("wind", key, spec.width, spec.height, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps})) {
       ++cached_;
       f.stats.ordering = "cache";
       f.stats.converged = true;
@@ -59,28 +76,36 @@ WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& val
       f = computeWindField(altitude, valid, spec, s, params, options);
       ++computed_;
       cache.store("wind", key, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps});
-      if (log)
-        *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: " << f.stats.ordering << ", "
-             << f.stats.iterations << " iterations, residual " << f.stats.residual << " (" << f.stats.seconds << " s)"
-             << (f.stats.converged ? "" : " NOT CONVERGED") << "\n";
     }
-    loading_.push_back(windLoading(f, valid, spec));
+    if (log && f.stats.ordering != "cache")
+      *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: " << f.stats.ordering << ", " << f.stats.iterations
+           << " iterations, residual " << f.stats.residual << " (" << f.stats.seconds << " s)" << (f.stats.converged ? "" : " NOT CONVERGED")
+           << (part ? ", each rank its local grid" : "") << "\n";
+    loading_.push_back(loading.empty() ? windLoading(f, valid, spec) : std::move(loading));
     fields_.push_back(std::move(f));
   }
 }
 
 Grid<float> windLoading(const WindField& f, const Grid<uint8_t>& valid, const GridSpec& spec) {
+  return windLoading(f, valid, spec, CellRect::whole(spec), CellRect::whole(spec));
+}
+
+Grid<float> windLoading(const WindField& f, const Grid<uint8_t>& valid, const GridSpec& spec, const CellRect& cells, const CellRect& over) {
   const int w = spec.width, h = spec.height;
-  Grid<float> out(w, h, 0.f);
-  const Grid<float>& s = f.verticalSpeedMps;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
+  if (over.intersect(cells) != over || over.widened(1, 1, CellRect::whole(spec)).intersect(cells) != over.widened(1, 1, CellRect::whole(spec)))
+    throw std::invalid_argument("windLoading: the field does not hold the cells and their neighbours");
+  Grid<float> out(cells.width(), cells.height(), 0.f);
+  const float* s = f.verticalSpeedMps.data();
+  auto at = [&](int x, int y) { return s[cells.offsetOf(x, y)]; };
+  for (int y = over.y0; y < over.y1; ++y)
+    for (int x = over.x0; x < over.x1; ++x) {
       if (!valid(x, y)) continue;
       auto ok = [&](int i, int j) { return i >= 0 && j >= 0 && i < w && j < h && valid(i, j); };
       const bool l = ok(x - 1, y), r = ok(x + 1, y), u = ok(x, y - 1), d = ok(x, y + 1);
-      const double gx = (l || r) ? ((r ? s(x + 1, y) : s(x, y)) - (l ? s(x - 1, y) : s(x, y))) / ((l && r ? 2.0 : 1.0) * spec.cellSizeXM) : 0.0;
-      const double gy = (u || d) ? ((d ? s(x, y + 1) : s(x, y)) - (u ? s(x, y - 1) : s(x, y))) / ((u && d ? 2.0 : 1.0) * spec.cellSizeYM) : 0.0;
-      out(x, y) = static_cast<float>(std::max(0.0, f.windXMps(x, y) * gx + f.windYMps(x, y) * gy));
+      const double gx = (l || r) ? ((r ? at(x + 1, y) : at(x, y)) - (l ? at(x - 1, y) : at(x, y))) / ((l && r ? 2.0 : 1.0) * spec.cellSizeXM) : 0.0;
+      const double gy = (u || d) ? ((d ? at(x, y + 1) : at(x, y)) - (u ? at(x, y - 1) : at(x, y))) / ((u && d ? 2.0 : 1.0) * spec.cellSizeYM) : 0.0;
+      const size_t i = cells.offsetOf(x, y);
+      out.values()[i] = static_cast<float>(std::max(0.0, f.windXMps.values()[i] * gx + f.windYMps.values()[i] * gy));
     }
   return out;
 }
@@ -94,6 +119,8 @@ void WindTimeline::releaseFields() {
 WindTimeline WindTimeline::window(int x0, int y0, int width, int height) const {
   auto cut = [&](const Grid<float>& g) { return gridWindow(g, x0, y0, width, height); };
   WindTimeline out;
+  const CellRect base = cells_.value_or(CellRect{0, 0, altitude().width(), altitude().height()});
+  out.cells_ = CellRect{base.x0 + x0, base.y0 + y0, base.x0 + x0 + width, base.y0 + y0 + height};
   out.windowAltitude_ = cut(altitude());
   out.weather_ = weather_;
   out.states_ = states_;

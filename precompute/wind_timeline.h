@@ -3,6 +3,8 @@
 // own interpolation). No wind anywhere in the season: nothing is computed.
 #pragma once
 #include <algorithm>
+#include <functional>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -20,13 +22,29 @@ struct WindFieldsAtDay {
 
 // max(0, W . grad W_sz) by central differences (NODATA neighbours skipped).
 Grid<float> windLoading(const WindField& field, const Grid<uint8_t>& valid, const GridSpec& spec);
+// The same for the cells `over` of a field held on `fieldCells` (which holds their neighbours):
+// a grid of fieldCells, zero outside `over`.
+Grid<float> windLoading(const WindField& field, const Grid<uint8_t>& valid, const GridSpec& spec, const CellRect& fieldCells,
+                        const CellRect& over);
+
+// A timeline made for part of the grid (a rank's local grid, across ranks): its cells, and how a
+// state's fields and loading are solved on them (the whole grid's bytes), or false where they
+// cannot be (the timeline then solves the whole grid and cuts it). Every rank's timeline calls
+// `solve` for the same states in the same order, and none reads the cache (a rank that found a
+// state there would leave the others' exchanges waiting).
+struct WindPart {
+  CellRect cells;
+  std::function<bool(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WindState& state,
+                     const ModelParameters& params, const WindSolverOptions& options, WindField& fields, Grid<float>& loading)>
+      solve;
+};
 
 class WindTimeline {
  public:
   // Computes (or loads from `cache`) the field of every distinct wind state the keyframes use.
   WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WeatherTimeline& weather,
                const ModelParameters& params, const PrecomputeCache& cache, const WindSolverOptions& options = {},
-               std::ostream* log = nullptr);
+               std::ostream* log = nullptr, const WindPart* part = nullptr);
 
   bool hasWind() const { return !states_.empty(); }
   // True when the fields differ between days (several states, or calm keyframes among windy ones).
@@ -46,6 +64,8 @@ class WindTimeline {
   // One rectangle of its cells (a rank's local grid, across ranks), the altitude included: its
   // at() gives those cells' bytes of this one's (the loading made on the whole grid, then cut).
   WindTimeline window(int x0, int y0, int width, int height) const;
+  // The whole grid's cells its fields cover: nullopt for the whole grid.
+  const std::optional<CellRect>& cells() const { return cells_; }
 
  private:
   WindTimeline() = default;
@@ -59,6 +79,7 @@ class WindTimeline {
   std::vector<int> keyframeState_;  // per keyframe: index into states_, -1 for calm
   size_t computed_ = 0, cached_ = 0;
   bool released_ = false;
+  std::optional<CellRect> cells_;
 };
 
 }  // namespace snow

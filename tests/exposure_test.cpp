@@ -228,6 +228,39 @@ TEST(Exposure, AWindowGivesItsCellsOfTheWholeTotalOnEveryDay) {
   }
 }
 
+// A rank's local grid computed alone (computeExposure with cells: the lines through them swept,
+// the direct sun widened by the indirect radius) is the whole grid's computed and cut, bit for bit:
+// sky, every sample day's direct and indirect sun, on rough relief with NODATA cells, for windows
+// inside, at each edge and corner, one cell wide, and the whole grid; with and without the
+// indirect term, on a grid whose cells are not square.
+TEST(Exposure, CellsComputedAloneAreTheWholeGridsCutBitForBit) {
+  Field f = makeField(61, 47, 10.0, [](double x, double y) {
+    return 1500.0 + 300.0 * std::sin(x / 90.0) * std::cos(y / 70.0) + 0.4 * x + 40.0 * std::sin(0.37 * x + 0.23 * y);
+  });
+  f.spec.cellSizeYM = 12.5;
+  for (int j = 18; j < 25; ++j)
+    for (int i = 28; i < 34; ++i) f.valid(i, j) = 0;  // NODATA across window borders
+  ExposureSettings s;
+  s.seasonDays = 70;
+  s.quality.indirectRadiusM = 60.0;  // several cells beyond a window's edge
+  ModelParameters noIndirect;
+  noIndirect.indirectSunWeightHours = 0.0;
+  for (const ModelParameters& p : {ModelParameters{}, noIndirect}) {
+    const Exposure whole = computeExposure(nullptr, f.heights, f.valid, f.spec, p, s);
+    for (const CellRect c : {CellRect{10, 8, 40, 30}, CellRect{0, 0, 25, 20}, CellRect{36, 27, 61, 47}, CellRect{0, 30, 61, 47},
+                             CellRect{30, 0, 31, 47}, CellRect{0, 0, 61, 47}}) {
+      const Exposure part = computeExposure(nullptr, f.heights, f.valid, f.spec, p, s, c);
+      ASSERT_EQ(part.days.size(), whole.days.size());
+      ASSERT_TRUE(part.cells && *part.cells == c);
+      EXPECT_EQ(gridWindow(whole.skyHours, c), part.skyHours) << c.x0 << "," << c.y0;
+      for (size_t d = 0; d < whole.days.size(); ++d) {
+        EXPECT_EQ(gridWindow(whole.days[d].sunHours, c), part.days[d].sunHours) << c.x0 << "," << c.y0 << " day " << d;
+        EXPECT_EQ(gridWindow(whole.days[d].indirectHours, c), part.days[d].indirectHours) << c.x0 << "," << c.y0 << " day " << d;
+      }
+    }
+  }
+}
+
 // The indirect term's documented decision: senders are not tested for visibility; the cosines
 // decide. Two slopes facing each other across a V valley light each other; a slope facing away
 // from the receiver (the far side of a ridge, as seen from its crest) sends nothing.

@@ -282,6 +282,38 @@ TEST(WindTimeline, AWindowGivesItsCellsOfTheWholeFieldsOnEveryDay) {
   }
 }
 
+// A timeline made for part of the grid (a rank's local grid) whose solve declines a state (the
+// free stream turns) solves the whole grid and keeps its cells: on every day the bytes of the
+// whole timeline's window; the states the part solves are asked for in keyframe order.
+TEST(WindTimeline, APartWhoseSolveDeclinesKeepsItsCellsOfTheWholeGridsSolve) {
+  DefaultTerrainOptions o;
+  o.size = 40;
+  GridSpec spec;
+  const Grid<float> a = generateDefaultTerrain(o, &spec);
+  Grid<uint8_t> valid(40, 40, 1);
+  valid(20, 20) = 0;
+  WeatherTimeline w = twoWinds();
+  w.keyframes[1].state.windSpeedMps = 0;
+  const WindTimeline whole(a, valid, spec, w, ModelParameters{}, PrecomputeCache("", false));
+  std::vector<double> asked;
+  const WindPart part{CellRect{7, 11, 32, 30}, [&](const Grid<float>&, const Grid<uint8_t>&, const GridSpec&, const WindState& s,
+                                                   const ModelParameters&, const WindSolverOptions&, WindField&, Grid<float>&) {
+                        asked.push_back(s.directionDeg);
+                        return false;
+                      }};
+  const WindTimeline mine(a, valid, spec, w, ModelParameters{}, PrecomputeCache("", false), WindSolverOptions{}, nullptr, &part);
+  ASSERT_EQ(asked.size(), whole.stateCount());
+  for (size_t i = 0; i < asked.size(); ++i) EXPECT_EQ(asked[i], whole.states()[i].directionDeg);
+  ASSERT_TRUE(mine.cells() && *mine.cells() == part.cells);
+  for (double day : {0.0, 4.0, 10.0, 14.5, 20.0, 30.0}) {
+    const WindFieldsAtDay all = whole.at(day), cut = mine.at(day);
+    EXPECT_EQ(gridWindow(all.windXMps, part.cells), cut.windXMps) << day;
+    EXPECT_EQ(gridWindow(all.windYMps, part.cells), cut.windYMps) << day;
+    EXPECT_EQ(gridWindow(all.windEffectZM, part.cells), cut.windEffectZM) << day;
+    EXPECT_EQ(gridWindow(all.windLoadingMps2, part.cells), cut.windLoadingMps2) << day;
+  }
+}
+
 TEST(WindTimeline, CacheReusedWhenInputsAreUnchanged) {
   DefaultTerrainOptions o;
   o.size = 40;

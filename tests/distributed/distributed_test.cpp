@@ -25,6 +25,8 @@
 #include "distributed/exact_sum.h"
 #include "distributed/halo_exchange.h"
 #include "distributed/local_state.h"
+#include "distributed/wind_across_ranks.h"
+#include "precompute/wind_timeline.h"
 
 namespace snow::dist {
 namespace {
@@ -165,6 +167,55 @@ TEST(Ranks, HaloExchangeFillsEveryHaloCellWithItsOwnersValue) {
       EXPECT_EQ(std::bit_cast<uint32_t>(f[i]), std::bit_cast<uint32_t>(unit(x, y, 9))) << x << ", " << y;
       EXPECT_EQ(g[i], 1.0 + unit(x, y, 10)) << x << ", " << y;
     }
+}
+
+// Each wind state solved on the ranks' local grids is the whole grid's solve cut to them, bit for
+// bit: the four fields, the loading (its halo from the owners), and the single process's
+// iterations, last change and residual. Winds along the axes, the diagonals and between, over a
+// rough relief with a NODATA disc across the subdomains' borders.
+TEST(Ranks, WindSolvedOnLocalGridsIsTheWholeGridsSolveBitForBit) {
+  const Communicator comm = Communicator::world();
+  const SnowState s = testState(97, 61);
+  const Decomposition d = Decomposition::choose(comm.size(), 97, 61, 6);
+  const CellRect l = d.local(comm.rank());
+  const ModelParameters p;
+  for (const WindState w : {WindState{270.0, 10.0}, WindState{0.0, 6.0}, WindState{90.0, 12.0}, WindState{180.0, 8.0},
+                            WindState{225.0, 15.0}, WindState{33.0, 9.0}, WindState{300.0, 12.0}}) {
+    const WindField whole = computeWindField(s.bedrockM, s.validCell, s.spec, w, p);
+    const Grid<float> wholeLoading = windLoading(whole, s.validCell, s.spec);
+    WindField mine;
+    Grid<float> loading;
+    ASSERT_TRUE(solveWindOnLocalGrid(comm, d, s.bedrockM, s.validCell, s.spec, w, p, WindSolverOptions{}, mine, loading)) << w.directionDeg;
+    EXPECT_TRUE(sameBytes(gridWindow(whole.windXMps, l), mine.windXMps)) << w.directionDeg;
+    EXPECT_TRUE(sameBytes(gridWindow(whole.windYMps, l), mine.windYMps)) << w.directionDeg;
+    EXPECT_TRUE(sameBytes(gridWindow(whole.windEffectZM, l), mine.windEffectZM)) << w.directionDeg;
+    EXPECT_TRUE(sameBytes(gridWindow(whole.verticalSpeedMps, l), mine.verticalSpeedMps)) << w.directionDeg;
+    EXPECT_TRUE(sameBytes(gridWindow(wholeLoading, l), loading)) << w.directionDeg;
+    EXPECT_EQ(whole.stats.iterations, mine.stats.iterations) << w.directionDeg;
+    EXPECT_EQ(whole.stats.lastUpdate, mine.stats.lastUpdate) << w.directionDeg;
+    EXPECT_EQ(whole.stats.residual, mine.stats.residual) << w.directionDeg;
+    EXPECT_EQ(whole.stats.converged, mine.stats.converged) << w.directionDeg;
+  }
+}
+
+// A free stream that turns (1 + k_venturi A changes sign across the relief) may make loops: every
+// rank declines alike, and the whole grid's solve is the reference.
+TEST(Ranks, WindOnLocalGridsIsDeclinedOnEveryRankWhereTheFreeStreamTurns) {
+  const Communicator comm = Communicator::world();
+  const SnowState s = testState(97, 61);
+  const Decomposition d = Decomposition::choose(comm.size(), 97, 61, 6);
+  ModelParameters p;
+  float lo = 1e30f, hi = -1e30f;
+  for (size_t i = 0; i < s.bedrockM.size(); ++i)
+    if (s.validCell.values()[i]) lo = std::min(lo, s.bedrockM.values()[i]), hi = std::max(hi, s.bedrockM.values()[i]);
+  p.venturiPerM = -2.0 / (lo + hi);  // negative above the middle altitude
+  WindField mine;
+  Grid<float> loading;
+  EXPECT_FALSE(solveWindOnLocalGrid(comm, d, s.bedrockM, s.validCell, s.spec, WindState{250.0, 10.0}, p, WindSolverOptions{}, mine, loading));
+  // The red-black ordering stops short of the fixed point: declined too.
+  WindSolverOptions redBlack;
+  redBlack.ordering = WindOrdering::RedBlack;
+  EXPECT_FALSE(solveWindOnLocalGrid(comm, d, s.bedrockM, s.validCell, s.spec, WindState{250.0, 10.0}, ModelParameters{}, redBlack, mine, loading));
 }
 
 TEST(Ranks, ExactSumsAreTheSingleProcessBackendsTotalsBitForBit) {
