@@ -17,7 +17,7 @@
 #include "distributed/launch.h"
 #include "distributed/local_state.h"
 #include "distributed/wind_across_ranks.h"
-#include "art_direction.h"
+#include "memory_model.h"
 #include "frame_writer.h"
 #include "memory_trace.h"
 #include "progress.h"
@@ -128,18 +128,27 @@ void fillFromOwnCells(Precomputed& pre, Precomputed& mine, dist::CellRect cells,
 }
 
 // Whether the season runs on the replica (dist::seasonNeedsReplica of the config makeSeasonConfig
-// will make), before the precompute: the scene's and art direction's events, its bedforms.
-bool seasonOnReplica(const Scene& scene, const ArtDirectionPlan& art) {
+// will make), before the terrain is read: the scene's events (art direction's masked ones among
+// them; a mask that starts none leaves the season without a replica, which this still counts),
+// its bedforms.
+bool seasonOnReplica(const Scene& scene) {
   SeasonConfig c;
   c.params = scene.params;
-  c.userAvalanches = art.avalanches;
-  c.userSkiers = art.skiers;
-  for (const Scene::AvalancheEvent& a : scene.userAvalanches)
-    if (!a.mask) c.userAvalanches.push_back({a.day, 0, 0, false, nullptr});
-  for (const Scene::AvalancheEvent& a : scene.userSkiers)
-    if (!a.mask) c.userSkiers.push_back({a.day, 0, 0, a.count, nullptr});
+  for (const Scene::AvalancheEvent& a : scene.userAvalanches) c.userAvalanches.push_back({a.day, 0, 0, false, nullptr});
+  for (const Scene::AvalancheEvent& a : scene.userSkiers) c.userSkiers.push_back({a.day, 0, 0, a.count, nullptr});
   if (scene.bedforms.enabled) c.bedforms = scene.bedforms.params;
   return dist::seasonNeedsReplica(c);
+}
+
+// Bytes a cell of the initial state every rank makes on the whole grid before it keeps its cells:
+// the terrain's and the snow's fields (initialState).
+double initialStateBytesPerCell() {
+  double bytes = 0;
+#define SNOW_INITIAL_BYTES(member, view, Element, role, access, fill) \
+  if (FieldRole::role == FieldRole::Terrain || FieldRole::role == FieldRole::Evolved) bytes += sizeof(Element);
+  SNOW_STATE_FIELDS(SNOW_INITIAL_BYTES)
+#undef SNOW_INITIAL_BYTES
+  return bytes;
 }
 
 // The season's own peak resident memory per rank, below the precompute's: a window of the
@@ -157,9 +166,39 @@ void endSeasonPeak() {
 
 }  // namespace
 
-PrecomputeParts rankPrecomputeParts(const Scene& scene, const ArtDirectionPlan& art, const GridSpec& spec, uint8_t outputNeeds) {
+std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole, const MemoryPrediction& onWhole,
+                                       const std::function<MemoryPrediction(const GridSpec&)>& predictOn) {
+  if (!acrossRanks) return std::nullopt;
+  const dist::Communicator comm = dist::Communicator::world();
+  dist::Decomposition d;
+  try {
+    d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;  // checkRanksSuitTheGrid says why
+  }
+  GridSpec local = whole;  // the largest of the ranks' local grids
+  for (int r = 0; r < d.ranks(); ++r)
+    if (d.local(r).cells() > local.cellCount() || r == 0) local.width = d.local(r).width(), local.height = d.local(r).height();
+  const MemoryPrediction onLocal = predictOn(local);
+  const double libraries = onWhole.libraryBytes, localAbove = onLocal.peakBytes() - onLocal.libraryBytes;
+  const double cells = static_cast<double>(whole.cellCount());
+  const double terrain = (sizeof(float) + sizeof(uint8_t)) * cells;  // the whole terrain's heights and validity, every rank
+  RanksMemory m;
+  m.ranks = comm.size();
+  m.ranksHere = dist::Communicator::node().ranks;
+  m.rankZeroHere = dist::Communicator::node().holdsRankZero;
+  if (seasonOnReplica(scene)) {  // every rank: the whole grid's bake beside its local grid's backend
+    m.rankZeroBytes = m.otherBytes = onWhole.peakBytes() + localAbove;
+  } else {  // rank 0 writes the whole grid's outputs; the others hold the whole terrain and, until they cut it, the initial state
+    m.rankZeroBytes = onWhole.peakBytes();
+    m.otherBytes = libraries + std::max(terrain + initialStateBytesPerCell() * cells, terrain + localAbove);
+  }
+  return m;
+}
+
+PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, uint8_t outputNeeds) {
   PrecomputeParts parts;
-  if (!acrossRanks || seasonOnReplica(scene, art)) return parts;
+  if (!acrossRanks || seasonOnReplica(scene)) return parts;
   const dist::Communicator comm = dist::Communicator::world();
   const dist::Decomposition d = dist::Decomposition::choose(comm.size(), spec.width, spec.height, dist::kContinuousHalo);
   const dist::CellRect cells = d.local(comm.rank());
@@ -174,10 +213,20 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const ArtDirectionPlan& 
   return parts;
 }
 
-SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, Precomputed& pre,
-                                  uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log) {
+void keepTheRanksCellsOfTheState(SnowState& state, const PrecomputeParts& parts) {
+  if (!acrossRanks || !parts.any() || dist::Communicator::world().rank() == 0) return;
   const dist::Communicator comm = dist::Communicator::world();
-  const GridSpec whole = state.spec;
+  const dist::Decomposition d = dist::Decomposition::choose(comm.size(), state.spec.width, state.spec.height, dist::kContinuousHalo);
+  state = dist::cutLocalState(std::move(state), d.local(comm.rank()));
+}
+
+SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std::unique_ptr<SnowBackend> local, SnowState& state,
+                                  Precomputed& pre, uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log) {
+  const dist::Communicator comm = dist::Communicator::world();
+  const GridSpec whole = terrain.info().spec;
+  // The ranks but 0 hold their local grid of the state since the inputs stage where the precompute
+  // is made in parts (keepTheRanksCellsOfTheState).
+  const bool alreadyLocal = pre.partsOnRanks && comm.rank() != 0;
   const dist::Decomposition d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
   const dist::CellRect cells = d.local(comm.rank());
   // Avalanches, skiers and bedforms run on a replica of the whole grid on every rank, their
@@ -191,28 +240,31 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBacken
   } else {
     config.skiTracks = nullptr;  // no skiers: the texture stays as the single process leaves it
     fillFromOwnCells(pre, mineOfPre, cells, scene.params, comm.rank() == 0, outputNeeds, config);
+    if (comm.rank() != 0) {  // read by nothing on this rank now: the precompute's parts hold their cells of it
+      terrain.terrain.heightsM = Grid<float>();
+      terrain.terrain.valid = Grid<uint8_t>();
+    }
   }
   config.lendFrames = false;  // each frame is gathered into a copy of its own
   if (const std::string why = dist::distributedSeasonRefusal(config, replicated); !why.empty())
     throw std::logic_error("a season across ranks with " + why + " passed acrossRanksRefusal");
   // A no-snow mask's snow leaves the whole grid here, its volume summed in the single process's
   // order; the ranks' seasons then find none on their no-snow cells, whose validity they clear.
-  const bool noSnow = state.noSnow.size() == whole.cellCount() && state.noSnow.size() > 0;
+  // A local state's are removed by its season, cell by cell alike (the volume is rank 0's to report).
+  const bool noSnow = !alreadyLocal && state.noSnow.size() == whole.cellCount() && state.noSnow.size() > 0;
   const double noSnowRemovedM3 = noSnow ? removeSnowOfNoSnowCells(state) : 0.0;
-  SnowState mine = dist::cutLocalState(state, cells);
+  SnowState mine = alreadyLocal ? std::move(state) : dist::cutLocalState(state, cells);
   if (pre.partsOnRanks) {  // the day-0 static fields runPrecompute fills on a single process's state
     mineOfPre.temperatureForDay(0, mine, scene.params);
     mineOfPre.windForDay(0, mine);
     if (!mineOfPre.wind->varies() && !(outputNeeds & kNeedsWind)) mineOfPre.wind->releaseFields();  // as runGridBake does
   }
-  // Every field is the ranks' now; rank 0 gathers the whole state at the frames and the end. With
-  // a replica, the season's first upload hands it the snow, and the replica's runners see the
-  // no-snow cells outside the terrain, as the rank's season does.
-  // Rank 0 keeps the terrain where its frames and outputs read the whole wind (its altitude: the
-  // fields' size, and W_z on calm days).
-  const bool keepTerrain = comm.rank() == 0 && (outputNeeds & kNeedsWind);
+  // Every field is the ranks' now; rank 0 gathers the whole state at the frames and the end (the
+  // whole wind's altitude is the terrain's, BakeTerrain). With a replica, the season's first upload
+  // hands it the snow, and the replica's runners see the no-snow cells outside the terrain, as the
+  // rank's season does.
   if (!replicated)
-    state.releaseFields([keepTerrain](FieldRole r) { return !(keepTerrain && r == FieldRole::Terrain); });
+    state.releaseFields([](FieldRole) { return true; });
   else if (noSnow)
     leaveNoSnowCellsOutside(state);
   // Every rank is here or failed on its own before: agree before the first exchange.

@@ -15,16 +15,18 @@
 #include <cstdint>
 #include <exception>
 #include <functional>
+#include <optional>
 #include <ostream>
 #include <string>
 
 #include "bake.h"
+#include "memory_model.h"
 #include "core/snow_state.h"
 #include "scene/scene.h"
 
 namespace snow {
 
-struct ArtDirectionPlan;
+struct BakeTerrain;
 struct Precomputed;
 struct PrecomputeParts;
 struct SeasonConfig;
@@ -49,18 +51,34 @@ void checkRanksSuitTheGrid(const GridSpec& spec);
 // ranks, or where the season runs on the replica, which reads the whole grid's): the exposure,
 // but on rank 0 where a layer in `outputNeeds` reads the sun; the wind on every rank alike (its
 // solve exchanges), unless a layer reads the wind.
-PrecomputeParts rankPrecomputeParts(const Scene& scene, const ArtDirectionPlan& art, const GridSpec& spec, uint8_t outputNeeds);
+PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, uint8_t outputNeeds);
 
-// The season across the ranks on rank `state`'s whole grid (every rank holds it, as the precompute
-// left it): on rank 0, `state` is then the gathered final state and each frame day went to
-// `frames`. Without avalanches, skiers or bedforms each rank fills its static fields from its own
-// cells of `pre` and frees the whole state and the whole `pre` (rank 0 keeps what the layers in
-// `outputNeeds` read), its day-0 static fields filled there where the precompute made parts
-// (Precomputed::partsOnRanks); with them, every rank keeps the whole state for the replica (the terrain,
-// the last day's static fields, its no-snow cells outside the terrain). `local` is the rank's
-// CPU backend.
-SeasonReport runSeasonAcrossRanks(const Scene& scene, std::unique_ptr<SnowBackend> local, SnowState& state, Precomputed& pre,
-                                  uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log);
+// Across ranks, the peak each rank of this machine is predicted to hold (memory_model.h): rank 0
+// as one process on the whole grid (`onWhole`: it gathers and writes the whole grid's outputs);
+// each other rank the whole terrain beside the larger of the whole initial state it holds until
+// it keeps its cells and one process's peak on the largest local grid (`predictOn`: an upper
+// bound, since it writes no outputs); with the replica, every rank one process's peak on the
+// whole grid and on its local grid. nullopt when not across ranks, or where the grid cannot be
+// split (checkRanksSuitTheGrid says why).
+std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole, const MemoryPrediction& onWhole,
+                                       const std::function<MemoryPrediction(const GridSpec&)>& predictOn);
+
+// The ranks but 0 keep their local grid's cells of the initial state (cut once art direction has
+// made it) where the precompute is made in parts: from there on nothing but the season reads it,
+// and rank 0 gathers the season's into its whole state.
+void keepTheRanksCellsOfTheState(SnowState& state, const PrecomputeParts& parts);
+
+// The season across the ranks on the terrain's whole grid (rank 0's `state` holds it, and every
+// rank's where the precompute was not made in parts; the others' their local grid): on rank 0,
+// `state` is then the gathered final state and each frame day went to `frames`. Without
+// avalanches, skiers or bedforms each rank fills its static fields from its own cells of `pre`
+// (its day-0 fields too where the precompute made parts, Precomputed::partsOnRanks) and frees the
+// whole state and the whole `pre` (rank 0 keeps what the layers in `outputNeeds` read), and the
+// ranks but 0 free the terrain's grids; with them, every rank keeps the whole state for the
+// replica (the terrain, the last day's static fields, its no-snow cells outside the terrain).
+// `local` is the rank's CPU backend.
+SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std::unique_ptr<SnowBackend> local, SnowState& state,
+                                  Precomputed& pre, uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log);
 
 // runBake on every rank of the launch, rank 0 logging to openLog() (opened once the ranks have
 // joined, so its failure is every rank's); `describe` writes a failure's message to the stream

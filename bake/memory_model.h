@@ -96,6 +96,20 @@ double memoryBudgetBytes(const Scene& scene);
 // and its largest owner, with the key where the scene sets it) and what to change.
 void refuseAboveBudget(const Scene& scene, const MemoryPrediction& prediction, double budgetBytes);
 
+// A bake across ranks (docs/distributed.md): the peak each rank on this machine is predicted to
+// hold (rank 0 writes the whole grid's outputs; the others hold their local grid), and their sum,
+// which the machine's memory holds at once.
+struct RanksMemory {
+  int ranks = 1;             // of the launch
+  int ranksHere = 1;         // on this machine
+  bool rankZeroHere = true;  // rank 0 is one of them
+  double rankZeroBytes = 0, otherBytes = 0;
+  double hereBytes() const { return rankZeroHere ? rankZeroBytes + (ranksHere - 1) * otherBytes : ranksHere * otherBytes; }
+};
+// Throws InputError when this machine's ranks together pass the budget: their count, each one's
+// peak, the key that sizes rank 0's largest owner, and what to change (fewer ranks a machine).
+void refuseRanksAboveBudget(const Scene& scene, const MemoryPrediction& rankZero, const RanksMemory& ranks, double budgetBytes);
+
 // Sizes the model cannot hold whatever the memory (coordinates past OpenVDB's 32-bit range, a
 // displacement map or ski-track texture of more than 2^31 pixels): InputError naming the key.
 void refuseBeyondTheModel(const Scene& scene, const GridSpec& spec);

@@ -60,12 +60,29 @@ GeoFrame geoFrameOf(const TerrainInfo& ti) {
 namespace {
 
 // The memory model's prediction for the grid, logged; refused above the budget before any work.
+// One process's prediction against the budget; across ranks, this machine's ranks' together
+// (`predictOn`: one process's prediction on another grid, a rank's local one).
+void refuseAboveTheBudget(const Scene& scene, const GridSpec& spec, const MemoryPrediction& prediction, double budget,
+                          const std::function<MemoryPrediction(const GridSpec&)>& predictOn, std::ostream* log) {
+  const std::optional<RanksMemory> ranks = ranksMemory(scene, spec, prediction, predictOn);
+  if (!ranks) return refuseAboveBudget(scene, prediction, budget);
+  refuseRanksAboveBudget(scene, prediction, *ranks, budget);
+  constexpr double kMiB = 1024.0 * 1024.0;
+  if (log)
+    *log << "memory: across " << ranks->ranks << " ranks, rank 0 about " << fixed(ranks->rankZeroBytes / kMiB, 0) << " MiB, each other about "
+         << fixed(ranks->otherBytes / kMiB, 0) << " MiB; the " << ranks->ranksHere << " on this machine about "
+         << fixed(ranks->hereBytes() / kMiB, 0) << " MiB together\n";
+}
+
 GridMemoryPlan checkGridMemory(const Scene& scene, const BakeTerrain& terrain, FrameTiming timing, std::ostream& log) {
   const GridSpec& spec = terrain.info().spec;
   refuseBeyondTheModel(scene, spec);
   const double budget = memoryBudgetBytes(scene);
-  const GridMemoryPlan plan = planGridMemory(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain), budget, timing);
-  refuseAboveBudget(scene, plan.prediction, budget);
+  const size_t triangles = triangleCount(terrain.occluders);
+  const SnowReach reach = terrainSnowReach(scene, terrain);
+  const GridMemoryPlan plan = planGridMemory(scene, spec, triangles, reach, budget, timing);
+  refuseAboveTheBudget(scene, spec, plan.prediction, budget,
+                       [&](const GridSpec& local) { return planGridMemory(scene, local, triangles, reach, budget, timing).prediction; }, &log);
   log << "memory: " << plan.prediction.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
   if (plan.askedBytes > 0)
     log << "frames: written " << (plan.timing == FrameTiming::Paused ? "while the season waits" : "after the season, from copies held through it")
@@ -84,7 +101,9 @@ void checkBuiltinMemory(const Scene& scene, FrameTiming timing) {
   spec.cellSizeXM = spec.cellSizeYM = b.cellSizeM;
   refuseBeyondTheModel(scene, spec);
   const double budget = memoryBudgetBytes(scene);
-  refuseAboveBudget(scene, planGridMemory(scene, spec, 0, builtinSnowReach(b, scene.params.rainSnowLimitM), budget, timing).prediction, budget);
+  const SnowReach reach = builtinSnowReach(b, scene.params.rainSnowLimitM);
+  refuseAboveTheBudget(scene, spec, planGridMemory(scene, spec, 0, reach, budget, timing).prediction, budget,
+                       [&](const GridSpec& local) { return planGridMemory(scene, local, 0, reach, budget, timing).prediction; }, nullptr);
 }
 
 size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
@@ -127,7 +146,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   checkBuiltinMemory(scene, options.frames);
   std::optional<BakeStage> stage(std::in_place, "terrain");
   progress().stage("terrain", 0.0);
-  const BakeTerrain terrain = loadBakeTerrain(scene, log);
+  BakeTerrain terrain = loadBakeTerrain(scene, log);  // across ranks, the ranks but 0 free its grids for the season
   const GridMemoryPlan memoryPlan = checkGridMemory(scene, terrain, options.frames, log);
   checkRanksSuitTheGrid(terrain.info().spec);
   const MemoryPrediction& memory = memoryPlan.prediction;
@@ -145,7 +164,9 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   stage.emplace("precompute");
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   const uint8_t needs = layersNeeds(layers);
-  Precomputed pre = runPrecompute(scene, terrain, state, cache, rankPrecomputeParts(scene, art, state.spec, needs), log);
+  const PrecomputeParts parts = rankPrecomputeParts(scene, state.spec, needs);
+  keepTheRanksCellsOfTheState(state, parts);
+  Precomputed pre = runPrecompute(scene, terrain, state, cache, parts, log);
   // A constant wind's fields are the state's copy from here on, unless a layer reads the wind
   // (across ranks with parts, each rank's local state's: runSeasonAcrossRanks).
   if (!pre.wind->varies() && !(needs & kNeedsWind) && !pre.partsOnRanks) pre.wind->releaseFields();
@@ -174,11 +195,11 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
     report = occlusion.report;
   } else {
     stage.emplace("season");
-    SeasonConfig config = makeSeasonConfig(scene, terrain, state, art, pre, layers, seasonOutputs, log);
+    SeasonConfig config = makeSeasonConfig(scene, terrain, art, pre, layers, seasonOutputs, log);
     FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, memoryPlan.timing);
     config.lendFrames = frames.lendsFrames();
     config.spillFolder = options.outDir;
-    report = bakingAcrossRanks() ? runSeasonAcrossRanks(scene, std::move(backend), state, pre, needs, config, frames, log)
+    report = bakingAcrossRanks() ? runSeasonAcrossRanks(scene, terrain, std::move(backend), state, pre, needs, config, frames, log)
                                  : runSeasonStage(scene, *backend, state, config, frames, log);
     backend.reset();  // its copies of the state and its scratch, freed before the outputs
     // No writer reads the state's static fields, nor the exposure samples unless a layer reads the sun.

@@ -13,9 +13,10 @@ namespace {
 
 // A user event's point (metres from the north-west corner, or the DEM's own projected
 // coordinates) as a valid cell.
-std::array<int, 2> eventCell(const Scene& scene, const TerrainInfo& ti, const SnowState& state, const Scene::AvalancheEvent& a,
+std::array<int, 2> eventCell(const Scene& scene, const Terrain& terrain, const Scene::AvalancheEvent& a,
                              const std::string& what, const std::string& point) {
   const std::string where = scene.sourceName + ":" + std::to_string(a.line) + ": events: " + what + " on day " + fixed(a.day, 1);
+  const TerrainInfo& ti = terrain.info;
   double xM = a.xM, yM = a.yM;
   if (a.mapCoordinates) {
     if (ti.coordinateSystem.rfind("geographic", 0) == 0)
@@ -29,13 +30,13 @@ std::array<int, 2> eventCell(const Scene& scene, const TerrainInfo& ti, const Sn
                      " m south of the north-west corner) is outside the terrain (" + fixed(ti.spec.width * ti.spec.cellSizeXM, 1) + " x " +
                      fixed(ti.spec.height * ti.spec.cellSizeYM, 1) + " m)");
   const int x = static_cast<int>(fx), y = static_cast<int>(fy);
-  if (!state.validCell(x, y)) throw InputError(where + ": the " + point + " falls on a NODATA cell");
+  if (!terrain.valid(x, y)) throw InputError(where + ": the " + point + " falls on a NODATA cell");
   return {x, y};
 }
 
 }  // namespace
 
-SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const ArtDirectionPlan& art,
+SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const ArtDirectionPlan& art,
                               const Precomputed& pre, const std::vector<std::string>& layers, SeasonOutputs& outputs, std::ostream& log) {
   SeasonConfig config;
   config.days = scene.days;
@@ -50,18 +51,20 @@ SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, co
   config.userSkiers = art.skiers;          // skiers from start masks
   for (const Scene::AvalancheEvent& a : scene.userAvalanches) {
     if (a.mask) continue;
-    const auto c = eventCell(scene, terrain.info(), state, a, "avalanche", "rupture point");
+    const auto c = eventCell(scene, terrain.terrain, a, "avalanche", "rupture point");
     config.userAvalanches.push_back({a.day, c[0], c[1], false, nullptr});
   }
   for (const Scene::AvalancheEvent& a : scene.userSkiers) {
     if (a.mask) continue;
-    const auto c = eventCell(scene, terrain.info(), state, a, "skier", "start point");
+    const auto c = eventCell(scene, terrain.terrain, a, "skier", "start point");
     config.userSkiers.push_back({a.day, c[0], c[1], a.count, nullptr});
   }
   const uint8_t needs = layersNeeds(layers);
-  if (needs & kNeedsRouteMap) outputs.routeMap = routeMap(state.bedrockM, state.validCell, state.spec);
+  // The whole terrain's (the state's terrain fields' bytes; a rank may hold its local grid alone).
+  const Terrain& t = terrain.terrain;
+  if (needs & kNeedsRouteMap) outputs.routeMap = routeMap(t.heightsM, t.valid, t.info.spec);
   if (needs & kNeedsSkiTracks) {
-    outputs.skiTracks.emplace(state.spec, scene.outputs.skiTrackFactor);
+    outputs.skiTracks.emplace(t.info.spec, scene.outputs.skiTrackFactor);
     config.skiTracks = &*outputs.skiTracks;
   }
   config.frameDays = scene.outputs.frameDays;

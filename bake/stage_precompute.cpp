@@ -13,13 +13,14 @@ namespace {
 // Sun exposure, from the cache when every input is unchanged.
 // Sun exposure, from the cache when every input is unchanged. On a rank's local grid (`cells`),
 // its own entry: the key of the whole grid's and the cells.
-Exposure loadOrComputeExposure(const SnowState& state, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,
+Exposure loadOrComputeExposure(const Terrain& terrain, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,
                                const ExposureSettings& es, const PrecomputeCache& cache, const std::optional<CellRect>& cells,
                                std::ostream& log) {
-  std::string key = exposureCacheKey(state.bedrockM, state.validCell, state.spec, occluders, p, es);
+  const GridSpec& spec = terrain.info.spec;
+  std::string key = exposureCacheKey(terrain.heightsM, terrain.valid, spec, occluders, p, es);
   if (cells) key += "-cells-" + std::to_string(cells->x0) + "-" + std::to_string(cells->y0) + "-" + std::to_string(cells->x1) + "-" +
                     std::to_string(cells->y1);
-  const CellRect extent = cells.value_or(CellRect::whole(state.spec));
+  const CellRect extent = cells.value_or(CellRect::whole(spec));
   // The sample days are fixed by the settings: list them, then fill the grids from the cache.
   Exposure e;
   e.days = exposureSampleDays(es);
@@ -32,8 +33,8 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
     return e;
   }
   std::unique_ptr<RayScene> scene;
-  if (!es.horizonSweep) scene = std::make_unique<RayScene>(state.bedrockM, state.spec, occluders);
-  e = computeExposure(scene.get(), state.bedrockM, state.validCell, state.spec, p, es, cells);
+  if (!es.horizonSweep) scene = std::make_unique<RayScene>(terrain.heightsM, spec, occluders);
+  e = computeExposure(scene.get(), terrain.heightsM, terrain.valid, spec, p, es, cells);
   if (cells) log << "  sun exposure: each rank its local grid (rank 0's " << cells->width() << " x " << cells->height() << " cells)\n";
   const ExposureTimings& t = e.timings;
   if (es.horizonSweep)
@@ -50,13 +51,13 @@ Exposure loadOrComputeExposure(const SnowState& state, const std::vector<Triangl
   return e;
 }
 
-void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const PrecomputeCache& cache,
-                        const std::optional<CellRect>& cells, Precomputed& pre, std::ostream& log) {
+void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const PrecomputeCache& cache, const std::optional<CellRect>& cells,
+                        Precomputed& pre, std::ostream& log) {
   const auto t0 = WallClock::now();
   const ExposureSettings es = exposureSettings(scene, terrain);
   if (scene.sunMethod == SunMethod::Horizon && !terrain.occluders.empty())
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
-  pre.exposure = loadOrComputeExposure(state, terrain.occluders, scene.params, es, cache, cells, log);
+  pre.exposure = loadOrComputeExposure(terrain.terrain, terrain.occluders, scene.params, es, cache, cells, log);
   pre.exposure->foldIndirect();  // the season and the layers read I_sun + I_ind only
   log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", "
       << pre.exposure->days.size() << " sample days) (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
@@ -135,7 +136,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   const StageDecision sun = sunExposureDecision(scene), windStage = windDecision(scene);
   if (sun.runs)
-    precomputeExposure(scene, terrain, state, cache, parts.exposure, pre, log);
+    precomputeExposure(scene, terrain, cache, parts.exposure, pre, log);
   else if (occlusionMode)
     log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
   else
@@ -144,7 +145,8 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   if (!pre.partsOnRanks) pre.temperatureForDay(0, state, scene.params);
   const auto t0 = WallClock::now();
   const WeatherTimeline calm;
-  pre.wind.emplace(state.bedrockM, state.validCell, state.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
+  const Terrain& t = terrain.terrain;  // the state's terrain fields' bytes, which a rank may hold in part
+  pre.wind.emplace(t.heightsM, t.valid, t.info.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
                    WindSolverOptions{}, &log, parts.wind ? &*parts.wind : nullptr);
   const WindTimeline& wind = *pre.wind;
   if (windStage.runs)

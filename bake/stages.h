@@ -106,7 +106,7 @@ struct SeasonOutputs {
   std::optional<SkiTracks> skiTracks;  // when the layers ask for ski_tracks
   Grid<float> routeMap;                // when the layers ask for ski_route_map
 };
-SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const SnowState& state, const ArtDirectionPlan& art,
+SeasonConfig makeSeasonConfig(const Scene& scene, const BakeTerrain& terrain, const ArtDirectionPlan& art,
                               const Precomputed& pre, const std::vector<std::string>& layers, SeasonOutputs& outputs, std::ostream& log);
 // Refuses [bedforms] settings that do not suit the grid (an odd grid's periodic window, a slab
 // the cells cannot hold), naming the key's file and line; nothing when bedforms are off.

@@ -17,6 +17,7 @@ namespace snow::dist {
 
 namespace {
 bool sessionOpen = false;
+NodeShare thisNode;
 void check(int status, const char* what) {
   if (status != MPI_SUCCESS) throw std::runtime_error(std::string("MPI: ") + what + " failed");
 }
@@ -34,6 +35,16 @@ MpiSession::MpiSession() {
     if (provided < MPI_THREAD_FUNNELED) throw std::runtime_error("MPI: this MPI does not allow threads beside the main one (TBB's)");
   }
   sessionOpen = true;
+  // The ranks sharing this machine's memory, and whether world rank 0 is among them.
+  MPI_Comm node;
+  check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node), "MPI_Comm_split_type");
+  int worldRank = 0, zeroHere = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &worldRank);
+  const int mine = worldRank == 0 ? 1 : 0;
+  check(MPI_Allreduce(&mine, &zeroHere, 1, MPI_INT, MPI_MAX, node), "MPI_Allreduce");
+  MPI_Comm_size(node, &thisNode.ranks);
+  thisNode.holdsRankZero = zeroHere != 0;
+  MPI_Comm_free(&node);
 }
 
 MpiSession::~MpiSession() {
@@ -42,7 +53,10 @@ MpiSession::~MpiSession() {
   MPI_Finalized(&done);
   if (!done) MPI_Finalize();
   sessionOpen = false;
+  thisNode = NodeShare{};
 }
+
+NodeShare Communicator::node() { return sessionOpen ? thisNode : NodeShare{}; }
 
 bool Communicator::hasMpi() { return true; }
 
@@ -113,6 +127,7 @@ MpiSession::MpiSession() = default;
 MpiSession::~MpiSession() = default;
 bool Communicator::hasMpi() { return false; }
 Communicator Communicator::world() { return Communicator(0, 1); }
+NodeShare Communicator::node() { return NodeShare{}; }
 void Communicator::exchange(const std::vector<Send>& sends, const std::vector<Receive>& receives) const {
   if (!sends.empty() || !receives.empty()) throw std::logic_error("Communicator::exchange: one rank has no peers");
 }

@@ -19,10 +19,19 @@ class MpiSession {
   MpiSession& operator=(const MpiSession&) = delete;
 };
 
+// The ranks of the launch that share this rank's machine (its memory), found once as the session
+// opens (every rank opens it together, before any can fail): how many, and whether rank 0 is one.
+struct NodeShare {
+  int ranks = 1;
+  bool holdsRankZero = true;
+};
+
 class Communicator {
  public:
   // Every process of the launch; one process alone without MPI or before an MpiSession.
   static Communicator world();
+  // This rank's machine's share of the launch; one process alone: itself.
+  static NodeShare node();
   // Whether this build has MPI (SNOWBAKE_MPI).
   static bool hasMpi();
   int rank() const { return rank_; }

@@ -6,31 +6,43 @@
 
 namespace snow::dist {
 
-namespace {
-// One field of `whole` cut to `cells` in `local`.
-template <class T>
-void cutField(const Grid<T>& whole, const GridSpec& spec, const CellRect& cells, Grid<T>& local) {
-  local.resize(cells.width(), cells.height());
-  copyCells(cells, CellRect{0, 0, spec.width, spec.height}, whole.data(), cells, local.data(), sizeof(T));
-}
-}  // namespace
-
 void cutFields(const SnowState& whole, const CellRect& cells, const std::function<bool(FieldRole)>& pick, SnowState& local) {
-#define SNOW_CUT_FIELD(member, view, Element, role, access, fill)                                                      \
+#define SNOW_CUT_FIELD(member, view, Element, role, access, fill)                                      \
   if (pick(FieldRole::role) && whole.member.size() == whole.spec.cellCount() && whole.member.size() > 0) \
-    cutField(whole.member, whole.spec, cells, local.member);
+    local.member = gridWindow(whole.member, cells);
   SNOW_STATE_FIELDS(SNOW_CUT_FIELD)
 #undef SNOW_CUT_FIELD
 }
 
+namespace {
+// The local grid's spec: `cells` of the whole one, its origin at their north-west corner.
+GridSpec localSpec(const GridSpec& whole, const CellRect& cells) {
+  GridSpec local = whole;
+  local.width = cells.width();
+  local.height = cells.height();
+  local.originX = whole.originX + cells.x0 * whole.cellSizeXM;
+  local.originY = whole.originY - cells.y0 * whole.cellSizeYM;
+  return local;
+}
+}  // namespace
+
 SnowState cutLocalState(const SnowState& whole, const CellRect& cells) {
   SnowState local;
-  local.spec = whole.spec;
-  local.spec.width = cells.width();
-  local.spec.height = cells.height();
-  local.spec.originX = whole.spec.originX + cells.x0 * whole.spec.cellSizeXM;
-  local.spec.originY = whole.spec.originY - cells.y0 * whole.spec.cellSizeYM;
+  local.spec = localSpec(whole.spec, cells);
   cutFields(whole, cells, [](FieldRole) { return true; }, local);
+  return local;
+}
+
+SnowState cutLocalState(SnowState&& whole, const CellRect& cells) {
+  SnowState local;
+  local.spec = localSpec(whole.spec, cells);
+#define SNOW_TAKE_FIELD(member, view, Element, role, access, fill)                     \
+  if (whole.member.size() == whole.spec.cellCount() && whole.member.size() > 0) { \
+    local.member = gridWindow(whole.member, cells);                                    \
+    whole.member = Grid<Element>();                                                    \
+  }
+  SNOW_STATE_FIELDS(SNOW_TAKE_FIELD)
+#undef SNOW_TAKE_FIELD
   return local;
 }
 

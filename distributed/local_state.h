@@ -12,6 +12,8 @@ namespace snow::dist {
 // The fields `whole` holds, cut to `cells`; the spec's origin moved to the local grid's
 // north-west corner (north-up: y runs south).
 SnowState cutLocalState(const SnowState& whole, const CellRect& cells);
+// The same, each of `whole`'s fields freed once it is cut: the two are never held at once.
+SnowState cutLocalState(SnowState&& whole, const CellRect& cells);
 // The fields of `whole` whose role `pick` accepts, cut into `local` (the local grid at `cells`,
 // sized anew): a day's static fields, filled on the whole grid, for a rank's season beside the
 // whole grid's replica.

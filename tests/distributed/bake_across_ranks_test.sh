@@ -190,6 +190,13 @@ refused cuda 'run.backend = "cuda": a bake across ranks' preset:default --set 'r
 refused missing-terrain /nonexistent/dem.asc preset:default --terrain /nonexistent/dem.asc "${no_avalanches[@]}"
 # Found once the ranks have joined (the terrain loaded): they agree on the status.
 refused tiny-grid "cannot be baked across ranks" preset:default --set terrain.size=12 "${no_avalanches[@]}"
+# This machine's ranks need more than the budget together, though one process alone fits it: refused
+# up front on every rank, the message counting the ranks.
+small_budget=(preset:default --set terrain.size=512 --set season.days=2 --set 'outputs.frames_days=[]' --set run.max_memory_gb=0.25
+              "${no_avalanches[@]}")
+refused ranks-memory "the 2 on this machine need about" "${small_budget[@]}"
+(cd "$work/ranks-memory" && "$bin" bake "${small_budget[@]}" --out alone --no-cache > alone.log 2>&1) ||
+  fail "ranks-memory: one process alone is refused too (the budget does not separate them)"
 
 # One rank alone fails (rank 0 makes the output folder and opens the log file): the others learn
 # it at the season's start, and every rank ends with exit 2, rank 0's one message, no hang.
