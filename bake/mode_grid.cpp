@@ -74,10 +74,9 @@ void refuseAboveTheBudget(const Scene& scene, const GridSpec& spec, const Memory
          << fixed(ranks->hereBytes() / kMiB, 0) << " MiB together\n";
 }
 
-GridMemoryPlan checkGridMemory(const Scene& scene, const BakeTerrain& terrain, FrameTiming timing, std::ostream& log) {
+GridMemoryPlan checkGridMemory(const Scene& scene, const BakeTerrain& terrain, FrameTiming timing, double budget, std::ostream& log) {
   const GridSpec& spec = terrain.info().spec;
   refuseBeyondTheModel(scene, spec);
-  const double budget = memoryBudgetBytes(scene);
   const size_t triangles = triangleCount(terrain.occluders);
   const SnowReach reach = terrainSnowReach(scene, terrain);
   const GridMemoryPlan plan = planGridMemory(scene, spec, triangles, reach, budget, timing);
@@ -92,7 +91,7 @@ GridMemoryPlan checkGridMemory(const Scene& scene, const BakeTerrain& terrain, F
 
 }  // namespace
 
-void checkBuiltinMemory(const Scene& scene, FrameTiming timing) {
+void checkBuiltinMemory(const Scene& scene, FrameTiming timing, double budget) {
   const TerrainSource& t = scene.terrain;
   if (!t.builtin || t.cropM || t.resampleCellSizeM || t.resampleSize) return;
   const DefaultTerrainOptions& b = t.builtinOptions;
@@ -100,7 +99,6 @@ void checkBuiltinMemory(const Scene& scene, FrameTiming timing) {
   spec.width = spec.height = b.size;
   spec.cellSizeXM = spec.cellSizeYM = b.cellSizeM;
   refuseBeyondTheModel(scene, spec);
-  const double budget = memoryBudgetBytes(scene);
   const SnowReach reach = builtinSnowReach(b, scene.params.rainSnowLimitM);
   refuseAboveTheBudget(scene, spec, planGridMemory(scene, spec, 0, reach, budget, timing).prediction, budget,
                        [&](const GridSpec& local) { return planGridMemory(scene, local, 0, reach, budget, timing).prediction; }, nullptr);
@@ -143,11 +141,14 @@ void createOutputFolder(const std::string& dir) {
 }
 
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
-  checkBuiltinMemory(scene, options.frames);
+  // The budget as the bake starts: the terrain read after it is among the model's owners (and
+  // across ranks, the other ranks' terrains on this machine too).
+  const double budget = memoryBudgetBytes(scene);
+  checkBuiltinMemory(scene, options.frames, budget);
   std::optional<BakeStage> stage(std::in_place, "terrain");
   progress().stage("terrain", 0.0);
   BakeTerrain terrain = loadBakeTerrain(scene, log);  // across ranks, the ranks but 0 free its grids for the season
-  const GridMemoryPlan memoryPlan = checkGridMemory(scene, terrain, options.frames, log);
+  const GridMemoryPlan memoryPlan = checkGridMemory(scene, terrain, options.frames, budget, log);
   checkRanksSuitTheGrid(terrain.info().spec);
   const MemoryPrediction& memory = memoryPlan.prediction;
   progress().stage("terrain", 1.0);

@@ -22,7 +22,7 @@ std::string manifestPath(const std::string& outDir);  // DIR/manifest.json, writ
 // the terrain (the memory model's VDB term).
 std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti);
 GeoFrame geoFrameOf(const TerrainInfo& ti);
-void checkBuiltinMemory(const Scene& scene, FrameTiming timing);
+void checkBuiltinMemory(const Scene& scene, FrameTiming timing, double budgetBytes);
 size_t triangleCount(const std::vector<TriangleMesh>& meshes);
 SnowReach terrainSnowReach(const Scene& scene, const BakeTerrain& terrain);
 // mode = "season" and mode = "occlusion" (mode_grid.cpp).

@@ -60,11 +60,11 @@ std::vector<PlannedStage> gridStages(const Scene& scene, const BakeTerrain& terr
 }
 
 void planGrid(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
-  checkBuiltinMemory(scene, options.frames);
+  plan.budgetBytes = memoryBudgetBytes(scene);  // as the bake would start
+  checkBuiltinMemory(scene, options.frames, plan.budgetBytes);
   const BakeTerrain terrain = loadBakeTerrain(scene, *std::make_unique<std::ostringstream>());
   const GridSpec& spec = terrain.info().spec;
   refuseBeyondTheModel(scene, spec);
-  plan.budgetBytes = memoryBudgetBytes(scene);
   plan.memory = planGridMemory(scene, spec, triangleCount(terrain.occluders), terrainSnowReach(scene, terrain), plan.budgetBytes, options.frames)
                     .prediction;
   refuseAboveBudget(scene, plan.memory, plan.budgetBytes);
