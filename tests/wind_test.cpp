@@ -256,62 +256,63 @@ TEST(WindTimeline, OneFieldPerDistinctStateBlendedBetweenKeyframes) {
                 0.5f * (t.field(0).windEffectZM.values()[i] + t.field(1).windEffectZM.values()[i]), 1e-3f);
 }
 
-// A rank's window of the timeline (a bake across ranks): on every day, calm ones included, the
-// window's fields are the whole timeline's fields' cells, byte for byte.
-TEST(WindTimeline, AWindowGivesItsCellsOfTheWholeFieldsOnEveryDay) {
-  DefaultTerrainOptions o;
-  o.size = 40;
+namespace {
+
+// The timelines of a rank's part: a 40² range with a NODATA cell, two winds with a calm keyframe
+// between them.
+struct CalmBetweenWinds {
   GridSpec spec;
-  const Grid<float> a = generateDefaultTerrain(o, &spec);
-  Grid<uint8_t> valid(40, 40, 1);
-  valid(20, 20) = 0;
-  WeatherTimeline w = twoWinds();
-  w.keyframes[1].state.windSpeedMps = 0;  // a calm keyframe between the windy ones
-  const WindTimeline whole(a, valid, spec, w, ModelParameters{}, PrecomputeCache("", false));
-  ASSERT_TRUE(whole.varies());
-  const WindTimeline window = whole.window(7, 11, 25, 19);
-  for (double day : {0.0, 4.0, 10.0, 14.5, 20.0, 30.0}) {
-    const WindFieldsAtDay all = whole.at(day), part = window.at(day);
-    auto same = [&](const Grid<float>& wholeField, const Grid<float>& windowField) {
-      return gridWindow(wholeField, 7, 11, 25, 19) == windowField;
-    };
-    EXPECT_TRUE(same(all.windXMps, part.windXMps)) << day;
-    EXPECT_TRUE(same(all.windYMps, part.windYMps)) << day;
-    EXPECT_TRUE(same(all.windEffectZM, part.windEffectZM)) << day;
-    EXPECT_TRUE(same(all.windLoadingMps2, part.windLoadingMps2)) << day;
+  Grid<float> altitude;
+  Grid<uint8_t> valid{40, 40, 1};
+  WeatherTimeline weather = twoWinds();
+  CalmBetweenWinds() {
+    DefaultTerrainOptions o;
+    o.size = 40;
+    altitude = generateDefaultTerrain(o, &spec);
+    valid(20, 20) = 0;
+    weather.keyframes[1].state.windSpeedMps = 0;
   }
+};
+
+// On every day, calm ones included, `part`'s fields are `whole`'s cells `c`, byte for byte.
+void expectTheWholesCellsOnEveryDay(const WindTimeline& whole, const WindTimeline& part, const CellRect& c) {
+  for (double day : {0.0, 4.0, 10.0, 14.5, 20.0, 30.0}) {
+    const WindFieldsAtDay all = whole.at(day), cut = part.at(day);
+    EXPECT_EQ(gridWindow(all.windXMps, c), cut.windXMps) << day;
+    EXPECT_EQ(gridWindow(all.windYMps, c), cut.windYMps) << day;
+    EXPECT_EQ(gridWindow(all.windEffectZM, c), cut.windEffectZM) << day;
+    EXPECT_EQ(gridWindow(all.windLoadingMps2, c), cut.windLoadingMps2) << day;
+  }
+}
+
+}  // namespace
+
+// A rank's window of the timeline (a bake across ranks): on every day the whole timeline's cells.
+TEST(WindTimeline, AWindowGivesItsCellsOfTheWholeFieldsOnEveryDay) {
+  const CalmBetweenWinds k;
+  const WindTimeline whole(k.altitude, k.valid, k.spec, k.weather, ModelParameters{}, PrecomputeCache("", false));
+  ASSERT_TRUE(whole.varies());
+  expectTheWholesCellsOnEveryDay(whole, whole.window(7, 11, 25, 19), CellRect{7, 11, 32, 30});
 }
 
 // A timeline made for part of the grid (a rank's local grid) whose solve declines a state (the
 // free stream turns) solves the whole grid and keeps its cells: on every day the bytes of the
 // whole timeline's window; the states the part solves are asked for in keyframe order.
 TEST(WindTimeline, APartWhoseSolveDeclinesKeepsItsCellsOfTheWholeGridsSolve) {
-  DefaultTerrainOptions o;
-  o.size = 40;
-  GridSpec spec;
-  const Grid<float> a = generateDefaultTerrain(o, &spec);
-  Grid<uint8_t> valid(40, 40, 1);
-  valid(20, 20) = 0;
-  WeatherTimeline w = twoWinds();
-  w.keyframes[1].state.windSpeedMps = 0;
-  const WindTimeline whole(a, valid, spec, w, ModelParameters{}, PrecomputeCache("", false));
+  const CalmBetweenWinds k;
+  const WindTimeline whole(k.altitude, k.valid, k.spec, k.weather, ModelParameters{}, PrecomputeCache("", false));
   std::vector<double> asked;
   const WindPart part{CellRect{7, 11, 32, 30}, [&](const Grid<float>&, const Grid<uint8_t>&, const GridSpec&, const WindState& s,
                                                    const ModelParameters&, const WindSolverOptions&, WindField&, Grid<float>&) {
                         asked.push_back(s.directionDeg);
                         return false;
                       }};
-  const WindTimeline mine(a, valid, spec, w, ModelParameters{}, PrecomputeCache("", false), WindSolverOptions{}, nullptr, &part);
+  const WindTimeline mine(k.altitude, k.valid, k.spec, k.weather, ModelParameters{}, PrecomputeCache("", false), WindSolverOptions{},
+                          nullptr, &part);
   ASSERT_EQ(asked.size(), whole.stateCount());
   for (size_t i = 0; i < asked.size(); ++i) EXPECT_EQ(asked[i], whole.states()[i].directionDeg);
   ASSERT_TRUE(mine.cells() && *mine.cells() == part.cells);
-  for (double day : {0.0, 4.0, 10.0, 14.5, 20.0, 30.0}) {
-    const WindFieldsAtDay all = whole.at(day), cut = mine.at(day);
-    EXPECT_EQ(gridWindow(all.windXMps, part.cells), cut.windXMps) << day;
-    EXPECT_EQ(gridWindow(all.windYMps, part.cells), cut.windYMps) << day;
-    EXPECT_EQ(gridWindow(all.windEffectZM, part.cells), cut.windEffectZM) << day;
-    EXPECT_EQ(gridWindow(all.windLoadingMps2, part.cells), cut.windLoadingMps2) << day;
-  }
+  expectTheWholesCellsOnEveryDay(whole, mine, part.cells);
 }
 
 TEST(WindTimeline, CacheReusedWhenInputsAreUnchanged) {
