@@ -78,11 +78,17 @@ std::string acrossRanksRefusal(const Scene& s) {
 bool bakingAcrossRanks() { return acrossRanks; }
 bool writesOutputs() { return !acrossRanks || dist::Communicator::world().rank() == 0; }
 
+namespace {
+// The launch's ranks' split of `spec`'s grid (std::invalid_argument where it cannot be split).
+dist::Decomposition decompositionOf(const GridSpec& spec) {
+  return dist::Decomposition::choose(dist::Communicator::world().size(), spec.width, spec.height, dist::kContinuousHalo);
+}
+}  // namespace
+
 void checkRanksSuitTheGrid(const GridSpec& spec) {
   if (!acrossRanks) return;
-  const int ranks = dist::Communicator::world().size();
   try {
-    dist::Decomposition::choose(ranks, spec.width, spec.height, dist::kContinuousHalo);
+    decompositionOf(spec);
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("the terrain's grid cannot be baked across ranks: ") + e.what() + " (run fewer ranks)");
   }
@@ -172,7 +178,7 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   const dist::Communicator comm = dist::Communicator::world();
   dist::Decomposition d;
   try {
-    d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
+    d = decompositionOf(whole);
   } catch (const std::invalid_argument&) {
     return std::nullopt;  // checkRanksSuitTheGrid says why
   }
@@ -200,7 +206,7 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
   PrecomputeParts parts;
   if (!acrossRanks || seasonOnReplica(scene)) return parts;
   const dist::Communicator comm = dist::Communicator::world();
-  const dist::Decomposition d = dist::Decomposition::choose(comm.size(), spec.width, spec.height, dist::kContinuousHalo);
+  const dist::Decomposition d = decompositionOf(spec);
   const dist::CellRect cells = d.local(comm.rank());
   if (!(comm.rank() == 0 && (outputNeeds & kNeedsSun))) parts.exposure = cells;
   if (!(outputNeeds & kNeedsWind))
@@ -215,9 +221,7 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
 
 void keepTheRanksCellsOfTheState(SnowState& state, const PrecomputeParts& parts) {
   if (!acrossRanks || !parts.any() || dist::Communicator::world().rank() == 0) return;
-  const dist::Communicator comm = dist::Communicator::world();
-  const dist::Decomposition d = dist::Decomposition::choose(comm.size(), state.spec.width, state.spec.height, dist::kContinuousHalo);
-  state = dist::cutLocalState(std::move(state), d.local(comm.rank()));
+  state = dist::cutLocalState(std::move(state), decompositionOf(state.spec).local(dist::Communicator::world().rank()));
 }
 
 SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std::unique_ptr<SnowBackend> local, SnowState& state,
@@ -227,7 +231,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   // The ranks but 0 hold their local grid of the state since the inputs stage where the precompute
   // is made in parts (keepTheRanksCellsOfTheState).
   const bool alreadyLocal = pre.partsOnRanks && comm.rank() != 0;
-  const dist::Decomposition d = dist::Decomposition::choose(comm.size(), whole.width, whole.height, dist::kContinuousHalo);
+  const dist::Decomposition d = decompositionOf(whole);
   const dist::CellRect cells = d.local(comm.rank());
   // Avalanches, skiers and bedforms run on a replica of the whole grid on every rank, their
   // runners on the whole state, which keeps its terrain and each day's static fields for them.

@@ -10,7 +10,6 @@
 namespace snow {
 namespace {
 
-// Sun exposure, from the cache when every input is unchanged.
 // Sun exposure, from the cache when every input is unchanged. On a rank's local grid (`cells`),
 // its own entry: the key of the whole grid's and the cells.
 Exposure loadOrComputeExposure(const Terrain& terrain, const std::vector<TriangleMesh>& occluders, const ModelParameters& p,

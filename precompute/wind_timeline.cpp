@@ -55,7 +55,6 @@ WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& val
   for (const WindState& s : states_) {
     WindField f;
     Grid<float> loading;
-    const std::string key = windCacheKey(altitude, valid, spec, s, params, options);
     if (part) {
       if (!part->solve(altitude, valid, spec, s, params, options, f, loading)) {  // the whole grid's, then its cells
         const WindField whole = computeWindField(altitude, valid, spec, s, params, options);
@@ -67,7 +66,8 @@ WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& val
         loading = gridWindow(windLoading(whole, valid, spec), c);
       }
       ++computed_;
-    } else if (cache.load("wind", key, spec.width, spec.height, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps})) {
+    } else if (const std::string key = windCacheKey(altitude, valid, spec, s, params, options);  // a part reads no cache
+               cache.load("wind", key, spec.width, spec.height, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps})) {
       ++cached_;
       f.stats.ordering = "cache";
       f.stats.converged = true;
