@@ -1,6 +1,8 @@
 #include "across_ranks.h"
 
 #include <algorithm>
+#include <functional>
+#include <optional>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -23,6 +25,7 @@
 #include "progress.h"
 #include "scene/layers.h"
 #include "stages.h"
+#include "tiles_on_ranks.h"
 
 namespace snow {
 
@@ -79,16 +82,19 @@ bool bakingAcrossRanks() { return acrossRanks; }
 bool writesOutputs() { return !acrossRanks || dist::Communicator::world().rank() == 0; }
 
 namespace {
-// The launch's ranks' split of `spec`'s grid (std::invalid_argument where it cannot be split).
-dist::Decomposition decompositionOf(const GridSpec& spec) {
-  return dist::Decomposition::choose(dist::Communicator::world().size(), spec.width, spec.height, dist::kContinuousHalo);
+// The launch's ranks' split of `spec`'s grid (std::invalid_argument where it cannot be split):
+// cut on the tiles' starts where the ranks write their own tiles (tiles_on_ranks.h).
+dist::Decomposition decompositionOf(const Scene& scene, const GridSpec& spec) {
+  const int ranks = dist::Communicator::world().size();
+  if (std::optional<dist::Decomposition> onTiles = decompositionOnTiles(scene, spec, ranks, dist::kContinuousHalo)) return *onTiles;
+  return dist::Decomposition::choose(ranks, spec.width, spec.height, dist::kContinuousHalo);
 }
 }  // namespace
 
-void checkRanksSuitTheGrid(const GridSpec& spec) {
+void checkRanksSuitTheGrid(const Scene& scene, const GridSpec& spec) {
   if (!acrossRanks) return;
   try {
-    decompositionOf(spec);
+    decompositionOf(scene, spec);
   } catch (const std::invalid_argument& e) {
     throw InputError(std::string("the terrain's grid cannot be baked across ranks: ") + e.what() + " (run fewer ranks)");
   }
@@ -178,7 +184,7 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   const dist::Communicator comm = dist::Communicator::world();
   dist::Decomposition d;
   try {
-    d = decompositionOf(whole);
+    d = decompositionOf(scene, whole);
   } catch (const std::invalid_argument&) {
     return std::nullopt;  // checkRanksSuitTheGrid says why
   }
@@ -196,8 +202,9 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   if (seasonOnReplica(scene)) {  // every rank: the whole grid's bake beside its local grid's backend
     m.rankZeroBytes = m.otherBytes = onWhole.peakBytes() + localAbove;
   } else {  // rank 0 writes the whole grid's outputs; the others hold the whole terrain and, until they cut it, the initial state
-    m.rankZeroBytes = onWhole.peakBytes();
     m.otherBytes = libraries + std::max(terrain + initialStateBytesPerCell() * cells, terrain + localAbove);
+    // Where each rank writes its tiles, rank 0 is one of the others (its local grid's outputs in localAbove).
+    m.rankZeroBytes = ranksWriteTheirTiles(scene, whole) ? m.otherBytes : onWhole.peakBytes();
   }
   return m;
 }
@@ -206,7 +213,7 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
   PrecomputeParts parts;
   if (!acrossRanks || seasonOnReplica(scene)) return parts;
   const dist::Communicator comm = dist::Communicator::world();
-  const dist::Decomposition d = decompositionOf(spec);
+  const dist::Decomposition d = decompositionOf(scene, spec);
   const dist::CellRect cells = d.local(comm.rank());
   if (!(comm.rank() == 0 && (outputNeeds & kNeedsSun))) parts.exposure = cells;
   if (!(outputNeeds & kNeedsWind))
@@ -219,19 +226,37 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
   return parts;
 }
 
-void keepTheRanksCellsOfTheState(SnowState& state, const PrecomputeParts& parts) {
-  if (!acrossRanks || !parts.any() || dist::Communicator::world().rank() == 0) return;
-  state = dist::cutLocalState(std::move(state), decompositionOf(state.spec).local(dist::Communicator::world().rank()));
+void keepTheRanksCellsOfTheState(const Scene& scene, SnowState& state, const PrecomputeParts& parts) {
+  if (!acrossRanks || !parts.any()) return;
+  // Rank 0 gathers the whole grid's state for its outputs, unless every rank writes its own tiles.
+  if (dist::Communicator::world().rank() == 0 && !ranksWriteTheirTiles(scene, state.spec)) return;
+  state = dist::cutLocalState(std::move(state), decompositionOf(scene, state.spec).local(dist::Communicator::world().rank()));
+}
+
+bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec) {
+  return acrossRanks && decompositionOnTiles(scene, spec, dist::Communicator::world().size(), dist::kContinuousHalo).has_value();
+}
+
+void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSpec& spec) {
+  if (!ranksWriteTheirTiles(scene, spec)) return;
+  shareTheTiles(sources, dist::Communicator::world(), decompositionOf(scene, spec));
+}
+
+void mergeTheRanksFiles(OutputSink& files) {
+  if (!inExchanges) throw std::logic_error("mergeTheRanksFiles: the ranks left their exchanges after the season");
+  mergeTheRanksFiles(dist::Communicator::world(), files);
+  inExchanges = false;  // the ranks' last exchange before the end's agreement
 }
 
 SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std::unique_ptr<SnowBackend> local, SnowState& state,
                                   Precomputed& pre, uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log) {
   const dist::Communicator comm = dist::Communicator::world();
   const GridSpec whole = terrain.info().spec;
-  // The ranks but 0 hold their local grid of the state since the inputs stage where the precompute
-  // is made in parts (keepTheRanksCellsOfTheState).
-  const bool alreadyLocal = pre.partsOnRanks && comm.rank() != 0;
-  const dist::Decomposition d = decompositionOf(whole);
+  // The ranks but 0 (and 0 where every rank writes its tiles) hold their local grid of the state
+  // since the inputs stage where the precompute is made in parts (keepTheRanksCellsOfTheState).
+  const bool tilesOnRanks = ranksWriteTheirTiles(scene, whole);
+  const bool alreadyLocal = pre.partsOnRanks && (comm.rank() != 0 || tilesOnRanks);
+  const dist::Decomposition d = decompositionOf(scene, whole);
   const dist::CellRect cells = d.local(comm.rank());
   // Avalanches, skiers and bedforms run on a replica of the whole grid on every rank, their
   // runners on the whole state, which keeps its terrain and each day's static fields for them.
@@ -244,7 +269,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   } else {
     config.skiTracks = nullptr;  // no skiers: the texture stays as the single process leaves it
     fillFromOwnCells(pre, mineOfPre, cells, scene.params, comm.rank() == 0, outputNeeds, config);
-    if (comm.rank() != 0) {  // read by nothing on this rank now: the precompute's parts hold their cells of it
+    if (comm.rank() != 0 || tilesOnRanks) {  // read by nothing on this rank now: the precompute's parts hold their cells of it
       terrain.terrain.heightsM = Grid<float>();
       terrain.terrain.valid = Grid<uint8_t>();
     }
@@ -275,8 +300,15 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   agreeBeforeExchanges(comm, true);
   inExchanges = true;
   startSeasonPeak();
-  log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid; rank 0's subdomain "
-      << d.owned(0).width() << " x " << d.owned(0).height() << " cells, halo " << d.halo << "\n";
+  log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid"
+      << (tilesOnRanks ? " cut on the tiles' starts" : "") << "; rank 0's subdomain " << d.owned(0).width() << " x "
+      << d.owned(0).height() << " cells, halo " << d.halo << "\n";
+  if (tilesOnRanks)
+    log << "outputs: each rank writes the tiles that start in its subdomain\n";
+  else if (const std::string why = whyRankZeroWritesEveryFile(scene); !why.empty())
+    log << "outputs: rank 0 gathers the whole grid and writes every file: " << why << "\n";
+  else
+    log << "outputs: rank 0 gathers the whole grid and writes every file: the grid does not split into bands of whole tiles, one a rank\n";
   SeasonReport report;
   {  // the backend and its scratch live for the season alone
     dist::DistributedBackend backend(std::move(local), comm, d);
@@ -296,6 +328,12 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
         },
         [&](double day, SnowState& s) {
           throwIfStopRequested();
+          if (tilesOnRanks) {  // each rank its tiles, from its own copy (FrameWriter writes in place: it calls MPI)
+            dist::refreshHalos(comm, d, s);
+            frames.write(day, s);
+            if (comm.rank() == 0) progress().event("season", "frame", {{"day", jsonNumber(day)}});
+            return;
+          }
           SnowState frame = gathered(s);
           if (comm.rank() != 0) return;
           frames.write(day, frame);
@@ -303,9 +341,15 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
         });
     frames.join();
     if (noSnow) report.noSnowRemovedM3 = noSnowRemovedM3;
-    SnowState final = gathered(mine);
-    inExchanges = false;
-    if (comm.rank() == 0) state = std::move(final);
+    if (tilesOnRanks) {  // each rank writes the tiles of its local grid
+      dist::refreshHalos(comm, d, mine);
+      state = std::move(mine);
+    } else if (SnowState final = gathered(mine); comm.rank() == 0) {
+      state = std::move(final);
+    }
+    // Ranks that write their tiles exchange each layer's range and then their lists of files
+    // (mergeTheRanksFiles): a failure until then ends every rank at once.
+    inExchanges = tilesOnRanks;
     progress().stage("season", 1.0);
     if (replicated)
       log << "season: avalanches, skiers and bedforms on every rank's replica of the whole grid, brought up to date "

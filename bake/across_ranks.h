@@ -3,14 +3,16 @@
 // (the whole grid's where the season runs on the replica or rank 0's layers read it); the season
 // runs decomposed (each rank its subdomain, halos exchanged, every sum in the single process's
 // order; avalanches, skiers and bedforms on every rank's replica of the whole grid); rank 0
-// gathers the state at the frames and the season's end and writes every output and the manifest:
-// the single process's bytes.
+// gathers the state at the frames and the season's end and writes every output and the manifest,
+// or, under [outputs.tiles] where they can, each rank writes the tiles that start in its
+// subdomain and rank 0 the manifest (tiles_on_ranks.h): the single process's bytes.
 //
 // Failures: the ranks work alone but for the wind's solve and the season, and they agree on the
 // exit status before each wind state's solve, at the season's start and at the end (the largest of
 // theirs), so a bad input ends every rank with exit 2 and one message (rank 0's; another rank's
-// own when rank 0 did not fail); a failure while the others wait in an exchange ends every rank at
-// once with its status (MPI_Abort).
+// own when rank 0 did not fail); a failure while the others wait in an exchange (the season, and
+// the tiles' outputs until their files are merged) ends every rank at once with its status
+// (MPI_Abort).
 #pragma once
 #include <cstdint>
 #include <exception>
@@ -27,6 +29,8 @@
 namespace snow {
 
 struct BakeTerrain;
+struct OutputSink;
+struct OutputSources;
 struct Precomputed;
 struct PrecomputeParts;
 struct SeasonConfig;
@@ -45,7 +49,7 @@ bool bakingAcrossRanks();
 bool writesOutputs();
 
 // Refuses (InputError) a grid that `ranks` subdomains cannot split: each needs the season's halo.
-void checkRanksSuitTheGrid(const GridSpec& spec);
+void checkRanksSuitTheGrid(const Scene& scene, const GridSpec& spec);
 
 // The parts of the precompute this rank makes on its local grid alone (none when not across
 // ranks, or where the season runs on the replica, which reads the whole grid's): the exposure,
@@ -66,7 +70,19 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
 // The ranks but 0 keep their local grid's cells of the initial state (cut once art direction has
 // made it) where the precompute is made in parts: from there on nothing but the season reads it,
 // and rank 0 gathers the season's into its whole state.
-void keepTheRanksCellsOfTheState(SnowState& state, const PrecomputeParts& parts);
+void keepTheRanksCellsOfTheState(const Scene& scene, SnowState& state, const PrecomputeParts& parts);
+
+// Whether each rank writes the tiles that start in its subdomain (tiles_on_ranks.h): across
+// ranks, under [outputs.tiles] with outputs each rank can write from its local grid, on a grid
+// that splits into bands of whole tiles. Then every rank keeps its local grid alone and none
+// gathers the whole grid's state.
+bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec);
+// Where they do, points `sources` at this rank's tiles (else leaves them as they are).
+void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSpec& spec);
+// Every rank's files merged into rank 0's `files`, in the single process's order, where each rank
+// writes its tiles: from the season's end until this returns, the ranks exchange (each layer's
+// range, then the lists of files), so a failure on one rank ends every rank at once.
+void mergeTheRanksFiles(OutputSink& files);
 
 // The season across the ranks on the terrain's whole grid (rank 0's `state` holds it, and every
 // rank's where the precompute was not made in parts; the others' their local grid): on rank 0,

@@ -149,7 +149,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   progress().stage("terrain", 0.0);
   BakeTerrain terrain = loadBakeTerrain(scene, log);  // across ranks, the ranks but 0 free its grids for the season
   const GridMemoryPlan memoryPlan = checkGridMemory(scene, terrain, options.frames, budget, log);
-  checkRanksSuitTheGrid(terrain.info().spec);
+  checkRanksSuitTheGrid(scene, terrain.info().spec);
   const MemoryPrediction& memory = memoryPlan.prediction;
   progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
@@ -166,7 +166,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   const uint8_t needs = layersNeeds(layers);
   const PrecomputeParts parts = rankPrecomputeParts(scene, state.spec, needs);
-  keepTheRanksCellsOfTheState(state, parts);
+  keepTheRanksCellsOfTheState(scene, state, parts);
   Precomputed pre = runPrecompute(scene, terrain, state, cache, parts, log);
   // A constant wind's fields are the state's copy from here on, unless a layer reads the wind
   // (across ranks with parts, each rank's local state's: runSeasonAcrossRanks).
@@ -176,7 +176,11 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : bakingAcrossRanks() ? createCpuBackend() : chooseBackend(scene.backend, log);
   const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
   if (bakingAcrossRanks()) log << "backend: " << backendName << " on each rank\n";
-  if (writesOutputs()) createOutputFolder(options.outDir);
+  // Across ranks, rank 0 writes every file, or each rank the tiles that start in its subdomain.
+  const bool tilesOnRanks = ranksWriteTheirTiles(scene, terrain.info().spec);
+  if (writesOutputs() || tilesOnRanks) createOutputFolder(options.outDir);
+  // Where every rank writes its tiles, rank 0 too frees the terrain's heights for the season.
+  const std::string terrainHash = tilesOnRanks && writesOutputs() ? terrainHashOf(scene, terrain.terrain) : std::string();
 
   OutputSink files;  // every file written, in order: the manifest's list
   const SinkScope filesScope(files);
@@ -186,6 +190,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
                         &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())};
   // "file" events as each file is written: a frame's during the season, the rest in the outputs stage.
   sources.fileWritten = [](const std::string& path, double day) { reportFilesWritten({path}, day >= 0.0 ? "season" : "outputs"); };
+  shareTheRanksTiles(sources, scene, terrain.info().spec);
   OutputWriter writer(sources, log);
   SeasonReport report;
   if (occlusionMode) {
@@ -197,7 +202,10 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   } else {
     stage.emplace("season");
     SeasonConfig config = makeSeasonConfig(scene, terrain, art, pre, layers, seasonOutputs, log);
-    FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, memoryPlan.timing);
+    // Ranks writing their tiles exchange each layer's range, which MPI allows the main thread alone:
+    // a frame beside the season is written in place instead (the same files).
+    const FrameTiming timing = tilesOnRanks && memoryPlan.timing == FrameTiming::Beside ? FrameTiming::Paused : memoryPlan.timing;
+    FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, timing);
     config.lendFrames = frames.lendsFrames();
     config.spillFolder = options.outDir;
     report = bakingAcrossRanks() ? runSeasonAcrossRanks(scene, terrain, std::move(backend), state, pre, needs, config, frames, log)
@@ -212,7 +220,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   BakeResult result;
   result.season = report;
   result.backendName = backendName;
-  if (!writesOutputs()) return result;  // rank 0 writes a bake across ranks
+  if (!writesOutputs() && !tilesOnRanks) return result;  // rank 0 writes a bake across ranks
 
   // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
   stage.emplace("outputs");
@@ -221,6 +229,10 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
   writer.writeSeasonEncodings();
+  if (tilesOnRanks) {  // each rank wrote its tiles; rank 0 lists every rank's
+    mergeTheRanksFiles(files);
+    if (!writesOutputs()) return result;
+  }
   writer.writeContactSheet();
   writer.writeAvalancheMaps(report.avalanches, state.spec);
   writeResolvedScene(scene, options.outDir);
@@ -229,8 +241,8 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   progress().stage("manifest", 0.0);
   Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
                                             occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
-                                            options.commandLine});
-  manifest.memoryJson = measuredMemoryBreakdown(memory, static_cast<double>(state.spec.cellCount()), "cell", options.verbose, log);
+                                            options.commandLine, terrainHash});
+  manifest.memoryJson = measuredMemoryBreakdown(memory, static_cast<double>(terrain.info().spec.cellCount()), "cell", options.verbose, log);
   result.files = files.paths;
   writeTextAtomically(manifestPath(options.outDir), manifestToJson(manifest));
   result.files.push_back(manifestPath(options.outDir));

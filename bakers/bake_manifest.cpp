@@ -36,6 +36,11 @@ void addSeasonRecords(Manifest& m, const SeasonReport& report) {
 
 }  // namespace
 
+std::string terrainHashOf(const Scene& scene, const Terrain& terrain) {
+  return scene.terrain.builtin ? Fnv1a64().add(terrain.heightsM.data(), terrain.heightsM.size() * sizeof(float)).hex()
+                               : hashFileFnv1a64(scene.terrain.file);
+}
+
 Manifest assembleBakeManifest(const BakeManifestInputs& in) {
   const Scene& scene = *in.scene;
   const Terrain& terrain = *in.terrain;
@@ -45,8 +50,7 @@ Manifest assembleBakeManifest(const BakeManifestInputs& in) {
   m.sceneName = scene.name;
   m.sceneHash = Fnv1a64().add(scene.canonicalToml).hex();
   m.terrainSource = terrain.info.source;
-  m.terrainHash = scene.terrain.builtin ? Fnv1a64().add(terrain.heightsM.data(), terrain.heightsM.size() * sizeof(float)).hex()
-                                        : hashFileFnv1a64(scene.terrain.file);
+  m.terrainHash = in.terrainHash.empty() ? terrainHashOf(scene, terrain) : in.terrainHash;
   m.coordinateSystem = terrain.info.coordinateSystem;
   m.seed = scene.seed;
   m.backend = in.backendName;

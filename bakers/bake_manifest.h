@@ -22,8 +22,11 @@ struct BakeManifestInputs {
   std::vector<ManifestEdit> edits;          // its edits (volumes filled from the report here)
   std::vector<ManifestFile> files;          // every file written, in order
   std::vector<std::string> commandLine;     // argv, empty from a library
+  std::string terrainHash;                  // terrainHashOf, taken before the terrain's heights were freed; empty: taken here
 };
 
 Manifest assembleBakeManifest(const BakeManifestInputs& in);
+// The manifest's terrain hash: a builtin terrain's heights', else its file's.
+std::string terrainHashOf(const Scene& scene, const Terrain& terrain);
 
 }  // namespace snow

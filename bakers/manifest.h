@@ -29,6 +29,9 @@ struct ManifestFile {
   std::string tileConvention;  // empty: not a tile
   int tileColumn = 0, tileRow = 0, tileX = 0, tileY = 0;
   double tileOriginX = 0, tileOriginY = 0, pixelSizeX = 0, pixelSizeY = 0;
+  // Not written: the writer's count when it listed the file, the order in which a bake across
+  // ranks merges the files its ranks wrote (OutputWriter::writesTile).
+  long long listing = -1;
 };
 
 struct ManifestSkier {

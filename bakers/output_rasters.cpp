@@ -2,6 +2,7 @@
 // 16- and 8-bit encodings mapped by [outputs.ranges] ("season" ranges written after the last
 // day), and every file's mapping and tile listed in the manifest.
 #include <filesystem>
+#include <stdexcept>
 
 #include "geotiff_writer.h"
 #include "grid_writer.h"
@@ -15,6 +16,20 @@ OutputWriter::BaseOf OutputWriter::baseOf(const Day& d) const {
   return [outDir = src_.outDir, frame = d.frame, tag = d.dayTag](const std::string& stem) {
     return (fs::path(outDir) / (frame ? "frames" : "") / (stem + tag)).string();
   };
+}
+
+ImageWindow OutputWriter::windowOf(int width, int height) const {
+  const CellRect& c = src_.stateCells;
+  if (c.empty() || width != c.width() || height != c.height()) return ImageWindow::whole(width, height);
+  return ImageWindow{src_.geo.gridWidth, src_.geo.gridHeight, c.x0, c.y0, width, height};
+}
+
+bool OutputWriter::writesTile(const TileLayout& l, int column, int row) const {
+  if (src_.tilesStartingIn.empty()) return true;
+  if (!l.tiled()) throw std::logic_error("a whole file where each rank writes its tiles (OutputSources::tilesStartingIn)");
+  if (tileStartsIn(src_.tilesStartingIn, l, column, row)) return true;
+  ++listings_;  // another rank's file
+  return false;
 }
 
 void OutputWriter::noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const {
@@ -31,7 +46,8 @@ void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, do
                                     const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content,
                                     const std::string& unit) {
   const auto& out = scene_.outputs;
-  const TileLayout l = tileLayout(set.tiles, grid.width(), grid.height());
+  const ImageWindow w = windowOf(grid.width(), grid.height());
+  const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   Grid<float> cut;
   Grid<uint8_t> cutValid;
@@ -42,19 +58,20 @@ void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, do
         planFile(tileBase + (out.format == ImageFormat::Tiff ? ".tif" : ".exr"), floatImageFormat_, content, 4.0 * l.tileWidth * l.tileHeight);
         continue;
       }
+      if (!writesTile(l, c, r)) continue;
       // Untiled, the image itself (no copy).
-      if (l.tiled()) cut = cutTile(grid, l, c, r), cutValid = masked ? cutTile(*valid, l, c, r) : Grid<uint8_t>();
+      if (l.tiled()) cut = cutTile(grid, w, l, c, r), cutValid = masked ? cutTile(*valid, w, l, c, r) : Grid<uint8_t>();
       const Grid<float>& tile = l.tiled() ? cut : grid;
       const Grid<uint8_t>* tileValid = !masked ? nullptr : l.tiled() ? &cutValid : valid;
       // TIFF through GDAL with the terrain's CRS and this tile's geotransform; EXR through OpenImageIO.
       const std::string path = out.format == ImageFormat::Tiff ? tileBase + ".tif" : writeFloatImage(tileBase, "exr", tile, layerName, out.compressionLevel).path;
       if (out.format == ImageFormat::Tiff)
-        writeGeoTiff(path, tile, src_.geo.pixels(grid.width(), grid.height(), c * l.step, r * l.step), layerName);
+        writeGeoTiff(path, tile, src_.geo.pixels(w.width, w.height, c * l.step, r * l.step), layerName);
       SeenRange seen;  // NODATA left out
       seen.widen(tile, tileValid);
       listFile(path, content, unit, floatImageFormat_, day, static_cast<float>(seen.mapping(RangeMode::Own).lo),
                static_cast<float>(seen.mapping(RangeMode::Own).hi));
-      noteTile(l, c, r, grid.width(), grid.height());
+      noteTile(l, c, r, w.width, w.height);
     }
 }
 
@@ -62,7 +79,8 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
                                       const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& m,
                                       const std::string& content, const std::string& unit, bool write) {
   const auto& out = scene_.outputs;
-  const TileLayout l = tileLayout(set.tiles, grid.width(), grid.height());
+  const ImageWindow w = windowOf(grid.width(), grid.height());
+  const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   // Quantised once for every tile: a pixel depends on its cell alone, so cutting the pixels
   // gives each tile's bytes.
@@ -76,23 +94,24 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
                  (encoding == "png8" ? 1.0 : 2.0) * l.tileWidth * l.tileHeight, encoding == "r16");
         continue;
       }
+      if (!writesTile(l, c, r)) continue;
       if (write && l.tiled())
-        writeQuantisedPixels(path, encoding, l.tileWidth, l.tileHeight,
-                             cutTile(pixels.data(), grid.width(), grid.height(), 1, l, c, r).data(), out.compressionLevel);
+        writeQuantisedPixels(path, encoding, l.tileWidth, l.tileHeight, cutTile(pixels.data(), w, 1, l, c, r).data(), out.compressionLevel);
       else if (write)
         writeQuantisedPixels(path, encoding, grid.width(), grid.height(), pixels.data(), out.compressionLevel);
       listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi),
                write);
       ManifestFile& f = currentSink().files.back();
       f.rangeMode = rangeModeName(m.mode), f.rangeLo = m.lo, f.rangeHi = m.hi, f.nodataPixel = kNodataPixel;
-      noteTile(l, c, r, grid.width(), grid.height());
+      noteTile(l, c, r, w.width, w.height);
     }
 }
 
 void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height,
                                   const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels,
                                   const std::string& format) {
-  const TileLayout l = tileLayout(set.tiles, width, height);
+  const ImageWindow w = windowOf(width, height);
+  const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".png";
@@ -100,16 +119,18 @@ void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, doub
         planFile(path, format.empty() ? kRgbPngFormat : format, content, static_cast<double>(channels) * l.tileWidth * l.tileHeight);
         continue;
       }
-      writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), width, height, channels, l, c, r) : pixels,
+      if (!writesTile(l, c, r)) continue;
+      writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), w, channels, l, c, r) : pixels,
                 scene_.outputs.compressionLevel);
       listFile(path, content, unit, format.empty() ? kRgbPngFormat : format, day, 0.f, 255.f);
-      noteTile(l, c, r, width, height);
+      noteTile(l, c, r, w.width, w.height);
     }
 }
 
 void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
                                        const std::string& content, const std::string& unit) {
-  const TileLayout l = tileLayout(set.tiles, grid.width(), grid.height());
+  const ImageWindow w = windowOf(grid.width(), grid.height());
+  const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
@@ -119,13 +140,14 @@ void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base,
         planFile(path, format, content, 4.0 * l.tileWidth * l.tileHeight, true);
         continue;
       }
-      const Grid<float> cut = l.tiled() ? cutTile(grid, l, c, r) : Grid<float>();
+      if (!writesTile(l, c, r)) continue;
+      const Grid<float> cut = l.tiled() ? cutTile(grid, w, l, c, r) : Grid<float>();
       const Grid<float>& tile = l.tiled() ? cut : grid;
       writeRawFloat32(path, tile);
       SeenRange seen;
       seen.widen(tile, nullptr);
       listFile(path, content, unit, format, day, static_cast<float>(seen.mapping(RangeMode::Own).lo), static_cast<float>(seen.mapping(RangeMode::Own).hi));
-      noteTile(l, c, r, grid.width(), grid.height());
+      noteTile(l, c, r, w.width, w.height);
     }
 }
 
@@ -138,6 +160,7 @@ void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const Laye
   if (range.mode != RangeMode::Fixed && !src_.plan) {
     SeenRange seen;
     seen.widen(grid, valid);
+    if (src_.wholeRange) seen = src_.wholeRange(seen);  // across ranks: every rank's cells
     m = seen.mapping(range.mode);
     if (range.mode == RangeMode::Season) {
       const std::lock_guard lock(seasonMutex_);
@@ -186,7 +209,11 @@ void OutputWriter::writeSeasonEncodings() {
   for (const ManifestFile& f : written.files) byPath[f.path] = &f;
   OutputSink& sink = currentSink();
   for (ManifestFile& f : sink.files)
-    if (const auto it = byPath.find(f.path); it != byPath.end()) f = *it->second;
+    if (const auto it = byPath.find(f.path); it != byPath.end()) {
+      const long long listing = f.listing;  // the day's place in the manifest
+      f = *it->second;
+      f.listing = listing;
+    }
   for (const auto& [kind, seconds] : written.seconds) sink.addSeconds(kind, seconds);
   seasonEncodings_.clear();
   spill_.reset();

@@ -57,6 +57,7 @@ void OutputWriter::listFile(const std::string& path, const std::string& content,
   f.day = day;
   f.minValue = minValue;
   f.maxValue = maxValue;
+  f.listing = listings_++;
   sink.files.push_back(f);
   sink.paths.push_back(path);
 }
@@ -237,7 +238,8 @@ void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const s
   const std::string content = "all layers as named channels: " + list;
   const std::string format = "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression_ + "), linear";
   // Tiled like the single-layer files: every channel cut at the same pixels.
-  const int width = channels[0].width(), height = channels[0].height();
+  const ImageWindow w = windowOf(channels[0].width(), channels[0].height());
+  const int width = w.width, height = w.height;
   const TileLayout l = tileLayout(set.tiles, width, height);
   const BaseOf base = baseOf(d);
   for (int r = 0; r < l.rows; ++r)
@@ -247,9 +249,10 @@ void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const s
         planFile(path, format, content, 4.0 * l.tileWidth * l.tileHeight * static_cast<double>(channels.size()));
         continue;
       }
+      if (!writesTile(l, c, r)) continue;
       std::vector<Grid<float>> cut;
       if (l.tiled())
-        for (const auto& g : channels) cut.push_back(cutTile(g, l, c, r));
+        for (const auto& g : channels) cut.push_back(cutTile(g, w, l, c, r));
       std::vector<const Grid<float>*> grids;
       for (const auto& g : l.tiled() ? cut : channels) grids.push_back(&g);
       writeMultiChannelExr(path, names, grids, scene_.outputs.compressionLevel);

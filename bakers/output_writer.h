@@ -3,6 +3,7 @@
 // meshes; then the season's contact sheet and each avalanche's maps. Every file is listed in the
 // current sink (output_sink.h), which becomes the manifest's file list.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -49,7 +50,14 @@ struct OutputSources {
   bool planSnowMesh = false;
   bool planNodata = false;    // plan mode: the terrain has NODATA cells (mesh tiles over them may be left out)
   // Called as each file is written (from the writers' threads): the progress's live "file" events.
-  std::function<void(const std::string& path, double day)> fileWritten;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
+  std::function<void(const std::string& path, double day)> fileWritten;
+  // Across ranks, where each rank writes the tiles that start in its subdomain (docs/distributed.md):
+  // the states given to writeDay are this rank's local grid, which lies at `stateCells` of the
+  // whole grid (empty: the state is the whole grid); the writer writes the tiles whose first
+  // pixel lies in `tilesStartingIn` (empty: every file); `wholeRange` combines a layer's range
+  // seen on this rank's cells with every other rank's (on every rank alike, in the same order).
+  CellRect stateCells, tilesStartingIn;
+  std::function<SeenRange(const SeenRange&)> wholeRange;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
 };
 
 class OutputWriter {
@@ -117,6 +125,12 @@ class OutputWriter {
   void noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const;
   void writeEncodings(const Day& d, const RasterSet& set, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content);
   void writeLayers(const Day& d);
+  // Where a raster's pixels lie in its image: the rank's window of the grid's image for a grid of
+  // the state's size across ranks, else the raster is the whole image.
+  ImageWindow windowOf(int width, int height) const;
+  // Whether this rank writes tile (column, row); counts a listing of the tiles it does not, so
+  // every rank numbers each file alike (ManifestFile::listing).
+  bool writesTile(const TileLayout& l, int column, int row) const;
   // Plan mode: a grid of the size `layer` is written at (values unset).
   Grid<float> planGrid(const Day& d, const LayerInfo& layer) const;
   void writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
@@ -153,6 +167,7 @@ class OutputWriter {
   std::mutex seasonMutex_;
   std::vector<SeasonEncoding> seasonEncodings_;
   std::map<std::string, SeenRange> seasonRanges_;  // by layer
+  mutable std::atomic<long long> listings_{0};  // files listed or left to another rank so far
   std::vector<std::vector<uint8_t>> previews_;  // every preview written, subsampled, for the contact sheet
   int previewWidth_ = 0, previewHeight_ = 0;
 };

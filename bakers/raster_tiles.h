@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "core/grid_window.h"
 #include "scene/scene.h"
 
 namespace snow {
@@ -36,20 +37,33 @@ std::vector<RasterSet> rasterSets(const OutputRequest& out);
 // "_<c>_<z>" with z counted from the south (Unity's terrain grid); "" untiled.
 std::string tileSuffix(const TileLayout& layout, int column, int row);
 
+// The pixels of an image held in memory: the whole image of width x height pixels, or a window
+// of it (a rank's local grid, bakers across ranks) from pixel (x0, y0) on.
+struct ImageWindow {
+  int width = 0, height = 0;                // the whole image
+  int x0 = 0, y0 = 0, windowWidth = 0, windowHeight = 0;  // the pixels held, row-major
+  static ImageWindow whole(int width, int height) { return {width, height, 0, 0, width, height}; }
+};
+
 // Tile (column, row) of an image of `channels` interleaved values a pixel, edge pixels repeated
-// past the image.
+// past the image, cut from the window `w` of it, which must hold every pixel the tile shows.
 template <class T>
-std::vector<T> cutTile(const T* image, int width, int height, int channels, const TileLayout& l, int column, int row) {
+std::vector<T> cutTile(const T* pixels, const ImageWindow& w, int channels, const TileLayout& l, int column, int row) {
   std::vector<T> tile(static_cast<size_t>(l.tileWidth) * l.tileHeight * channels);
   const int x0 = column * l.step, y0 = row * l.step;
-  const int inside = std::clamp(width - x0, 0, l.tileWidth);  // columns of the tile within the image
+  const int inside = std::clamp(w.width - x0, 0, l.tileWidth);  // columns of the tile within the image
+  auto at = [&](int x, int y) { return pixels + (static_cast<size_t>(y - w.y0) * w.windowWidth + (x - w.x0)) * channels; };
   for (int y = 0; y < l.tileHeight; ++y) {
-    const T* source = image + static_cast<size_t>(std::min(y0 + y, height - 1)) * width * channels;
+    const int imageY = std::min(y0 + y, w.height - 1);
     T* out = tile.data() + static_cast<size_t>(y) * l.tileWidth * channels;
-    if (inside > 0) std::copy_n(source + static_cast<size_t>(x0) * channels, static_cast<size_t>(inside) * channels, out);
-    for (int x = inside; x < l.tileWidth; ++x) std::copy_n(source + static_cast<size_t>(width - 1) * channels, channels, out + static_cast<size_t>(x) * channels);
+    if (inside > 0) std::copy_n(at(x0, imageY), static_cast<size_t>(inside) * channels, out);
+    for (int x = inside; x < l.tileWidth; ++x) std::copy_n(at(w.width - 1, imageY), channels, out + static_cast<size_t>(x) * channels);
   }
   return tile;
+}
+template <class T>
+std::vector<T> cutTile(const T* image, int width, int height, int channels, const TileLayout& l, int column, int row) {
+  return cutTile(image, ImageWindow::whole(width, height), channels, l, column, row);
 }
 template <class T>
 Grid<T> cutTile(const Grid<T>& g, const TileLayout& l, int column, int row) {
@@ -57,6 +71,17 @@ Grid<T> cutTile(const Grid<T>& g, const TileLayout& l, int column, int row) {
   Grid<T> tile(l.tileWidth, l.tileHeight);
   tile.values() = cutTile(g.data(), g.width(), g.height(), 1, l, column, row);
   return tile;
+}
+// The same from the window `w` of the image that `g` holds.
+template <class T>
+Grid<T> cutTile(const Grid<T>& g, const ImageWindow& w, const TileLayout& l, int column, int row) {
+  Grid<T> tile(l.tileWidth, l.tileHeight);
+  tile.values() = cutTile(g.data(), w, 1, l, column, row);
+  return tile;
+}
+// Whether the tile's first pixel lies in `cells` (the tiles a rank writes; every tile when empty).
+inline bool tileStartsIn(const CellRect& cells, const TileLayout& l, int column, int row) {
+  return cells.empty() || cells.contains(column * l.step, row * l.step);
 }
 
 }  // namespace snow

@@ -3,6 +3,7 @@
 // cells each rank sends to and receives from the others to refresh its halo.
 #pragma once
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 #include "core/grid_window.h"
@@ -20,12 +21,16 @@ struct Decomposition {
   int width = 0, height = 0;    // the whole grid, cells
   int columns = 1, rows = 1;    // the process grid; rank = row * columns + column
   int halo = 0;                 // cells of neighbours each local grid holds at least, each side
+  // Where the subdomains' columns and rows start (columns + 1 and rows + 1 values, the last the
+  // grid's extent) when chosen on tiles (chooseOnTiles); empty: the balanced splits.
+  std::vector<int> columnStarts, rowStarts;
 
   int ranks() const { return columns * rows; }
   int columnOf(int rank) const { return rank % columns; }
   int rowOf(int rank) const { return rank / columns; }
   int rankAt(int column, int row) const { return row * columns + column; }
-  // The cells `rank` owns: balanced splits, the first cut at width * column / columns.
+  // The cells `rank` owns: balanced splits, the first cut at width * column / columns (or at
+  // columnStarts and rowStarts).
   CellRect owned(int rank) const;
   // Its local grid: `owned` widened by `halo` within the grid, its origin lowered to multiples of
   // kLocalOriginMultiple.
@@ -36,6 +41,12 @@ struct Decomposition {
   // a tie (rows are contiguous in memory). Throws std::invalid_argument, saying why, when no
   // factorisation gives every subdomain at least `halo` cells (and one) a side.
   static Decomposition choose(int ranks, int width, int height, int halo);
+  // As choose, but every cut falls on the start of a tile of `tileColumns` x `tileRows` tiles
+  // starting every `step` cells (the last reaching past the grid), each rank's subdomain a band
+  // of whole tiles, so that a rank's local grid holds every cell of the tiles starting in it as
+  // long as the tiles overlap by no more than the halo. nullopt where no factorisation gives
+  // every subdomain a tile and `halo` cells a side.
+  static std::optional<Decomposition> chooseOnTiles(int ranks, int width, int height, int halo, int step, int tileColumns, int tileRows);
 };
 
 // Copies `cells` (whole-grid coordinates, inside both) from a row-major grid of `fromGrid`'s cells

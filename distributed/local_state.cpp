@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "halo_exchange.h"
+
 namespace snow::dist {
 
 void cutFields(const SnowState& whole, const CellRect& cells, const std::function<bool(FieldRole)>& pick, SnowState& local) {
@@ -90,6 +92,17 @@ void gatherOwned(const Communicator& comm, const Decomposition& d, const SnowSta
   if (local.member.size() > 0) gatherField(comm, d, local.member, whole.member, root, #member);
   SNOW_STATE_FIELDS(SNOW_GATHER_FIELD)
 #undef SNOW_GATHER_FIELD
+}
+
+void refreshHalos(const Communicator& comm, const Decomposition& d, SnowState& local) {
+  const HaloPlan plan = haloPlan(d, comm.rank());
+  const size_t cells = d.local(comm.rank()).cells();
+#define SNOW_REFRESH_FIELD(member, view, Element, role, access, fill)                                                   \
+  if (local.member.size() > 0 && local.member.size() != cells)                                                          \
+    throw std::invalid_argument("refreshHalos: rank " + std::to_string(comm.rank()) + "'s " #member " is not its local grid"); \
+  if (local.member.size() > 0) exchangeHalo(comm, d, plan, local.member.data(), sizeof(Element));
+  SNOW_STATE_FIELDS(SNOW_REFRESH_FIELD)
+#undef SNOW_REFRESH_FIELD
 }
 
 }  // namespace snow::dist

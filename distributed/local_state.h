@@ -27,4 +27,8 @@ SnowState wholeLike(const SnowState& local, const GridSpec& spec);
 // other ranks send theirs. `whole` is read only on `root`.
 void gatherOwned(const Communicator& comm, const Decomposition& d, const SnowState& local, SnowState& whole, int root = 0);
 
+// Every field `local` holds (the same on every rank) has its halo cells refreshed from their
+// owners: a state the ranks' writers read beyond their own cells (tiles that overlap a neighbour's).
+void refreshHalos(const Communicator& comm, const Decomposition& d, SnowState& local);
+
 }  // namespace snow::dist

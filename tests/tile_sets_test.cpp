@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "bake_support.h"
+#include "bakers/raster_tiles.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -121,6 +122,37 @@ ProcessResult snowbake(const fs::path& dir, const std::string& args) {
 // 96 pixels in grid tiles of 40 sharing 3: 3 x 3 tiles of layers.exr (both channels), of the
 // frame's layers.exr, and of each avalanche map and motion frame; every one cut from the untiled
 // file, bit for bit.
+TEST(TileSets, ATileCutFromAWindowOfTheImageIsTheTileCutFromTheWholeImage) {
+  // What a rank writes from its local grid (bakers across ranks): any window holding the tile's
+  // pixels, those past the image's edge repeated from it as the whole image's tiles have them.
+  const int width = 61, height = 47, channels = 3;
+  std::vector<uint16_t> image(static_cast<size_t>(width) * height * channels);
+  for (size_t k = 0; k < image.size(); ++k) image[k] = static_cast<uint16_t>(k * 2654435761u >> 16);
+  OutputTiles t;
+  t.convention = TileConvention::Grid, t.sizePx = 20, t.overlapPx = 3;
+  const TileLayout l = tileLayout(t, width, height);
+  ASSERT_EQ(l.columns, 4);
+  ASSERT_EQ(l.rows, 3);
+  int checked = 0;
+  for (int r = 0; r < l.rows; ++r)
+    for (int c = 0; c < l.columns; ++c) {
+      const std::vector<uint16_t> whole = cutTile(image.data(), width, height, channels, l, c, r);
+      // Windows from the tile's own pixels to a margin of 5 around them, within the image.
+      for (int margin : {0, 5}) {
+        const int x0 = std::max(0, c * l.step - margin), y0 = std::max(0, r * l.step - margin);
+        const int x1 = std::min(width, c * l.step + l.tileWidth + margin), y1 = std::min(height, r * l.step + l.tileHeight + margin);
+        std::vector<uint16_t> window;
+        for (int y = y0; y < y1; ++y)
+          window.insert(window.end(), image.begin() + (static_cast<size_t>(y) * width + x0) * channels,
+                        image.begin() + (static_cast<size_t>(y) * width + x1) * channels);
+        const ImageWindow w{width, height, x0, y0, x1 - x0, y1 - y0};
+        EXPECT_EQ(cutTile(window.data(), w, channels, l, c, r), whole) << "tile " << c << ", " << r << ", margin " << margin;
+        ++checked;
+      }
+    }
+  EXPECT_EQ(checked, 24);
+}
+
 TEST(TileSets, LayersExrAndAvalancheMapTilesReassembleToTheUntiledFilesBitForBit) {
   const test::Bake whole = test::bakeSceneText("tilesets_whole", avalancheScene("", ""));
   const test::Bake tiled = test::bakeSceneText("tilesets_tiled", avalancheScene("", "[outputs.tiles]\nconvention = \"grid\"\nsize_px = 40\noverlap_px = 3\n"));

@@ -12,12 +12,19 @@
 # --events: the default preset with its spontaneous avalanches and skiers, which every rank runs
 # on its replica of the whole grid; the last column says how often the replica was brought up to
 # date and what rank 0 sent for it.
-#   tools/bench-distributed-bake.sh [--weak] [--events] [BUILD=build] [SIZE=1024] [DAYS=30]
+# --tiles: the default preset's layers but its preview (its displacement maps, VDB and meshes
+# left out too), in png16 and EXR as Unreal tiles of 505, which each rank writes for the tiles
+# that start in its subdomain (bake/tiles_on_ranks.h); the one process writes the same.
+#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0
-while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ]; do
-  if [ "$1" = --weak ]; then mode=weak; else events=1; fi
+mode=strong events=0 tiles=0
+while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ]; do
+  case "$1" in
+    --weak) mode=weak ;;
+    --events) events=1 ;;
+    --tiles) tiles=1 ;;
+  esac
   shift
 done
 build="${1:-build}" size="${2:-1024}" days="${3:-30}"
@@ -25,7 +32,22 @@ bin="$(realpath "$build/snowbake")"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
-args=(bake preset:default --set "season.days=$days" --set 'outputs.frames_days=[]' --no-cache --quiet --out out)
+scene=preset:default
+if [ "$tiles" = 1 ]; then  # the preset with its [outputs] table replaced
+  scene="$work/tiles.toml"
+  awk '/^\[outputs\]$/ { skip = 1 } /^\[outputs\.ranges\]$/ { skip = 0 } !skip' presets/default.toml > "$scene"
+  cat >> "$scene" <<'TOML'
+[outputs]
+layers = ["compacted", "stable", "unstable", "powder", "depth", "surface", "snow_coverage", "weight_snow", "weight_rock",
+          "splat_map", "snow_normal"]
+format = "exr"
+encodings = ["png16"]
+[outputs.tiles]
+convention = "unreal"
+size_px = 505
+TOML
+fi
+args=(bake "$scene" --set "season.days=$days" --set 'outputs.frames_days=[]' --no-cache --quiet --out out)
 [ "$events" = 1 ] || args+=(--set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0)
 # run RANKS SIZE: bakes into $work/RANKS-SIZE; prints its table row ($one: the alone bake's peak).
 run() {
@@ -57,7 +79,7 @@ same() {
   done
 }
 
-echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers, 10 m cells, $days days;" \
+echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers but the preview as Unreal tiles of 505"), 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
 printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" \
   "largest rank / one process" "season's peak MiB per rank" "largest / one process" "replica gathers"

@@ -4,10 +4,10 @@
 # off by skiers, their ski-track texture), frames written beside the season or after it; the
 # art-direction preset whole (painted masks, initial snow, multipliers, no-snow road, timeline
 # edits, a masked avalanche event and a skier group); the bedform window; and a real DEM with NODATA
-# from ../shared/data (skipped with a message when absent). Their manifests differ in the "memory"
-# line alone (the measured peak varies from run to run). Then what a launch refuses (the CUDA
-# backend, a missing terrain, a grid too small for the ranks), each exit 2 with one message and
-# nothing written, and a failure on rank 0 alone.
+# from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
+# subdomain. Their manifests differ in the "memory" line alone (the measured peak varies from run
+# to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
+# the ranks), each exit 2 with one message and nothing written, and a failure on rank 0 alone.
 #   bash bake_across_ranks_test.sh SNOWBAKE MPIEXEC DATA_DIR [MPIEXEC_FLAGS...]
 set -euo pipefail
 bin="$(realpath "$1")" mpiexec="$2" data="$3"
@@ -142,6 +142,56 @@ if (echo 5 > /proc/self/clear_refs) 2> /dev/null; then
   grep -qE "^memory: peak resident per rank in the season [0-9]+, [0-9]+ MiB; after it [0-9]+, [0-9]+ MiB" "$work/winds/2/log" ||
     fail "winds on 2 ranks: no season peak per rank in the log"
 fi
+
+# [outputs.tiles] of layers each rank can write from its own cells: the ranks' subdomains cut on
+# the tiles' starts, each rank writing the tiles that start in its subdomain (frames, "season",
+# "own" and fixed ranges combined over the ranks, r32, the engine maps and the avalanche preview,
+# whose normals read the next cells); one manifest in the single process's order.
+cat > "$work/tiles.toml" <<TOML
+name = "across ranks: tiles written by their ranks"
+[terrain]
+builtin = "ridged"
+size = 129
+cell_size_m = 10.0
+[season]
+start_date = 2025-12-01
+days = 30
+[[weather.keyframe]]
+day = 0
+sea_level_temperature_c = 4.0
+wind_direction_deg = 280
+wind_speed_mps = 8.0
+[parameters]
+avalanche_rate_per_km2_per_day = 0.0
+skiers_per_hour = 0.0
+[outputs]
+layers = ["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour", "melt", "splat_map", "snow_normal",
+          "avalanche_preview"]
+encodings = ["png16", "png8", "r32"]
+frames_days = [10, 20]
+[outputs.ranges]
+surface = "own"
+[outputs.tiles]
+convention = "unity"
+size_px = 33
+TOML
+check_scene tiles "$work/tiles.toml"
+for ranks in 2 3 4; do
+  grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tiles/$ranks/log" ||
+    fail "tiles on $ranks ranks: the ranks did not write their own tiles"
+done
+# GeoTIFF tiles of Unreal's 127 (2 x 2 on a grid of 253), frames beside the season (written in
+# place where the ranks write their tiles): 4 ranks write their own, 3 cannot share 2 x 2 tiles
+# (rank 0 gathers the grid and writes them all).
+unreal=("$work/tiles.toml" --set terrain.size=253 --set 'outputs.format="tiff"' --set 'outputs.tiles.convention="unreal"'
+        --set outputs.tiles.size_px=127 --set 'run.frame_writing="beside"')
+bake unreal "$work/unreal/alone" alone "${unreal[@]}"
+for ranks in 3 4; do
+  bake unreal "$work/unreal/$ranks" "$ranks" "${unreal[@]}" && same "unreal tiles on $ranks ranks" "$work/unreal/alone" "$work/unreal/$ranks"
+done
+grep -q "^outputs: each rank writes the tiles" "$work/unreal/4/log" || fail "unreal tiles on 4 ranks: not written by their ranks"
+grep -q "^outputs: rank 0 gathers the whole grid and writes every file: the grid does not split" "$work/unreal/3/log" ||
+  fail "unreal tiles on 3 ranks: not gathered on rank 0"
 
 dem="$data/dem/tyrol_avaWog_5m.asc"
 if [ -f "$dem" ]; then

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -80,6 +81,52 @@ TEST(Decomposition, RefusesSubdomainsNarrowerThanTheHaloSayingWhy) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("run fewer ranks"), std::string::npos) << e.what();
   }
+}
+
+TEST(Decomposition, OnTilesEveryCutFallsOnATileStartAndEachTileLiesInTheLocalGridOfTheRankItStartsIn) {
+  struct Case {
+    int width, height, size, step;  // tiles of `size` starting every `step` cells (overlap size - step)
+  };
+  const int halo = 7;
+  for (const Case c : {Case{253, 253, 127, 126}, Case{129, 129, 33, 32}, Case{500, 300, 127, 126}, Case{2048, 2048, 505, 504},
+                       Case{97, 61, 20, 17}}) {
+    auto count = [&](int extent) { return extent <= c.size ? 1 : 1 + (extent - c.size + c.step - 1) / c.step; };
+    const int columns = count(c.width), rows = count(c.height);
+    for (int ranks = 1; ranks <= 6; ++ranks) {
+      const std::optional<Decomposition> d = Decomposition::chooseOnTiles(ranks, c.width, c.height, halo, c.step, columns, rows);
+      // These grids' last tiles leave bands wider than the halo: a split exists where a process
+      // grid has no more columns and rows than there are tiles.
+      bool fits = false;
+      for (int pc = 1; pc <= ranks; ++pc) fits |= ranks % pc == 0 && pc <= columns && ranks / pc <= rows;
+      ASSERT_EQ(d.has_value(), fits) << ranks << " ranks, " << columns << " x " << rows << " tiles";
+      if (!d) continue;
+      ASSERT_EQ(d->ranks(), ranks);
+      std::vector<int> owners(static_cast<size_t>(c.width) * c.height, 0);
+      for (int r = 0; r < ranks; ++r) {
+        const CellRect o = d->owned(r), l = d->local(r);
+        EXPECT_GE(o.width(), halo);
+        EXPECT_GE(o.height(), halo);
+        EXPECT_EQ(o.x0 % c.step, 0) << "a cut between tile starts";
+        EXPECT_EQ(o.y0 % c.step, 0);
+        for (int y = o.y0; y < o.y1; ++y)
+          for (int x = o.x0; x < o.x1; ++x) ++owners[static_cast<size_t>(y) * c.width + x];
+      }
+      for (int n : owners) ASSERT_EQ(n, 1) << ranks << " ranks on " << c.width << " x " << c.height;
+      // Every tile's pixels within the image lie in the local grid of the rank owning its first pixel.
+      for (int ty = 0; ty < rows; ++ty)
+        for (int tx = 0; tx < columns; ++tx) {
+          int owner = -1;
+          for (int r = 0; r < ranks; ++r) owner = d->owned(r).contains(tx * c.step, ty * c.step) ? r : owner;
+          ASSERT_GE(owner, 0);
+          const CellRect shown = CellRect{tx * c.step, ty * c.step, tx * c.step + c.size, ty * c.step + c.size}.intersect({0, 0, c.width, c.height});
+          EXPECT_EQ(shown.intersect(d->local(owner)), shown) << "tile " << tx << ", " << ty << " on " << ranks << " ranks";
+        }
+    }
+  }
+  // More ranks than tiles a side allows, or a band thinner than the halo: none.
+  EXPECT_FALSE(Decomposition::chooseOnTiles(4, 127, 127, halo, 126, 1, 1));
+  EXPECT_FALSE(Decomposition::chooseOnTiles(2, 130, 130, halo, 126, 2, 2)) << "the second band 4 cells wide";
+  EXPECT_TRUE(Decomposition::chooseOnTiles(2, 140, 130, halo, 126, 2, 2)) << "the second band 14 cells wide";
 }
 
 TEST(HaloPlan, EveryHaloCellComesFromItsOwnerOnceAndEachSendIsItsPeersReceive) {

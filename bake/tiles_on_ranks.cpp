@@ -1,0 +1,151 @@
+#include "tiles_on_ranks.h"
+
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+
+#include "bakers/raster_tiles.h"
+#include "scene/layers.h"
+
+namespace snow {
+
+std::string whyRankZeroWritesEveryFile(const Scene& scene) {
+  const OutputRequest& out = scene.outputs;
+  if (out.tiles.convention == TileConvention::None) return "the outputs are whole files (no [outputs.tiles])";
+  if (out.tiles.resizeWidth > 0) return "outputs.tiles.resize (tiles cut from a resampled image)";
+  if (out.resizeWidth > 0) return "outputs.resize (layers resampled over the whole grid)";
+  for (const std::string& name : out.layers) {
+    const LayerInfo* layer = findLayer(name);
+    if (!layer) continue;
+    // The engine maps and the avalanche preview are drawn cell by cell (normals from the next
+    // cells, in the halo); the preview's colours span the whole grid's altitudes, and its
+    // thumbnails make the contact sheet.
+    if (name == "preview") return "outputs.layers: \"preview\" (coloured over the whole grid's altitudes)";
+    if (layer->needs != kNeedsState) return "outputs.layers: \"" + name + "\" (read from the precompute or the skiers, not the snow state)";
+  }
+  if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";
+  if (out.multichannelExr) return "outputs.multichannel_exr";
+  if (out.vdb) return "outputs.vdb (one file of the whole snow body)";
+  if (!out.meshes.empty()) return "outputs.meshes (triangulated over the whole grid)";
+  if (out.avalancheMaps) return "outputs.avalanche_maps";
+  return "";
+}
+
+std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int halo) {
+  if (!whyRankZeroWritesEveryFile(scene).empty()) return std::nullopt;
+  const TileLayout l = tileLayout(scene.outputs.tiles, spec.width, spec.height);
+  // A tile reaches its overlap past the next tile's start, into the next rank's subdomain: the halo holds it.
+  if (l.tileWidth - l.step > halo) return std::nullopt;
+  return dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
+}
+
+void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const dist::Decomposition& d) {
+  sources.stateCells = d.local(comm.rank());
+  sources.tilesStartingIn = d.owned(comm.rank());
+  sources.wholeRange = [comm](const SeenRange& mine) {
+    // Each rank's lowest and highest (an empty range's infinities included): their extremes are
+    // the whole grid's, whatever the order.
+    const std::vector<double> all = comm.allGather({mine.lo, mine.hi});
+    SeenRange whole;
+    for (size_t k = 0; k + 1 < all.size(); k += 2) whole.widen(SeenRange{all[k], all[k + 1]});
+    return whole;
+  };
+}
+
+namespace {
+
+// A rank's listed files as bytes: each entry's fields in declaration order, then its absolute path.
+class Packer {
+ public:
+  template <class T>
+  void put(const T& v) {
+    const auto* p = reinterpret_cast<const char*>(&v);
+    bytes.insert(bytes.end(), p, p + sizeof(T));
+  }
+  void put(const std::string& s) {
+    put(static_cast<uint64_t>(s.size()));
+    bytes.insert(bytes.end(), s.begin(), s.end());
+  }
+  std::vector<char> bytes;
+};
+class Unpacker {
+ public:
+  explicit Unpacker(const std::vector<char>& bytes) : bytes_(bytes) {}
+  template <class T>
+  void get(T& v) {
+    need(sizeof(T));
+    std::memcpy(&v, bytes_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+  }
+  void get(std::string& s) {
+    uint64_t n = 0;
+    get(n);
+    need(n);
+    s.assign(bytes_.data() + at_, n);
+    at_ += n;
+  }
+  bool done() const { return at_ == bytes_.size(); }
+
+ private:
+  void need(size_t n) const {
+    if (bytes_.size() - at_ < n) throw std::logic_error("mergeTheRanksFiles: a rank's list of files ends early");
+  }
+  const std::vector<char>& bytes_;
+  size_t at_ = 0;
+};
+
+// Every field of ManifestFile, in order: a field added there is added here.
+template <class Io>
+void eachField(Io&& io, ManifestFile& f) {
+  io(f.path), io(f.content), io(f.unit), io(f.format), io(f.day), io(f.minValue), io(f.maxValue), io(f.width), io(f.height);
+  io(f.rangeMode), io(f.rangeLo), io(f.rangeHi), io(f.nodataPixel);
+  io(f.tileConvention), io(f.tileColumn), io(f.tileRow), io(f.tileX), io(f.tileY);
+  io(f.tileOriginX), io(f.tileOriginY), io(f.pixelSizeX), io(f.pixelSizeY), io(f.listing);
+}
+
+}  // namespace
+
+void mergeTheRanksFiles(const dist::Communicator& comm, OutputSink& files) {
+  if (files.files.size() != files.paths.size()) throw std::logic_error("mergeTheRanksFiles: files and paths differ in number");
+  Packer pack;
+  pack.put(static_cast<uint64_t>(files.files.size()));
+  for (size_t k = 0; k < files.files.size(); ++k) {
+    ManifestFile f = files.files[k];
+    eachField([&](const auto& v) { pack.put(v); }, f);
+    pack.put(files.paths[k]);
+  }
+  // Each rank's byte count, then rank 0 receives every other rank's list.
+  const std::vector<double> sizes = comm.allGather({static_cast<double>(pack.bytes.size())});
+  if (comm.rank() != 0) {
+    comm.exchange({{0, pack.bytes.data(), pack.bytes.size()}}, {});
+    return;
+  }
+  struct Listed {
+    ManifestFile file;
+    std::string path;
+  };
+  std::vector<Listed> all;
+  for (int peer = 0; peer < comm.size(); ++peer) {
+    std::vector<char> bytes = peer == 0 ? pack.bytes : std::vector<char>(static_cast<size_t>(sizes[peer]));
+    if (peer != 0) comm.exchange({}, {{peer, bytes.data(), bytes.size()}});
+    Unpacker in(bytes);
+    uint64_t n = 0;
+    in.get(n);
+    for (uint64_t k = 0; k < n; ++k) {
+      Listed l;
+      eachField([&](auto& v) { in.get(v); }, l.file);
+      in.get(l.path);
+      if (l.file.listing < 0) throw std::logic_error("mergeTheRanksFiles: " + l.file.path + " was not listed by a writer");
+      all.push_back(std::move(l));
+    }
+    if (!in.done()) throw std::logic_error("mergeTheRanksFiles: rank " + std::to_string(peer) + "'s list of files has bytes left");
+  }
+  std::sort(all.begin(), all.end(), [](const Listed& a, const Listed& b) { return a.file.listing < b.file.listing; });
+  files.files.clear(), files.paths.clear();
+  for (Listed& l : all) {
+    files.files.push_back(std::move(l.file));
+    files.paths.push_back(std::move(l.path));
+  }
+}
+
+}  // namespace snow

@@ -1,0 +1,37 @@
+// Outputs across ranks written where their cells are (docs/distributed.md, Outputs): under
+// [outputs.tiles], the ranks' subdomains are cut on tile starts, so each rank's local grid holds
+// every cell of the tiles that start in its subdomain, and each rank writes those tiles from its
+// own cells. A layer's range ("own", "season") is combined over the ranks, and rank 0 merges the
+// files every rank listed into one manifest in the single process's order. The same bytes as one
+// process, and no rank holds the whole grid for the outputs.
+#pragma once
+#include <optional>
+#include <string>
+
+#include "bakers/output_sink.h"
+#include "bakers/output_writer.h"
+#include "distributed/communicator.h"
+#include "distributed/decomposition.h"
+#include "scene/scene.h"
+
+namespace snow {
+
+// Why the ranks cannot write their own tiles of the scene's outputs (rank 0 then gathers the
+// whole grid and writes every file), naming the key; empty when they can, as far as the scene
+// says (the grid must also split into bands of whole tiles: decompositionOnTiles).
+std::string whyRankZeroWritesEveryFile(const Scene& scene);
+
+// The ranks' subdomains cut on the starts of the scene's tiles of a grid of `spec`'s size (halo
+// `halo`), where whyRankZeroWritesEveryFile is empty and the tiles can be shared; else nullopt.
+std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int halo);
+
+// Points `sources` at this rank's tiles of decomposition `d`: its local grid's state, the tiles
+// starting in its subdomain, a layer's range combined over the ranks.
+void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const dist::Decomposition& d);
+
+// Every rank's files, listed into its `files`, merged on rank 0 in the order each was listed
+// (ManifestFile::listing): the single process's order. The other ranks' `files` are left as they
+// are.
+void mergeTheRanksFiles(const dist::Communicator& comm, OutputSink& files);
+
+}  // namespace snow
