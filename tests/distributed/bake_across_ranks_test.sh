@@ -7,7 +7,8 @@
 # from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
 # subdomain. Their manifests differ in the "memory" line alone (the measured peak varies from run
 # to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
-# the ranks), each exit 2 with one message and nothing written, and a failure on rank 0 alone.
+# the ranks), each exit 2 with one message and nothing written, a failure on rank 0 alone, and one
+# rank failing to write its tile.
 #   bash bake_across_ranks_test.sh SNOWBAKE MPIEXEC DATA_DIR [MPIEXEC_FLAGS...]
 set -euo pipefail
 bin="$(realpath "$1")" mpiexec="$2" data="$3"
@@ -262,6 +263,17 @@ alone_fails() {  # NAME EXPECTED ARGS...
 }
 alone_fails rank0-output-folder /proc/snowbake-out --out /proc/snowbake-out
 alone_fails rank0-log-file /proc/snowbake.log --out out --log-file /proc/snowbake.log
+
+# Where each rank writes its tiles, one rank failing to write one (a folder in the way of rank
+# 3's first tile) ends every rank at once with its status and its one message, no manifest.
+mkdir -p "$work/tile-fails/out/frames" "$work/tile-fails/out/depth_3_0.exr"
+status=0
+(cd "$work/tile-fails" && timeout 300 "${launch[@]}" -n 4 "$bin" bake "$work/tiles.toml" --out out --no-cache --threads 1 > log 2>&1) ||
+  status=$?
+[ "$status" = 1 ] || fail "tile-fails: exit $status, not 1 (124: it hung)"
+grep -q "^\[rank 3\] snowbake: failed: .*depth_3_0.exr: Is a directory" "$work/tile-fails/log" ||
+  { fail "tile-fails: rank 3's message is not in the log"; cat "$work/tile-fails/log" >&2; }
+[ ! -e "$work/tile-fails/out/manifest.json" ] || fail "tile-fails: a manifest was written"
 
 if [ "$failures" -gt 0 ]; then
   echo "bake_across_ranks_test: $failures failures" >&2
