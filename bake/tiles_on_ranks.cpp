@@ -17,10 +17,8 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
   for (const std::string& name : out.layers) {
     const LayerInfo* layer = findLayer(name);
     if (!layer) continue;
-    // The engine maps and the avalanche preview are drawn cell by cell (normals from the next
-    // cells, in the halo); the preview's colours span the whole grid's altitudes, and its
-    // thumbnails make the contact sheet.
-    if (name == "preview") return "outputs.layers: \"preview\" (coloured over the whole grid's altitudes)";
+    // The pictures are drawn cell by cell, their normals from the next cells (in the halo); the
+    // preview's altitude range and contact-sheet thumbnails are put together over the ranks.
     if (layer->needs != kNeedsState) return "outputs.layers: \"" + name + "\" (read from the precompute or the skiers, not the snow state)";
   }
   if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";
@@ -49,6 +47,19 @@ void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const
     SeenRange whole;
     for (size_t k = 0; k + 1 < all.size(); k += 2) whole.widen(SeenRange{all[k], all[k + 1]});
     return whole;
+  };
+  sources.wholeThumbnail = [comm](std::vector<uint8_t> mine) {
+    // Each pixel is one rank's, 0 on every other: or'd together on rank 0.
+    if (comm.rank() != 0) {
+      comm.exchange({{0, mine.data(), mine.size()}}, {});
+      return mine;
+    }
+    std::vector<uint8_t> theirs(mine.size());
+    for (int peer = 1; peer < comm.size(); ++peer) {
+      comm.exchange({}, {{peer, theirs.data(), theirs.size()}});
+      for (size_t k = 0; k < mine.size(); ++k) mine[k] |= theirs[k];
+    }
+    return mine;
   };
 }
 

@@ -269,12 +269,17 @@ std::vector<uint8_t> avalanchePreviewRgb(const Grid<float>& a, const Grid<uint8_
   return rgb;
 }
 
-std::vector<uint8_t> snowPreviewRgb(const SnowState& s, const double sun[3]) {
+AltitudeRange bedrockRange(const SnowState& s) {
+  AltitudeRange r;
+  for (size_t i = 0; i < s.bedrockM.size(); ++i)
+    if (s.validCell.values()[i]) r.lo = std::min(r.lo, s.bedrockM.values()[i]), r.hi = std::max(r.hi, s.bedrockM.values()[i]);
+  return r;
+}
+
+std::vector<uint8_t> snowPreviewRgb(const SnowState& s, const double sun[3], const AltitudeRange& altitudes) {
   const int w = s.spec.width, h = s.spec.height;
   std::vector<uint8_t> rgb(static_cast<size_t>(w) * h * 3, 0);
-  float lo = 1e30f, hi = -1e30f;
-  for (size_t i = 0; i < s.bedrockM.size(); ++i)
-    if (s.validCell.values()[i]) lo = std::min(lo, s.bedrockM.values()[i]), hi = std::max(hi, s.bedrockM.values()[i]);
+  const float lo = altitudes.lo, hi = altitudes.hi;
   auto surface = [&](int x, int y) {
     x = std::clamp(x, 0, w - 1), y = std::clamp(y, 0, h - 1);
     return static_cast<double>(s.bedrockM(x, y)) + s.depthM(x, y);

@@ -87,7 +87,16 @@ std::vector<uint8_t> avalanchePreviewRgb(const Grid<float>& surfaceM, const Grid
 // low, brown, grey rock high, over the grid's own range), snow shaded by its top layer (powder
 // white, unstable pale blue, stable cream, compacted grey), both lit by a sun at `sunDirection`
 // (unit vector x east, y north, z up) with some sky light; NODATA black. 8-bit sRGB, 3 channels.
-std::vector<uint8_t> snowPreviewRgb(const SnowState& state, const double sunDirection[3]);
+// `altitudes`: the bare rock's colour range, the state's valid cells' lowest and highest bedrock
+// (the whole grid's, where the state is a rank's window of it).
+struct AltitudeRange {
+  float lo = 1e30f, hi = -1e30f;
+};
+AltitudeRange bedrockRange(const SnowState& state);
+std::vector<uint8_t> snowPreviewRgb(const SnowState& state, const double sunDirection[3], const AltitudeRange& altitudes);
+inline std::vector<uint8_t> snowPreviewRgb(const SnowState& state, const double sunDirection[3]) {
+  return snowPreviewRgb(state, sunDirection, bedrockRange(state));
+}
 
 // Tiles RGB images of one size into a contact sheet `columns` wide (a grey gap between them).
 std::vector<uint8_t> contactSheetRgb(const std::vector<std::vector<uint8_t>>& images, int width, int height, int columns,

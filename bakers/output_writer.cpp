@@ -201,15 +201,27 @@ void OutputWriter::writePreview(const Day& d, const LayerInfo& layer) {
   SunPosition sun = sunPosition(latitude, scene_.startDayOfYear() + d.outputDay, 12.0);
   double direction[3] = {sun.direction[0], sun.direction[1], sun.direction[2]};
   if (sun.elevationDeg < 5.0) direction[0] = 0.0, direction[1] = latitude >= 0 ? -0.966 : 0.966, direction[2] = 0.259;
-  const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction);
+  // Bare rock coloured over the whole grid's altitudes (across ranks, every rank's range combined).
+  AltitudeRange altitudes = bedrockRange(s);
+  if (src_.wholeRange) {
+    const SeenRange whole = src_.wholeRange(SeenRange{altitudes.lo, altitudes.hi});
+    altitudes = {static_cast<float>(whole.lo), static_cast<float>(whole.hi)};
+  }
+  const std::vector<uint8_t> rgb = snowPreviewRgb(s, direction, altitudes);
   write(rgb);
-  // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet.
-  const int stride = std::max(1, (std::max(s.spec.width, s.spec.height) + 511) / 512);
-  const int tw = (s.spec.width + stride - 1) / stride, th = (s.spec.height + stride - 1) / stride;
-  std::vector<uint8_t> thumb(static_cast<size_t>(tw) * th * 3);
+  // Every preview, subsampled to at most 512 pixels across, for the season's contact sheet (a
+  // rank's window gives the pixels it owns, put together on rank 0).
+  const ImageWindow w = windowOf(s.spec.width, s.spec.height);
+  const int stride = std::max(1, (std::max(w.width, w.height) + 511) / 512);
+  const int tw = (w.width + stride - 1) / stride, th = (w.height + stride - 1) / stride;
+  std::vector<uint8_t> thumb(static_cast<size_t>(tw) * th * 3, 0);
   for (int y = 0; y < th; ++y)
-    for (int x = 0; x < tw; ++x)
-      std::copy_n(&rgb[(static_cast<size_t>(y * stride) * s.spec.width + x * stride) * 3], 3, &thumb[(static_cast<size_t>(y) * tw + x) * 3]);
+    for (int x = 0; x < tw; ++x) {
+      const int ix = x * stride, iy = y * stride;  // in the whole image
+      if (!src_.tilesStartingIn.empty() && !src_.tilesStartingIn.contains(ix, iy)) continue;
+      std::copy_n(&rgb[(static_cast<size_t>(iy - w.y0) * w.windowWidth + (ix - w.x0)) * 3], 3, &thumb[(static_cast<size_t>(y) * tw + x) * 3]);
+    }
+  if (src_.wholeThumbnail) thumb = src_.wholeThumbnail(std::move(thumb));
   previews_.push_back(std::move(thumb));
   previewWidth_ = tw, previewHeight_ = th;
 }

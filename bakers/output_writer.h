@@ -56,8 +56,11 @@ struct OutputSources {
   // whole grid (empty: the state is the whole grid); the writer writes the tiles whose first
   // pixel lies in `tilesStartingIn` (empty: every file); `wholeRange` combines a layer's range
   // seen on this rank's cells with every other rank's (on every rank alike, in the same order).
+  // `wholeThumbnail` puts each rank's pixels of a preview's thumbnail (0 on the others' cells)
+  // together on rank 0 (the contact sheet's).
   CellRect stateCells, tilesStartingIn;
-  std::function<SeenRange(const SeenRange&)> wholeRange;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
+  std::function<SeenRange(const SeenRange&)> wholeRange;
+  std::function<std::vector<uint8_t>(std::vector<uint8_t>)> wholeThumbnail;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
 };
 
 class OutputWriter {

@@ -12,9 +12,9 @@
 # --events: the default preset with its spontaneous avalanches and skiers, which every rank runs
 # on its replica of the whole grid; the last column says how often the replica was brought up to
 # date and what rank 0 sent for it.
-# --tiles: the default preset's layers but its preview (its displacement maps, VDB and meshes
-# left out too), in png16 and EXR as Unreal tiles of 505, which each rank writes for the tiles
-# that start in its subdomain (bake/tiles_on_ranks.h); the one process writes the same.
+# --tiles: the default preset's layers (its displacement maps, VDB and meshes left out) in png16,
+# EXR and PNG as Unreal tiles of 505, which each rank writes for the tiles that start in its
+# subdomain (bake/tiles_on_ranks.h); the one process writes the same.
 #   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -39,7 +39,7 @@ if [ "$tiles" = 1 ]; then  # the preset with its [outputs] table replaced
   cat >> "$scene" <<'TOML'
 [outputs]
 layers = ["compacted", "stable", "unstable", "powder", "depth", "surface", "snow_coverage", "weight_snow", "weight_rock",
-          "splat_map", "snow_normal"]
+          "splat_map", "snow_normal", "preview"]
 format = "exr"
 encodings = ["png16"]
 [outputs.tiles]
@@ -79,7 +79,7 @@ same() {
   done
 }
 
-echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers but the preview as Unreal tiles of 505"), 10 m cells, $days days;" \
+echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as Unreal tiles of 505 (no displacement maps, VDB or meshes)"), 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
 printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" \
   "largest rank / one process" "season's peak MiB per rank" "largest / one process" "replica gathers"

@@ -146,8 +146,9 @@ fi
 
 # [outputs.tiles] of layers each rank can write from its own cells: the ranks' subdomains cut on
 # the tiles' starts, each rank writing the tiles that start in its subdomain (frames, "season",
-# "own" and fixed ranges combined over the ranks, r32, the engine maps and the avalanche preview,
-# whose normals read the next cells); one manifest in the single process's order.
+# "own" and fixed ranges combined over the ranks, r32, the engine maps and previews, whose normals
+# read the next cells, the preview's altitude range and the contact sheet's thumbnails put
+# together); one manifest in the single process's order.
 cat > "$work/tiles.toml" <<TOML
 name = "across ranks: tiles written by their ranks"
 [terrain]
@@ -167,7 +168,7 @@ avalanche_rate_per_km2_per_day = 0.0
 skiers_per_hour = 0.0
 [outputs]
 layers = ["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour", "melt", "splat_map", "snow_normal",
-          "avalanche_preview"]
+          "avalanche_preview", "preview"]
 encodings = ["png16", "png8", "r32"]
 frames_days = [10, 20]
 [outputs.ranges]
