@@ -149,35 +149,10 @@ fi
 # "own" and fixed ranges combined over the ranks, r32, the engine maps and previews, whose normals
 # read the next cells, the preview's altitude range and the contact sheet's thumbnails put
 # together); one manifest in the single process's order.
-cat > "$work/tiles.toml" <<TOML
-name = "across ranks: tiles written by their ranks"
-[terrain]
-builtin = "ridged"
-size = 129
-cell_size_m = 10.0
-[season]
-start_date = 2025-12-01
-days = 30
-[[weather.keyframe]]
-day = 0
-sea_level_temperature_c = 4.0
-wind_direction_deg = 280
-wind_speed_mps = 8.0
-[parameters]
-avalanche_rate_per_km2_per_day = 0.0
-skiers_per_hour = 0.0
-[outputs]
-layers = ["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour", "melt", "splat_map", "snow_normal",
-          "avalanche_preview", "preview"]
-encodings = ["png16", "png8", "r32"]
-frames_days = [10, 20]
-[outputs.ranges]
-surface = "own"
-[outputs.tiles]
-convention = "unity"
-size_px = 33
-TOML
-check_scene tiles "$work/tiles.toml"
+tiles=("$work/winds.toml" --set 'outputs.layers=["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour",
+       "melt", "splat_map", "snow_normal", "avalanche_preview", "preview"]' --set 'outputs.encodings=["png16", "png8", "r32"]'
+       --set 'outputs.ranges.surface="own"' --set 'outputs.tiles.convention="unity"' --set outputs.tiles.size_px=33)
+check_scene tiles "${tiles[@]}"
 for ranks in 2 3 4; do
   grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tiles/$ranks/log" ||
     fail "tiles on $ranks ranks: the ranks did not write their own tiles"
@@ -185,7 +160,7 @@ done
 # GeoTIFF tiles of Unreal's 127 (2 x 2 on a grid of 253), frames beside the season (written in
 # place where the ranks write their tiles): 4 ranks write their own, 3 cannot share 2 x 2 tiles
 # (rank 0 gathers the grid and writes them all).
-unreal=("$work/tiles.toml" --set terrain.size=253 --set 'outputs.format="tiff"' --set 'outputs.tiles.convention="unreal"'
+unreal=("${tiles[@]}" --set terrain.size=253 --set 'outputs.format="tiff"' --set 'outputs.tiles.convention="unreal"'
         --set outputs.tiles.size_px=127 --set 'run.frame_writing="beside"')
 bake unreal "$work/unreal/alone" alone "${unreal[@]}"
 for ranks in 3 4; do
@@ -266,13 +241,13 @@ alone_fails rank0-output-folder /proc/snowbake-out --out /proc/snowbake-out
 alone_fails rank0-log-file /proc/snowbake.log --out out --log-file /proc/snowbake.log
 
 # Where each rank writes its tiles, one rank failing to write one (a folder in the way of rank
-# 3's first tile) ends every rank at once with its status and its one message, no manifest.
-mkdir -p "$work/tile-fails/out/frames" "$work/tile-fails/out/depth_3_0.exr"
+# 3's first tile, the south-east one of 3 x 3) ends every rank at once with its status and its one message, no manifest.
+mkdir -p "$work/tile-fails/out/frames" "$work/tile-fails/out/depth_2_0.exr"
 status=0
-(cd "$work/tile-fails" && timeout 300 "${launch[@]}" -n 4 "$bin" bake "$work/tiles.toml" --out out --no-cache --threads 1 > log 2>&1) ||
+(cd "$work/tile-fails" && timeout 300 "${launch[@]}" -n 4 "$bin" bake "${tiles[@]}" --out out --no-cache --threads 1 > log 2>&1) ||
   status=$?
 [ "$status" = 1 ] || fail "tile-fails: exit $status, not 1 (124: it hung)"
-grep -q "^\[rank 3\] snowbake: failed: .*depth_3_0.exr: Is a directory" "$work/tile-fails/log" ||
+grep -q "^\[rank 3\] snowbake: failed: .*depth_2_0.exr: Is a directory" "$work/tile-fails/log" ||
   { fail "tile-fails: rank 3's message is not in the log"; cat "$work/tile-fails/log" >&2; }
 [ ! -e "$work/tile-fails/out/manifest.json" ] || fail "tile-fails: a manifest was written"
 
