@@ -228,8 +228,9 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
 
 void keepTheRanksCellsOfTheState(const Scene& scene, SnowState& state, const PrecomputeParts& parts) {
   if (!acrossRanks || !parts.any()) return;
-  // Rank 0 gathers the whole grid's state for its outputs, unless every rank writes its own tiles.
-  if (dist::Communicator::world().rank() == 0 && !ranksWriteTheirTiles(scene, state.spec)) return;
+  // Rank 0 gathers the whole grid's state for its outputs, unless every rank writes its own tiles;
+  // it keeps a no-snow mask's whole grid to take the snow it removes in the single process's order.
+  if (dist::Communicator::world().rank() == 0 && (!ranksWriteTheirTiles(scene, state.spec) || state.noSnow.size() > 0)) return;
   state = dist::cutLocalState(std::move(state), decompositionOf(scene, state.spec).local(dist::Communicator::world().rank()));
 }
 
@@ -253,9 +254,10 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   const dist::Communicator comm = dist::Communicator::world();
   const GridSpec whole = terrain.info().spec;
   // The ranks but 0 (and 0 where every rank writes its tiles) hold their local grid of the state
-  // since the inputs stage where the precompute is made in parts (keepTheRanksCellsOfTheState).
+  // since the inputs stage where the precompute is made in parts (keepTheRanksCellsOfTheState);
+  // a local grid is never the whole grid on more than one rank.
   const bool tilesOnRanks = ranksWriteTheirTiles(scene, whole);
-  const bool alreadyLocal = pre.partsOnRanks && (comm.rank() != 0 || tilesOnRanks);
+  const bool alreadyLocal = pre.partsOnRanks && (state.spec.width != whole.width || state.spec.height != whole.height);
   const dist::Decomposition d = decompositionOf(scene, whole);
   const dist::CellRect cells = d.local(comm.rank());
   // Avalanches, skiers and bedforms run on a replica of the whole grid on every rank, their

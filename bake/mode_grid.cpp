@@ -202,9 +202,10 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   } else {
     stage.emplace("season");
     SeasonConfig config = makeSeasonConfig(scene, terrain, art, pre, layers, seasonOutputs, log);
-    // Ranks writing their tiles exchange each layer's range, which MPI allows the main thread alone:
-    // a frame beside the season is written in place instead (the same files).
-    const FrameTiming timing = tilesOnRanks && memoryPlan.timing == FrameTiming::Beside ? FrameTiming::Paused : memoryPlan.timing;
+    // Ranks writing their tiles exchange as they write (each layer's range), from the main thread
+    // alone and all at once: every rank writes its frames in place, whatever timing its own memory
+    // plan chose (the same files).
+    const FrameTiming timing = tilesOnRanks ? FrameTiming::Paused : memoryPlan.timing;
     FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, timing);
     config.lendFrames = frames.lendsFrames();
     config.spillFolder = options.outDir;

@@ -32,8 +32,9 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
 std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int halo) {
   if (!whyRankZeroWritesEveryFile(scene).empty()) return std::nullopt;
   const TileLayout l = tileLayout(scene.outputs.tiles, spec.width, spec.height);
-  // A tile reaches its overlap past the next tile's start, into the next rank's subdomain: the halo holds it.
-  if (l.tileWidth - l.step > halo) return std::nullopt;
+  // A tile reaches its overlap past the next tile's start, into the next rank's subdomain: the halo
+  // holds it, and the next cell its normals and slopes read.
+  if (l.tileWidth - l.step >= halo) return std::nullopt;
   return dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
 }
 

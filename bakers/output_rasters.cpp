@@ -32,6 +32,23 @@ bool OutputWriter::writesTile(const TileLayout& l, int column, int row) const {
   return false;
 }
 
+SeenRange OutputWriter::seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid) const {
+  SeenRange seen;
+  const ImageWindow w = windowOf(grid.width(), grid.height());
+  if (src_.tilesStartingIn.empty() || (w.windowWidth == w.width && w.windowHeight == w.height)) {
+    seen.widen(grid, valid);
+    return seen;
+  }
+  // A rank's window: the cells it owns alone (at its local grid's edge a layer reading the next
+  // cells, as the slope's weights do, reads them clamped).
+  const CellRect& own = src_.tilesStartingIn;
+  const CellRect mine{own.x0 - w.x0, own.y0 - w.y0, own.x1 - w.x0, own.y1 - w.y0};
+  const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
+  const Grid<uint8_t> ownValid = masked ? gridWindow(*valid, mine) : Grid<uint8_t>();
+  seen.widen(gridWindow(grid, mine), masked ? &ownValid : nullptr);
+  return seen;
+}
+
 void OutputWriter::noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const {
   ManifestFile& f = currentSink().files.back();
   if (imageWidth != src_.geo.gridWidth || imageHeight != src_.geo.gridHeight || l.tiled()) f.width = l.tileWidth, f.height = l.tileHeight;
@@ -158,8 +175,7 @@ void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const Laye
   const LayerRange range = rangeOf(out, layer);
   ValueMapping m{range.mode, range.lo, range.hi};
   if (range.mode != RangeMode::Fixed && !src_.plan) {
-    SeenRange seen;
-    seen.widen(grid, valid);
+    SeenRange seen = seenOnOwnCells(grid, valid);
     if (src_.wholeRange) seen = src_.wholeRange(seen);  // across ranks: every rank's cells
     m = seen.mapping(range.mode);
     if (range.mode == RangeMode::Season) {

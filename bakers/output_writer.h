@@ -131,6 +131,8 @@ class OutputWriter {
   // Where a raster's pixels lie in its image: the rank's window of the grid's image for a grid of
   // the state's size across ranks, else the raster is the whole image.
   ImageWindow windowOf(int width, int height) const;
+  // The range of a raster's valid values: over the cells this rank owns, in a rank's window.
+  SeenRange seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid) const;
   // Whether this rank writes tile (column, row); counts a listing of the tiles it does not, so
   // every rank numbers each file alike (ManifestFile::listing).
   bool writesTile(const TileLayout& l, int column, int row) const;

@@ -157,6 +157,15 @@ for ranks in 2 3 4; do
   grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tiles/$ranks/log" ||
     fail "tiles on $ranks ranks: the ranks did not write their own tiles"
 done
+# A no-snow mask on initial snow (rank 0 keeps the whole state until the season to take what it
+# removes in the single process's order) and weight_rock, whose slopes read the next cells, on its
+# own range (over each rank's own cells): on 4 ranks.
+nosnow=("${tiles[@]}" --set initial_snow.stable=0.2 --set "multipliers.no_snow=\"$root/presets/art_direction/road.png\""
+        --set 'outputs.ranges.weight_rock="own"')
+bake nosnow "$work/nosnow/alone" alone "${nosnow[@]}" && bake nosnow "$work/nosnow/4" 4 "${nosnow[@]}" &&
+  same "tiles with a no-snow mask on 4 ranks" "$work/nosnow/alone" "$work/nosnow/4"
+grep -qE "no-snow mask: [1-9]" "$work/nosnow/alone/log" || fail "nosnow: the mask removed no snow"
+
 # GeoTIFF tiles of Unreal's 127 (2 x 2 on a grid of 253), frames beside the season (written in
 # place where the ranks write their tiles): 4 ranks write their own, 3 cannot share 2 x 2 tiles
 # (rank 0 gathers the grid and writes them all).
