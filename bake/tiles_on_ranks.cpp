@@ -22,7 +22,6 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
     if (layer->needs != kNeedsState) return "outputs.layers: \"" + name + "\" (read from the precompute or the skiers, not the snow state)";
   }
   if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";
-  if (out.multichannelExr) return "outputs.multichannel_exr";
   if (out.vdb) return "outputs.vdb (one file of the whole snow body)";
   if (!out.meshes.empty()) return "outputs.meshes (triangulated over the whole grid)";
   if (out.avalancheMaps) return "outputs.avalanche_maps";

@@ -146,12 +146,13 @@ fi
 
 # [outputs.tiles] of layers each rank can write from its own cells: the ranks' subdomains cut on
 # the tiles' starts, each rank writing the tiles that start in its subdomain (frames, "season",
-# "own" and fixed ranges combined over the ranks, r32, the engine maps and previews, whose normals
+# "own" and fixed ranges combined over the ranks, r32, layers.exr, the engine maps and previews, whose normals
 # read the next cells, the preview's altitude range and the contact sheet's thumbnails put
 # together); one manifest in the single process's order.
 tiles=("$work/winds.toml" --set 'outputs.layers=["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour",
        "melt", "splat_map", "snow_normal", "avalanche_preview", "preview"]' --set 'outputs.encodings=["png16", "png8", "r32"]'
-       --set 'outputs.ranges.surface="own"' --set 'outputs.tiles.convention="unity"' --set outputs.tiles.size_px=33)
+       --set 'outputs.ranges.surface="own"' --set outputs.multichannel_exr=true --set 'outputs.tiles.convention="unity"'
+       --set outputs.tiles.size_px=33)
 check_scene tiles "${tiles[@]}"
 for ranks in 2 3 4; do
   grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tiles/$ranks/log" ||
