@@ -17,8 +17,9 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
   for (const std::string& name : out.layers) {
     const LayerInfo* layer = findLayer(name);
     if (!layer) continue;
-    // The pictures are drawn cell by cell, their normals from the next cells (in the halo); the
-    // preview's altitude range and contact-sheet thumbnails are put together over the ranks.
+    // Every layer of the snow state is: the pictures too, drawn cell by cell with their normals
+    // from the next cells (in the halo), the preview's altitude range and contact-sheet thumbnails
+    // put together over the ranks.
     if (layer->needs != kNeedsState) return "outputs.layers: \"" + name + "\" (read from the precompute or the skiers, not the snow state)";
   }
   if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";

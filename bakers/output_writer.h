@@ -47,7 +47,7 @@ struct OutputSources {
   // size and the scene alone; no value is computed, nothing is written. The state given to
   // writeDay then needs only its spec.
   bool plan = false;
-  bool planSnowMesh = false;
+  bool planSnowMesh = false;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
   bool planNodata = false;    // plan mode: the terrain has NODATA cells (mesh tiles over them may be left out)
   // Called as each file is written (from the writers' threads): the progress's live "file" events.
   std::function<void(const std::string& path, double day)> fileWritten;
@@ -60,7 +60,7 @@ struct OutputSources {
   // together on rank 0 (the contact sheet's).
   CellRect stateCells, tilesStartingIn;
   std::function<SeenRange(const SeenRange&)> wholeRange;
-  std::function<std::vector<uint8_t>(std::vector<uint8_t>)> wholeThumbnail;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
+  std::function<std::vector<uint8_t>(std::vector<uint8_t>)> wholeThumbnail;
 };
 
 class OutputWriter {
