@@ -152,8 +152,8 @@ bool seasonOnReplica(const Scene& scene) {
   return dist::seasonNeedsReplica(c);
 }
 
-// Bytes a cell of the initial state every rank makes on the whole grid before it keeps its cells:
-// the terrain's and the snow's fields (initialState).
+// Bytes a cell of the initial state a rank makes on the whole grid for art direction before it
+// keeps its cells: the terrain's and the snow's fields (initialState).
 double initialStateBytesPerCell() {
   double bytes = 0;
 #define SNOW_INITIAL_BYTES(member, view, Element, role, access, fill) \
@@ -201,10 +201,13 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   m.rankZeroHere = dist::Communicator::node().holdsRankZero;
   if (seasonOnReplica(scene)) {  // every rank: the whole grid's bake beside its local grid's backend
     m.rankZeroBytes = m.otherBytes = onWhole.peakBytes() + localAbove;
-  } else {  // rank 0 writes the whole grid's outputs; the others hold the whole terrain and, until they cut it, the initial state
-    m.otherBytes = libraries + std::max(terrain + initialStateBytesPerCell() * cells, terrain + localAbove);
+  } else {  // rank 0 writes the whole grid's outputs; the others hold the whole terrain and, with art
+            // direction until they cut it, the whole initial state
+    const double wholeInitial = needsArtDirection(scene) ? initialStateBytesPerCell() * cells : 0.0;
+    m.otherBytes = libraries + terrain + std::max(wholeInitial, localAbove);
     // Where each rank writes its tiles, rank 0 is one of the others (its local grid's outputs in localAbove).
-    m.rankZeroBytes = ranksWriteTheirTiles(scene, whole) ? m.otherBytes : onWhole.peakBytes();
+    m.rankZeroGathers = !ranksWriteTheirTiles(scene, whole);
+    m.rankZeroBytes = m.rankZeroGathers ? onWhole.peakBytes() : m.otherBytes;
   }
   return m;
 }
@@ -226,12 +229,26 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
   return parts;
 }
 
-void keepTheRanksCellsOfTheState(const Scene& scene, SnowState& state, const PrecomputeParts& parts) {
-  if (!acrossRanks || !parts.any()) return;
-  // Rank 0 gathers the whole grid's state for its outputs, unless every rank writes its own tiles;
-  // it keeps a no-snow mask's whole grid to take the snow it removes in the single process's order.
-  if (dist::Communicator::world().rank() == 0 && (!ranksWriteTheirTiles(scene, state.spec) || state.noSnow.size() > 0)) return;
-  state = dist::cutLocalState(std::move(state), decompositionOf(scene, state.spec).local(dist::Communicator::world().rank()));
+namespace {
+// Whether this rank keeps its local grid's cells of the state from the precompute on (`noSnow`:
+// art direction made a no-snow mask). Rank 0 gathers the whole grid's state for its outputs, unless
+// every rank writes its own tiles; it keeps a no-snow mask's whole grid to take the snow it removes
+// in the single process's order.
+bool keepsItsCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts, bool noSnow) {
+  if (!acrossRanks || !parts.any()) return false;
+  return dist::Communicator::world().rank() != 0 || (ranksWriteTheirTiles(scene, whole) && !noSnow);
+}
+}  // namespace
+
+CellRect initialStateCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts) {
+  if (needsArtDirection(scene) || !keepsItsCells(scene, whole, parts, false)) return CellRect::whole(whole);
+  return decompositionOf(scene, whole).local(dist::Communicator::world().rank());
+}
+
+void keepTheRanksCellsOfTheState(const Scene& scene, const GridSpec& whole, SnowState& state, const PrecomputeParts& parts) {
+  const bool wholeGrid = state.spec.width == whole.width && state.spec.height == whole.height;  // else made on its cells
+  if (!wholeGrid || !keepsItsCells(scene, whole, parts, state.noSnow.size() > 0)) return;
+  state = dist::cutLocalState(std::move(state), decompositionOf(scene, whole).local(dist::Communicator::world().rank()));
 }
 
 bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec) {
@@ -254,8 +271,8 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   const dist::Communicator comm = dist::Communicator::world();
   const GridSpec whole = terrain.info().spec;
   // The ranks but 0 (and 0 where every rank writes its tiles) hold their local grid of the state
-  // since the inputs stage where the precompute is made in parts (keepTheRanksCellsOfTheState);
-  // a local grid is never the whole grid on more than one rank.
+  // since the inputs stage where the precompute is made in parts (initialStateCells,
+  // keepTheRanksCellsOfTheState); a local grid is never the whole grid on more than one rank.
   const bool tilesOnRanks = ranksWriteTheirTiles(scene, whole);
   const bool alreadyLocal = pre.partsOnRanks && (state.spec.width != whole.width || state.spec.height != whole.height);
   const dist::Decomposition d = decompositionOf(scene, whole);
@@ -426,7 +443,7 @@ int runBakeAcrossRanks(BakeOptions options, const std::function<std::ostream&()>
       perRank(2);
       *log << "; after it";
       perRank(3);
-      *log << " (rank 0 writes the outputs)\n";
+      *log << " (the outputs)\n";
     }
   }
   acrossRanks = false;

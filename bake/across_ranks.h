@@ -23,6 +23,7 @@
 
 #include "bake.h"
 #include "memory_model.h"
+#include "core/grid_window.h"
 #include "core/snow_state.h"
 #include "scene/scene.h"
 
@@ -67,10 +68,16 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
 std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole, const MemoryPrediction& onWhole,
                                        const std::function<MemoryPrediction(const GridSpec&)>& predictOn);
 
-// The ranks but 0 keep their local grid's cells of the initial state (cut once art direction has
-// made it) where the precompute is made in parts: from there on nothing but the season reads it,
-// and rank 0 gathers the season's into its whole state.
-void keepTheRanksCellsOfTheState(const Scene& scene, SnowState& state, const PrecomputeParts& parts);
+// The cells of the whole grid this rank's initial state is made on (initialState): its local grid
+// where it keeps that alone once the precompute is made in parts (the ranks but 0, and 0 where
+// every rank writes its tiles) and the scene has no art direction; else the whole grid, which
+// art direction reads (its rasters placed and their volumes summed over the whole grid).
+CellRect initialStateCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts);
+// Where it was made on the whole grid, the state cut to this rank's local grid once art direction
+// has made it, where the rank keeps that alone (as initialStateCells; rank 0 not with a no-snow
+// mask, whose removed volume it sums on the whole grid): from there on nothing but the season
+// reads it, and rank 0 gathers the season's into its whole state.
+void keepTheRanksCellsOfTheState(const Scene& scene, const GridSpec& whole, SnowState& state, const PrecomputeParts& parts);
 
 // Whether each rank writes the tiles that start in its subdomain (tiles_on_ranks.h): across
 // ranks, under [outputs.tiles] with outputs each rank can write from its local grid, on a grid

@@ -78,6 +78,8 @@ class RasterCache {
   std::map<Key, Entry> cache_;
 };
 
+}  // namespace
+
 // True when the scene asks for anything this stage does; otherwise the bake skips it silently.
 bool needsArtDirection(const Scene& scene) {
   bool anyEvent = false;
@@ -88,6 +90,8 @@ bool needsArtDirection(const Scene& scene) {
   const bool bedformMask = scene.bedforms.enabled && scene.bedforms.mask.has_value();
   return anyEvent || anyInitial || !scene.edits.empty() || scene.multipliers.any() || bedformMask;
 }
+
+namespace {
 
 // Fills one snow layer from its [initial_snow] entry; returns the volume placed (m^3).
 double placeInitialLayer(int l, const InitialSnowLayer& spec, RasterCache& rasters, SnowState& state, std::ostream& log) {

@@ -23,6 +23,9 @@ struct ArtDirectionPlan {
   bool any() const { return !rasters.empty() || !edits.empty(); }
 };
 
+// Whether the scene asks for any art direction; otherwise prepareArtDirection does nothing.
+bool needsArtDirection(const Scene& scene);
+
 // Reads the rasters the scene names and fills `state` (initial layers, multipliers, noSnow).
 // Throws InputError naming the raster file and the problem.
 ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terrain, SnowState& state, std::ostream& log);

@@ -103,6 +103,7 @@ struct RanksMemory {
   int ranks = 1;             // of the launch
   int ranksHere = 1;         // on this machine
   bool rankZeroHere = true;  // rank 0 is one of them
+  bool rankZeroGathers = true;  // rank 0 writes the whole grid's outputs (not each rank its tiles)
   double rankZeroBytes = 0, otherBytes = 0;
   double hereBytes() const { return rankZeroHere ? rankZeroBytes + (ranksHere - 1) * otherBytes : ranksHere * otherBytes; }
 };

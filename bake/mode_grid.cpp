@@ -24,22 +24,6 @@ namespace snow {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-// The state on the terrain, with art direction's initial snow, multipliers and masks.
-// The terrain and the snow alone: the record fields are made by the season (those an output
-// reads, SeasonConfig::recordFields) and the static fields by the precompute's fill of day 0, so
-// neither is held through the art direction and the precompute's sweeps.
-SnowState initialState(const BakeTerrain& t) {
-  SnowState state;
-  state.allocate(t.info().spec, [](FieldRole r) { return r != FieldRole::Record && r != FieldRole::Static; });
-  state.bedrockM = t.terrain.heightsM;
-  state.validCell = t.terrain.valid;
-  return state;
-}
-
-}  // namespace
-
 std::vector<std::string> layersToWrite(const Scene& scene, const TerrainInfo& ti) {
   std::vector<std::string> layers = scene.outputs.layers;
   if (ti.nodataCells > 0 && std::find(layers.begin(), layers.end(), "valid_mask") == layers.end()) layers.push_back("valid_mask");
@@ -158,15 +142,16 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   // Painted rasters first: a bad mask fails before any precompute runs; so do bedform parameters
   // that do not suit the grid.
   stage.emplace("inputs and art direction");
-  SnowState state = initialState(terrain);
-  const ArtDirectionPlan art = prepareArtDirection(scene, terrain.info(), state, log);
-  checkBedformsSuitTheGrid(scene, state.spec);
-  const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
-  stage.emplace("precompute");
+  const GridSpec& wholeSpec = terrain.info().spec;
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   const uint8_t needs = layersNeeds(layers);
-  const PrecomputeParts parts = rankPrecomputeParts(scene, state.spec, needs);
-  keepTheRanksCellsOfTheState(scene, state, parts);
+  const PrecomputeParts parts = rankPrecomputeParts(scene, wholeSpec, needs);
+  SnowState state = initialState(terrain, initialStateCells(scene, wholeSpec, parts));  // across ranks, maybe its local grid alone
+  const ArtDirectionPlan art = prepareArtDirection(scene, terrain.info(), state, log);
+  checkBedformsSuitTheGrid(scene, wholeSpec);
+  const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
+  stage.emplace("precompute");
+  keepTheRanksCellsOfTheState(scene, wholeSpec, state, parts);
   Precomputed pre = runPrecompute(scene, terrain, state, cache, parts, log);
   // A constant wind's fields are the state's copy from here on, unless a layer reads the wind
   // (across ranks with parts, each rank's local state's: runSeasonAcrossRanks).

@@ -1,5 +1,6 @@
 // Stage 2: the terrain (DEM, heightmap, raw or mesh), the occluder meshes and the latitude.
 #include "core/format.h"
+#include "core/grid_window.h"
 #include "stages.h"
 
 namespace snow {
@@ -28,6 +29,14 @@ BakeTerrain loadBakeTerrain(const Scene& scene, std::ostream& log) {
     log << "site: latitude " << fixed(t.latitudeDeg, 3) << " deg " << (ti.latitudeKnown ? "(from the DEM)" : "(default; set site.latitude_deg)")
         << "\n";
   return t;
+}
+
+SnowState initialState(const BakeTerrain& t, const CellRect& cells) {
+  SnowState state;
+  state.allocate(windowSpec(t.info().spec, cells), [](FieldRole r) { return r != FieldRole::Record && r != FieldRole::Static; });
+  state.bedrockM = gridWindow(t.terrain.heightsM, cells);
+  state.validCell = gridWindow(t.terrain.valid, cells);
+  return state;
 }
 
 }  // namespace snow

@@ -15,6 +15,7 @@
 #include "bakers/manifest.h"
 #include "bakers/output_writer.h"
 #include "core/backend.h"
+#include "core/grid_window.h"
 #include "core/season.h"
 #include "core/util.h"
 #include "frame_writer.h"
@@ -41,6 +42,12 @@ struct BakeTerrain {
   const TerrainInfo& info() const { return terrain.info; }
 };
 BakeTerrain loadBakeTerrain(const Scene& scene, std::ostream& log);
+// The state on `cells` of the terrain's grid, with the terrain's and the snow's fields: the record
+// fields are made by the season (those an output reads, SeasonConfig::recordFields) and the static
+// fields by the precompute's fill of day 0, so neither is held through the art direction and the
+// precompute's sweeps. `cells` is the whole grid, or across ranks a rank's local grid: the cells
+// the whole state's cut would hold (dist::cutLocalState), its spec's origin at their corner.
+SnowState initialState(const BakeTerrain& terrain, const CellRect& cells);
 
 // Whether a precompute stage runs, and why not: the one decision the bake acts on and
 // `snowbake plan` reports (stage_precompute.cpp).

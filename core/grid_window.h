@@ -49,4 +49,15 @@ Grid<T> gridWindow(const Grid<T>& whole, const CellRect& r) {
   return gridWindow(whole, r.x0, r.y0, r.width(), r.height());
 }
 
+// The spec of `cells` of the grid `whole` as a grid of their own: its origin at their north-west
+// corner (north-up: y runs south).
+inline GridSpec windowSpec(const GridSpec& whole, const CellRect& cells) {
+  GridSpec local = whole;
+  local.width = cells.width();
+  local.height = cells.height();
+  local.originX = whole.originX + cells.x0 * whole.cellSizeXM;
+  local.originY = whole.originY - cells.y0 * whole.cellSizeYM;
+  return local;
+}
+
 }  // namespace snow

@@ -16,28 +16,16 @@ void cutFields(const SnowState& whole, const CellRect& cells, const std::functio
 #undef SNOW_CUT_FIELD
 }
 
-namespace {
-// The local grid's spec: `cells` of the whole one, its origin at their north-west corner.
-GridSpec localSpec(const GridSpec& whole, const CellRect& cells) {
-  GridSpec local = whole;
-  local.width = cells.width();
-  local.height = cells.height();
-  local.originX = whole.originX + cells.x0 * whole.cellSizeXM;
-  local.originY = whole.originY - cells.y0 * whole.cellSizeYM;
-  return local;
-}
-}  // namespace
-
 SnowState cutLocalState(const SnowState& whole, const CellRect& cells) {
   SnowState local;
-  local.spec = localSpec(whole.spec, cells);
+  local.spec = windowSpec(whole.spec, cells);
   cutFields(whole, cells, [](FieldRole) { return true; }, local);
   return local;
 }
 
 SnowState cutLocalState(SnowState&& whole, const CellRect& cells) {
   SnowState local;
-  local.spec = localSpec(whole.spec, cells);
+  local.spec = windowSpec(whole.spec, cells);
 #define SNOW_TAKE_FIELD(member, view, Element, role, access, fill)                     \
   if (whole.member.size() == whole.spec.cellCount() && whole.member.size() > 0) { \
     local.member = gridWindow(whole.member, cells);                                    \

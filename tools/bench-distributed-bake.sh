@@ -15,15 +15,18 @@
 # --tiles: the default preset's layers (its displacement maps, VDB and meshes left out) in png16,
 # EXR and PNG as Unreal tiles of 505, which each rank writes for the tiles that start in its
 # subdomain (bake/tiles_on_ranks.h); the one process writes the same.
-#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles] [BUILD=build] [SIZE=1024] [DAYS=30]
+# --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
+# prints rank 0's log lines of each stage's time, the memory and the mass balance beside the row.
+#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles] [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0 tiles=0
-while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ]; do
+mode=strong events=0 tiles=0 only=""
+while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --ranks-only ]; do
   case "$1" in
     --weak) mode=weak ;;
     --events) events=1 ;;
     --tiles) tiles=1 ;;
+    --ranks-only) mode=only only="$2"; shift ;;
   esac
   shift
 done
@@ -68,8 +71,8 @@ run() {
   season_largest="$(echo "$season_peaks" | tr ',' '\n' | sort -g | tail -1 | tr -d ' ')"
   replica="$(sed -n 's/^season: .*brought up to date \([0-9]*\) times (\([0-9.]*\) MiB sent by rank 0)$/\1 times, \2 MiB/p' "$dir/log")"
   printf '| %s | %s² | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$ranks" "$size" "$([ "$ranks" = 1 ] && echo 2 || echo 1)" "$season" "$total" \
-    "$peaks" "$(awk -v a="$largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }')" "${season_peaks:--}" \
-    "$([ -n "$season_largest" ] && awk -v a="$season_largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }' || echo -)" "${replica:--}"
+    "$peaks" "$([ -n "$one" ] && awk -v a="$largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }' || echo -)" "${season_peaks:--}" \
+    "$([ -n "$season_largest" ] && [ -n "$one" ] && awk -v a="$season_largest" -v b="$one" 'BEGIN { printf "%.2f", a / b }' || echo -)" "${replica:--}"
 }
 # same RANKS SIZE: every output file but the manifest has the alone bake's bytes.
 same() {
@@ -90,6 +93,11 @@ if [ "$mode" = strong ]; then
     run "$ranks" "$size"
     [ "$ranks" = 1 ] || same "$ranks" "$size"
   done
+elif [ "$mode" = only ]; then
+  run "$only" "$size"
+  echo
+  echo "rank 0's log:"
+  grep -E '^(terrain|sun exposure|wind|season|outputs|total|memory|mass)' "$work/$only-$size/log" | sed 's/^/    /'
 else  # weak: SIZE² cells a rank (1448² is 2.0 x 1024²)
   run 1 "$size"
   run 2 "$(awk -v s="$size" 'BEGIN { printf "%d", s * sqrt(2) + 0.5 }')"
