@@ -225,6 +225,11 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
                             agreeBeforeExchanges(comm, false);
                             const Exchanging exchanging;
                             return dist::solveWindOnLocalGrid(comm, d, altitude, valid, s, state, p, o, f, loading);
+                          },
+                          [comm](bool found) {  // after the failures' agreement, as a solve: a rank that failed joins that
+                            agreeBeforeExchanges(comm, false);
+                            const std::vector<double> all = comm.allGather({found ? 1.0 : 0.0});
+                            return std::all_of(all.begin(), all.end(), [](double f) { return f == 1.0; });
                           }};
   return parts;
 }

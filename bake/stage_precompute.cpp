@@ -17,8 +17,7 @@ Exposure loadOrComputeExposure(const Terrain& terrain, const std::vector<Triangl
                                std::ostream& log) {
   const GridSpec& spec = terrain.info.spec;
   std::string key = exposureCacheKey(terrain.heightsM, terrain.valid, spec, occluders, p, es);
-  if (cells) key += "-cells-" + std::to_string(cells->x0) + "-" + std::to_string(cells->y0) + "-" + std::to_string(cells->x1) + "-" +
-                    std::to_string(cells->y1);
+  if (cells) key = partCacheKey(key, *cells);
   const CellRect extent = cells.value_or(CellRect::whole(spec));
   // The sample days are fixed by the settings: list them, then fill the grids from the cache.
   Exposure e;
@@ -157,9 +156,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   } else if (windStage.runs) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " (" << wind.computedStates()
         << " computed, " << wind.cachedStates() << " from the cache"
-        << (parts.wind          ? std::string(", on each rank's local grid: no cache")
-            : cache.enabled()   ? " " + cache.directory()
-                                : std::string(", cache off"))
+        << (parts.wind ? ", each rank its local grid's" : "") << (cache.enabled() ? " " + cache.directory() : std::string(", cache off"))
         << ") (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   } else {
     log << "precompute: no wind in the season: wind field skipped\n";

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "core/grid_window.h"
 
 namespace snow {
 
@@ -18,6 +19,13 @@ struct CacheEntryCheck {
   bool valid = false;    // its header, length and checksum are right
   std::string problem;   // why not, for the log ("truncated: 100 of 4152 bytes", ...)
 };
+
+// The key of a rank's part (its local grid's `cells`, across ranks) of the whole grid's entry
+// `wholeKey`: an entry of its own, read by a later bake with the same ranks.
+inline std::string partCacheKey(const std::string& wholeKey, const CellRect& cells) {
+  return wholeKey + "-cells-" + std::to_string(cells.x0) + "-" + std::to_string(cells.y0) + "-" + std::to_string(cells.x1) + "-" +
+         std::to_string(cells.y1);
+}
 
 class PrecomputeCache {
  public:

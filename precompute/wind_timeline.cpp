@@ -56,17 +56,28 @@ WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& val
     WindField f;
     Grid<float> loading;
     if (part) {
-      if (!part->solve(altitude, valid, spec, s, params, options, f, loading)) {  // the whole grid's, then its cells
-        const WindField whole = computeWindField(altitude, valid, spec, s, params, options);
-        const CellRect& c = part->cells;
-        f.windXMps = gridWindow(whole.windXMps, c), f.windYMps = gridWindow(whole.windYMps, c);
-        f.windEffectZM = gridWindow(whole.windEffectZM, c), f.verticalSpeedMps = gridWindow(whole.verticalSpeedMps, c);
-        f.stats = whole.stats;
-        f.stats.ordering += " of the whole grid (the free stream turns)";
-        loading = gridWindow(windLoading(whole, valid, spec), c);
+      const CellRect& c = part->cells;
+      const std::string key = partCacheKey(windCacheKey(altitude, valid, spec, s, params, options), c);
+      const bool found = cache.load("wind", key, c.width(), c.height(), {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps, &loading});
+      if (part->everyRankFound ? part->everyRankFound(found) : found) {
+        ++cached_;
+        f.stats.ordering = "cache";
+        f.stats.converged = true;
+        if (log) *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: from the cache, each rank its local grid's\n";
+      } else {
+        f = WindField(), loading = Grid<float>();  // a part some other rank did not find: all solve
+        if (!part->solve(altitude, valid, spec, s, params, options, f, loading)) {  // the whole grid's, then its cells
+          const WindField whole = computeWindField(altitude, valid, spec, s, params, options);
+          f.windXMps = gridWindow(whole.windXMps, c), f.windYMps = gridWindow(whole.windYMps, c);
+          f.windEffectZM = gridWindow(whole.windEffectZM, c), f.verticalSpeedMps = gridWindow(whole.verticalSpeedMps, c);
+          f.stats = whole.stats;
+          f.stats.ordering += " of the whole grid (the free stream turns)";
+          loading = gridWindow(windLoading(whole, valid, spec), c);
+        }
+        ++computed_;
+        cache.store("wind", key, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps, &loading});
       }
-      ++computed_;
-    } else if (const std::string key = windCacheKey(altitude, valid, spec, s, params, options);  // a part reads no cache
+    } else if (const std::string key = windCacheKey(altitude, valid, spec, s, params, options);
                cache.load("wind", key, spec.width, spec.height, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps})) {
       ++cached_;
       f.stats.ordering = "cache";

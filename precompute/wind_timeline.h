@@ -30,13 +30,17 @@ Grid<float> windLoading(const WindField& field, const Grid<uint8_t>& valid, cons
 // A timeline made for part of the grid (a rank's local grid, across ranks): its cells, and how a
 // state's fields and loading are solved on them (the whole grid's bytes), or false where they
 // cannot be (the timeline then solves the whole grid and cuts it). Every rank's timeline calls
-// `solve` for the same states in the same order, and none reads the cache (a rank that found a
-// state there would leave the others' exchanges waiting).
+// `solve` for the same states in the same order. Each rank's part of a state is an entry of its
+// own in the cache (partCacheKey); `everyRankFound` says whether every rank found its part there
+// (this rank's `found` beside the others'; empty: a part alone, its own finding), so the ranks
+// read them all or solve together (a rank that read its part alone would leave the others'
+// exchanges waiting).
 struct WindPart {
   CellRect cells;
   std::function<bool(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WindState& state,
                      const ModelParameters& params, const WindSolverOptions& options, WindField& fields, Grid<float>& loading)>
       solve;
+  std::function<bool(bool found)> everyRankFound;
 };
 
 class WindTimeline {

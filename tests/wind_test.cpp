@@ -315,6 +315,53 @@ TEST(WindTimeline, APartWhoseSolveDeclinesKeepsItsCellsOfTheWholeGridsSolve) {
   expectTheWholesCellsOnEveryDay(whole, mine, part.cells);
 }
 
+// A rank's part is cached as an entry of its own (the whole grid's key and its cells) and read back
+// only where every rank found its own (everyRankFound); else the part is solved again.
+TEST(WindTimeline, APartIsCachedAsItsOwnEntryAndReadOnlyWhereEveryRankFoundItsOwn) {
+  const CalmBetweenWinds k;
+  const WindTimeline whole(k.altitude, k.valid, k.spec, k.weather, ModelParameters{}, PrecomputeCache("", false));
+  const std::string dir = tempCacheDir();
+  const PrecomputeCache cache(dir, true);
+  size_t solves = 0;
+  bool othersFound = true;
+  std::vector<bool> asked;  // this rank's finding, each state
+  const WindPart part{CellRect{7, 11, 32, 30},
+                      [&](const Grid<float>&, const Grid<uint8_t>&, const GridSpec&, const WindState&, const ModelParameters&,
+                          const WindSolverOptions&, WindField&, Grid<float>&) {
+                        ++solves;
+                        return false;  // the whole grid's solve, cut
+                      },
+                      [&](bool found) {
+                        asked.push_back(found);
+                        return found && othersFound;
+                      }};
+  auto timeline = [&] {
+    return WindTimeline(k.altitude, k.valid, k.spec, k.weather, ModelParameters{}, cache, WindSolverOptions{}, nullptr, &part);
+  };
+  const size_t n = whole.stateCount();
+  ASSERT_GE(n, 2u);
+  const WindTimeline first = timeline();
+  EXPECT_EQ(first.computedStates(), n);
+  EXPECT_EQ(asked, std::vector<bool>(n, false));
+  size_t entries = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir))
+    entries += e.path().filename().string().find("-cells-7-11-32-30") != std::string::npos;
+  EXPECT_EQ(entries, n);
+  asked.clear();
+  const WindTimeline second = timeline();
+  EXPECT_EQ(second.cachedStates(), n);
+  EXPECT_EQ(second.computedStates(), 0u);
+  EXPECT_EQ(asked, std::vector<bool>(n, true));
+  EXPECT_EQ(solves, n);
+  expectTheWholesCellsOnEveryDay(whole, second, part.cells);
+  othersFound = false;  // another rank missed its part: this one solves with it
+  const WindTimeline third = timeline();
+  EXPECT_EQ(third.computedStates(), n);
+  EXPECT_EQ(solves, 2 * n);
+  expectTheWholesCellsOnEveryDay(whole, third, part.cells);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(WindTimeline, CacheReusedWhenInputsAreUnchanged) {
   DefaultTerrainOptions o;
   o.size = 40;

@@ -5,7 +5,7 @@
 # art-direction preset whole (painted masks, initial snow, multipliers, no-snow road, timeline
 # edits, a masked avalanche event and a skier group); the bedform window; and a real DEM with NODATA
 # from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
-# subdomain. Their manifests differ in the "memory" line alone (the measured peak varies from run
+# subdomain; the ranks' parts of the precompute read from the cache by a second bake. Their manifests differ in the "memory" line alone (the measured peak varies from run
 # to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
 # the ranks), each exit 2 with one message and nothing written, a failure on rank 0 alone, and one
 # rank failing to write its tile.
@@ -179,6 +179,28 @@ done
 grep -q "^outputs: each rank writes the tiles" "$work/unreal/4/log" || fail "unreal tiles on 4 ranks: not written by their ranks"
 grep -q "^outputs: rank 0 gathers the whole grid and writes every file: the grid does not split" "$work/unreal/3/log" ||
   fail "unreal tiles on 3 ranks: not gathered on rank 0"
+
+# The precompute's cache across ranks: each rank's part of the exposure and of each wind state is an
+# entry of its own. A second bake with the same ranks reads them all; where one rank's part of a
+# wind state is missing, every rank solves that state again (none waits in an exchange the others
+# skip). The same files each time (one command line: the manifests agree too).
+cached() {  # NAME: the tiles' scene on 3 ranks into $work/cache/NAME, the cache in $work/cache/entries
+  mkdir -p "$work/cache/$1"
+  (cd "$work/cache/$1" && timeout 300 "${launch[@]}" -n 3 "$bin" bake "${tiles[@]}" --out out --cache-dir "$work/cache/entries" --quiet \
+    --threads 1 > log 2>&1) || { fail "cache $1: exit $?"; cat "$work/cache/$1/log" >&2; return 1; }
+}
+if cached first && cached again; then
+  same "the second bake with the cache on 3 ranks" "$work/cache/first" "$work/cache/again"
+  grep -q "sun exposure: from the cache (each rank its local grid's)" "$work/cache/again/log" || fail "cache: the exposure's parts were not read"
+  grep -q "precompute: wind, 2 states (0 computed, 2 from the cache, each rank its local grid's" "$work/cache/again/log" ||
+    fail "cache: the wind's parts were not read"
+  parts=("$work"/cache/entries/wind-*-cells-0-0-*.bin)
+  [ "${#parts[@]}" = 2 ] || fail "cache: rank 0 stored ${#parts[@]} wind parts, not one for each of 2 states"
+  rm -f "${parts[0]}"
+  cached missing && same "a bake missing rank 0's part of a wind state on 3 ranks" "$work/cache/first" "$work/cache/missing"
+  grep -q "precompute: wind, 2 states (1 computed, 1 from the cache, each rank its local grid's" "$work/cache/missing/log" ||
+    fail "cache: with rank 0's part of a state missing, the ranks did not solve that state alone"
+fi
 
 dem="$data/dem/tyrol_avaWog_5m.asc"
 if [ -f "$dem" ]; then
