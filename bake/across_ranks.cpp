@@ -47,8 +47,8 @@ struct OtherRankFailed {
   int status;
 };
 
-// An agreement before the ranks exchange (each wind state's solve on the local grids, the season's
-// start): every rank's status (0: fine), in rank order. A rank that failed joins the next one from
+// An agreement before the ranks exchange (each wind state's cache read and solve on the local
+// grids, the season's start): every rank's status (0: fine), in rank order. A rank that failed joins the next one from
 // runBakeAcrossRanks, where every other rank ends.
 std::vector<double> agreedStatuses(const dist::Communicator& comm, int status, bool seasonStart) {
   seasonAgreed = seasonAgreed || seasonStart;
@@ -152,15 +152,33 @@ bool seasonOnReplica(const Scene& scene) {
   return dist::seasonNeedsReplica(c);
 }
 
-// Bytes a cell of the initial state a rank makes on the whole grid for art direction before it
-// keeps its cells: the terrain's and the snow's fields (initialState).
-double initialStateBytesPerCell() {
-  double bytes = 0;
+// Bytes a cell of the initial state rank 0 keeps on the whole grid until the season for a no-snow
+// mask (initialStateCells): the terrain's and the snow's fields (initialState), the mask and the
+// multipliers' factors.
+double initialStateBytesPerCell(const Scene& scene) {
+  double bytes = sizeof(uint8_t);  // the no-snow mask
 #define SNOW_INITIAL_BYTES(member, view, Element, role, access, fill) \
   if (FieldRole::role == FieldRole::Terrain || FieldRole::role == FieldRole::Evolved) bytes += sizeof(Element);
   SNOW_STATE_FIELDS(SNOW_INITIAL_BYTES)
 #undef SNOW_INITIAL_BYTES
+  const Multipliers& m = scene.multipliers;
+  for (const auto* factor : {&m.snowfall, &m.melt, &m.windErosion, &m.avalancheRelease, &m.skierSpawn})
+    bytes += factor->has_value() ? sizeof(float) : 0;
   return bytes;
+}
+
+// Bytes a cell of the whole grid art direction holds on every rank (prepareArtDirection): each
+// raster use placed on the whole grid and held until it is done (a raster used twice counted
+// twice: an upper bound), and the masked edits' weights, held through the season.
+double artDirectionBytesPerCell(const Scene& scene) {
+  size_t rasters = 0;
+  for (const InitialSnowLayer& l : scene.initialSnow)
+    rasters += l.kind == InitialSnowLayer::Kind::Raster || l.kind == InitialSnowLayer::Kind::Mask;
+  const Multipliers& m = scene.multipliers;
+  for (const auto* factor : {&m.snowfall, &m.melt, &m.windErosion, &m.avalancheRelease, &m.skierSpawn, &m.noSnow})
+    rasters += factor->has_value();
+  for (const EditSpec& e : scene.edits) rasters += 2 * e.mask.has_value();  // placed, and its weights kept
+  return sizeof(float) * static_cast<double>(rasters) + (m.noSnow ? sizeof(uint8_t) : 0);  // the no-snow mask thresholded whole
 }
 
 // The season's own peak resident memory per rank, below the precompute's: a window of the
@@ -201,13 +219,13 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   m.rankZeroHere = dist::Communicator::node().holdsRankZero;
   if (seasonOnReplica(scene)) {  // every rank: the whole grid's bake beside its local grid's backend
     m.rankZeroBytes = m.otherBytes = onWhole.peakBytes() + localAbove;
-  } else {  // rank 0 writes the whole grid's outputs; the others hold the whole terrain and, with art
-            // direction until they cut it, the whole initial state
-    const double wholeInitial = needsArtDirection(scene) ? initialStateBytesPerCell() * cells : 0.0;
-    m.otherBytes = libraries + terrain + std::max(wholeInitial, localAbove);
-    // Where each rank writes its tiles, rank 0 is one of the others (its local grid's outputs in localAbove).
+  } else {  // the others: the whole terrain until the season and art direction's whole grids beside their local grid's bake
+    m.otherBytes = libraries + terrain + artDirectionBytesPerCell(scene) * cells + localAbove;
+    // Rank 0 writes the whole grid's outputs; or, where each rank writes its tiles, it is one of the
+    // others (its local grid's outputs in localAbove), a no-snow mask's whole initial state beside.
     m.rankZeroGathers = !ranksWriteTheirTiles(scene, whole);
-    m.rankZeroBytes = m.rankZeroGathers ? onWhole.peakBytes() : m.otherBytes;
+    m.rankZeroBytes = m.rankZeroGathers ? onWhole.peakBytes()
+                                        : m.otherBytes + (scene.multipliers.noSnow ? initialStateBytesPerCell(scene) * cells : 0.0);
   }
   return m;
 }
@@ -234,26 +252,13 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
   return parts;
 }
 
-namespace {
-// Whether this rank keeps its local grid's cells of the state from the precompute on (`noSnow`:
-// art direction made a no-snow mask). Rank 0 gathers the whole grid's state for its outputs, unless
-// every rank writes its own tiles; it keeps a no-snow mask's whole grid to take the snow it removes
-// in the single process's order.
-bool keepsItsCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts, bool noSnow) {
-  if (!acrossRanks || !parts.any()) return false;
-  return dist::Communicator::world().rank() != 0 || (ranksWriteTheirTiles(scene, whole) && !noSnow);
-}
-}  // namespace
-
 CellRect initialStateCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts) {
-  if (needsArtDirection(scene) || !keepsItsCells(scene, whole, parts, false)) return CellRect::whole(whole);
-  return decompositionOf(scene, whole).local(dist::Communicator::world().rank());
-}
-
-void keepTheRanksCellsOfTheState(const Scene& scene, const GridSpec& whole, SnowState& state, const PrecomputeParts& parts) {
-  const bool wholeGrid = state.spec.width == whole.width && state.spec.height == whole.height;  // else made on its cells
-  if (!wholeGrid || !keepsItsCells(scene, whole, parts, state.noSnow.size() > 0)) return;
-  state = dist::cutLocalState(std::move(state), decompositionOf(scene, whole).local(dist::Communicator::world().rank()));
+  if (!acrossRanks || !parts.any()) return CellRect::whole(whole);
+  // Rank 0 gathers the whole grid's state for its outputs, unless every rank writes its own tiles;
+  // it keeps a no-snow mask's whole grid to take the snow it removes in the single process's order.
+  const int rank = dist::Communicator::world().rank();
+  if (rank == 0 && (!ranksWriteTheirTiles(scene, whole) || scene.multipliers.noSnow)) return CellRect::whole(whole);
+  return decompositionOf(scene, whole).local(rank);
 }
 
 bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec) {
@@ -276,8 +281,8 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   const dist::Communicator comm = dist::Communicator::world();
   const GridSpec whole = terrain.info().spec;
   // The ranks but 0 (and 0 where every rank writes its tiles) hold their local grid of the state
-  // since the inputs stage where the precompute is made in parts (initialStateCells,
-  // keepTheRanksCellsOfTheState); a local grid is never the whole grid on more than one rank.
+  // since the inputs stage where the precompute is made in parts (initialStateCells); a local grid
+  // is never the whole grid on more than one rank.
   const bool tilesOnRanks = ranksWriteTheirTiles(scene, whole);
   const bool alreadyLocal = pre.partsOnRanks && (state.spec.width != whole.width || state.spec.height != whole.height);
   const dist::Decomposition d = decompositionOf(scene, whole);

@@ -8,8 +8,8 @@
 // subdomain and rank 0 the manifest (tiles_on_ranks.h): the single process's bytes.
 //
 // Failures: the ranks work alone but for the wind's solve and the season, and they agree on the
-// exit status before each wind state's solve, at the season's start and at the end (the largest of
-// theirs), so a bad input ends every rank with exit 2 and one message (rank 0's; another rank's
+// exit status before each wind state's cache read and solve, at the season's start and at the end
+// (the largest of theirs), so a bad input ends every rank with exit 2 and one message (rank 0's; another rank's
 // own when rank 0 did not fail); a failure while the others wait in an exchange (the season, and
 // the tiles' outputs until their files are merged) ends every rank at once with its status
 // (MPI_Abort).
@@ -60,24 +60,21 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
 
 // Across ranks, the peak each rank of this machine is predicted to hold (memory_model.h): rank 0
 // as one process on the whole grid (`onWhole`: it gathers and writes the whole grid's outputs);
-// each other rank the whole terrain beside the larger of the whole initial state it holds until
-// it keeps its cells and one process's peak on the largest local grid (`predictOn`: an upper
-// bound, since it writes no outputs); with the replica, every rank one process's peak on the
-// whole grid and on its local grid. nullopt when not across ranks, or where the grid cannot be
+// each other rank the whole terrain and art direction's whole-grid rasters and edit weights beside
+// one process's peak on the largest local grid (`predictOn`: an upper bound, since it writes no
+// outputs); where each rank writes its tiles, rank 0 as the others (with a no-snow mask, its whole
+// initial state besides); with the replica, every rank one process's peak on the whole grid and
+// on its local grid. nullopt when not across ranks, or where the grid cannot be
 // split (checkRanksSuitTheGrid says why).
 std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole, const MemoryPrediction& onWhole,
                                        const std::function<MemoryPrediction(const GridSpec&)>& predictOn);
 
-// The cells of the whole grid this rank's initial state is made on (initialState): its local grid
-// where it keeps that alone once the precompute is made in parts (the ranks but 0, and 0 where
-// every rank writes its tiles) and the scene has no art direction; else the whole grid, which
-// art direction reads (its rasters placed and their volumes summed over the whole grid).
+// The cells of the whole grid this rank's initial state is made on (initialState; art direction
+// fills it there): its local grid where it keeps that alone from the precompute on, the precompute
+// made in parts (the ranks but 0, and rank 0 where every rank writes its tiles and no no-snow mask
+// asks it to sum the snow the mask removes over the whole grid); else the whole grid. From there
+// on nothing but the season reads the state, and rank 0 gathers the season's into its whole state.
 CellRect initialStateCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts);
-// Where it was made on the whole grid, the state cut to this rank's local grid once art direction
-// has made it, where the rank keeps that alone (as initialStateCells; rank 0 not with a no-snow
-// mask, whose removed volume it sums on the whole grid): from there on nothing but the season
-// reads it, and rank 0 gathers the season's into its whole state.
-void keepTheRanksCellsOfTheState(const Scene& scene, const GridSpec& whole, SnowState& state, const PrecomputeParts& parts);
 
 // Whether each rank writes the tiles that start in its subdomain (tiles_on_ranks.h): across
 // ranks, under [outputs.tiles] with outputs each rank can write from its local grid, on a grid

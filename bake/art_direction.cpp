@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "core/errors.h"
+#include "core/grid_window.h"
 #include "core/hash.h"
 #include "inputs/raster_input.h"
 
@@ -29,8 +30,8 @@ int layerIndex(const std::string& name) {
 // Maps each raster once per (file, values, range, invert, use), and lists every use.
 class RasterCache {
  public:
-  RasterCache(const TerrainInfo& terrain, const SnowState& state, std::ostream& log, std::vector<ManifestRaster>& records)
-      : terrain_(terrain), state_(state), log_(log), records_(records) {}
+  RasterCache(const Terrain& terrain, std::ostream& log, std::vector<ManifestRaster>& records)
+      : terrain_(terrain), log_(log), records_(records) {}
 
   const Grid<float>& get(const RasterRef& ref, RasterUse use, const std::string& role) {
     auto pair = [](const std::optional<std::array<double, 2>>& p) {
@@ -40,7 +41,7 @@ class RasterCache {
     auto it = cache_.find(key);
     if (it == cache_.end()) {
       // Read, placed and described once per raster; each use below only adds its role.
-      Entry e{mapRaster(ref, use, terrain_, state_.validCell), {}};
+      Entry e{mapRaster(ref, use, terrain_.info, terrain_.valid), {}};
       const MappedRaster& m = e.mapped;
       ManifestRaster& d = e.record;
       d.hash = hashFileFnv1a64(ref.file);
@@ -67,8 +68,7 @@ class RasterCache {
 
  private:
   using Key = std::tuple<std::string, std::tuple<bool, double, double>, std::tuple<bool, double, double>, bool, int>;
-  const TerrainInfo& terrain_;
-  const SnowState& state_;
+  const Terrain& terrain_;
   std::ostream& log_;
   std::vector<ManifestRaster>& records_;
   struct Entry {
@@ -77,8 +77,6 @@ class RasterCache {
   };
   std::map<Key, Entry> cache_;
 };
-
-}  // namespace
 
 // True when the scene asks for anything this stage does; otherwise the bake skips it silently.
 bool needsArtDirection(const Scene& scene) {
@@ -91,62 +89,63 @@ bool needsArtDirection(const Scene& scene) {
   return anyEvent || anyInitial || !scene.edits.empty() || scene.multipliers.any() || bedformMask;
 }
 
-namespace {
-
-// Fills one snow layer from its [initial_snow] entry; returns the volume placed (m^3).
-double placeInitialLayer(int l, const InitialSnowLayer& spec, RasterCache& rasters, SnowState& state, std::ostream& log) {
-  const size_t n = state.spec.cellCount();
+// Fills one snow layer from its [initial_snow] entry on `cells` (the state's); returns the volume
+// placed on the whole grid (m^3), summed in the whole grid's order whatever `cells`.
+double placeInitialLayer(int l, const InitialSnowLayer& spec, RasterCache& rasters, const Grid<uint8_t>& wholeValid, const CellRect& cells,
+                         SnowState& state, std::ostream& log) {
   const double area = state.spec.cellAreaM2();
-  const auto& valid = state.validCell.values();
   const std::string role = std::string("initial_snow.") + snowLayerName(static_cast<SnowLayer>(l));
-  std::vector<float>& layer = state.layer(static_cast<SnowLayer>(l)).values();
+  Grid<float>& layer = state.layer(static_cast<SnowLayer>(l));
   const Grid<float>* raster = nullptr;
   if (spec.kind == InitialSnowLayer::Kind::Raster) raster = &rasters.get(spec.raster, RasterUse::Depth, role);
   if (spec.kind == InitialSnowLayer::Kind::Mask) raster = &rasters.get(spec.raster, RasterUse::Mask, role + ".mask");
   double volume = 0.0;
-  for (size_t i = 0; i < n; ++i) {
-    if (!valid[i]) {
-      layer[i] = 0.f;
-      continue;
+  for (int y = 0; y < wholeValid.height(); ++y)
+    for (int x = 0; x < wholeValid.width(); ++x) {
+      float depth = 0.f;
+      if (wholeValid(x, y)) {
+        switch (spec.kind) {
+          case InitialSnowLayer::Kind::Constant: depth = static_cast<float>(spec.depthM); break;
+          case InitialSnowLayer::Kind::Raster: depth = (*raster)(x, y); break;
+          case InitialSnowLayer::Kind::Mask: depth = static_cast<float>((*raster)(x, y) * spec.depthM); break;
+          case InitialSnowLayer::Kind::None: break;  // not placed (placeInitialSnow skips it)
+        }
+        volume += static_cast<double>(depth) * area;
+      }
+      if (cells.contains(x, y)) layer(x - cells.x0, y - cells.y0) = depth;
     }
-    switch (spec.kind) {
-      case InitialSnowLayer::Kind::Constant: layer[i] = static_cast<float>(spec.depthM); break;
-      case InitialSnowLayer::Kind::Raster: layer[i] = raster->values()[i]; break;
-      case InitialSnowLayer::Kind::Mask: layer[i] = static_cast<float>(raster->values()[i] * spec.depthM); break;
-      case InitialSnowLayer::Kind::None: break;
-    }
-    volume += static_cast<double>(layer[i]) * area;
-  }
   if (spec.kind == InitialSnowLayer::Kind::Constant) log << "  " << role << ": " << num(spec.depthM) << " m everywhere\n";
   log << "  " << role << ": " << std::scientific << std::setprecision(4) << volume << std::defaultfloat << " m^3 placed\n";
   return volume;
 }
 
 // Initial snow cover, layer by layer; returns the total volume placed (m^3).
-double placeInitialSnow(const Scene& scene, RasterCache& rasters, SnowState& state, std::ostream& log) {
+double placeInitialSnow(const Scene& scene, RasterCache& rasters, const Grid<uint8_t>& wholeValid, const CellRect& cells, SnowState& state,
+                        std::ostream& log) {
   double total = 0.0;
   for (int l = 0; l < kSnowLayerCount; ++l) {
     const InitialSnowLayer& spec = scene.initialSnow[static_cast<size_t>(l)];
     if (spec.kind == InitialSnowLayer::Kind::None) continue;
-    total += placeInitialLayer(l, spec, rasters, state, log);
+    total += placeInitialLayer(l, spec, rasters, wholeValid, cells, state, log);
   }
   return total;
 }
 
-// A 0/1 grid of the valid cells where `mask` is at least 0.5; `cells` counts the ones.
-Grid<uint8_t> thresholdMask(const Grid<float>& mask, const SnowState& state, size_t& cells) {
-  const auto& valid = state.validCell.values();
-  Grid<uint8_t> out(state.spec.width, state.spec.height, 0);
-  cells = 0;
-  for (size_t i = 0; i < state.spec.cellCount(); ++i)
-    if (valid[i] && mask.values()[i] >= 0.5f) out.values()[i] = 1, ++cells;
-  return out;
+// A 0/1 grid on `cells` of the valid cells where `mask` is at least 0.5; `count` counts the ones
+// of the whole grid.
+Grid<uint8_t> thresholdMask(const Grid<float>& mask, const Grid<uint8_t>& wholeValid, const CellRect& cells, size_t& count) {
+  Grid<uint8_t> whole(wholeValid.width(), wholeValid.height(), 0);
+  count = 0;
+  for (size_t i = 0; i < whole.size(); ++i)
+    if (wholeValid.values()[i] && mask.values()[i] >= 0.5f) whole.values()[i] = 1, ++count;
+  return cells == CellRect{0, 0, whole.width(), whole.height()} ? whole : gridWindow(whole, cells);
 }
 
 std::string percentOfGrid(size_t cells, size_t n) { return num(100.0 * cells / std::max<size_t>(1, n)); }
 
-// The per-cell multipliers and the no-snow mask.
-void applyMultipliers(const Multipliers& mu, RasterCache& rasters, SnowState& state, std::ostream& log) {
+// The per-cell multipliers and the no-snow mask, on `cells` (the state's).
+void applyMultipliers(const Multipliers& mu, RasterCache& rasters, const Grid<uint8_t>& wholeValid, const CellRect& cells, SnowState& state,
+                      std::ostream& log) {
   const std::pair<const std::optional<RasterRef>*, Grid<float>*> factors[] = {
       {&mu.snowfall, &state.snowfallFactor},
       {&mu.melt, &state.meltFactor},
@@ -155,19 +154,20 @@ void applyMultipliers(const Multipliers& mu, RasterCache& rasters, SnowState& st
       {&mu.skierSpawn, &state.skierSpawnFactor}};
   const char* names[] = {"snowfall", "melt", "wind_erosion", "avalanche_release", "skier_spawn"};
   for (size_t k = 0; k < std::size(factors); ++k)
-    if (*factors[k].first) *factors[k].second = rasters.get(**factors[k].first, RasterUse::Mask, std::string("multipliers.") + names[k]);
+    if (*factors[k].first)
+      *factors[k].second = gridWindow(rasters.get(**factors[k].first, RasterUse::Mask, std::string("multipliers.") + names[k]), cells);
   if (!mu.noSnow) return;
-  size_t cells = 0;
-  state.noSnow = thresholdMask(rasters.get(*mu.noSnow, RasterUse::Mask, "multipliers.no_snow"), state, cells);
-  log << "  multipliers.no_snow: " << cells << " cells kept bare (" << percentOfGrid(cells, state.spec.cellCount())
-      << " % of the grid)\n";
+  size_t count = 0;
+  state.noSnow = thresholdMask(rasters.get(*mu.noSnow, RasterUse::Mask, "multipliers.no_snow"), wholeValid, cells, count);
+  log << "  multipliers.no_snow: " << count << " cells kept bare (" << percentOfGrid(count, wholeValid.size()) << " % of the grid)\n";
 }
 
 // Where the wind bedforms run.
-void applyBedformMask(const RasterRef& mask, RasterCache& rasters, SnowState& state, std::ostream& log) {
-  size_t cells = 0;
-  state.bedformMask = thresholdMask(rasters.get(mask, RasterUse::Mask, "bedforms.mask"), state, cells);
-  log << "  bedforms.mask: " << cells << " cells (" << percentOfGrid(cells, state.spec.cellCount()) << " % of the grid)\n";
+void applyBedformMask(const RasterRef& mask, RasterCache& rasters, const Grid<uint8_t>& wholeValid, const CellRect& cells, SnowState& state,
+                      std::ostream& log) {
+  size_t count = 0;
+  state.bedformMask = thresholdMask(rasters.get(mask, RasterUse::Mask, "bedforms.mask"), wholeValid, cells, count);
+  log << "  bedforms.mask: " << count << " cells (" << percentOfGrid(count, wholeValid.size()) << " % of the grid)\n";
 }
 
 // The edit's one-line description, shared by the log and the manifest.
@@ -202,9 +202,9 @@ void addEdit(size_t k, const EditSpec& e, RasterCache& rasters, ArtDirectionPlan
 }
 
 // A masked avalanche releases from every unstable cell inside the mask (>= 0.5).
-void addMaskedAvalanches(const Scene& scene, RasterCache& rasters, const SnowState& state, ArtDirectionPlan& plan) {
-  const size_t n = state.spec.cellCount();
-  const auto& valid = state.validCell.values();
+void addMaskedAvalanches(const Scene& scene, RasterCache& rasters, const Grid<uint8_t>& wholeValid, ArtDirectionPlan& plan) {
+  const size_t n = wholeValid.size();
+  const auto& valid = wholeValid.values();
   for (const auto& a : scene.userAvalanches) {
     if (!a.mask) continue;
     const Grid<float>& m = rasters.get(*a.mask, RasterUse::Mask, "events (avalanche, line " + std::to_string(a.line) + ").mask");
@@ -223,9 +223,9 @@ void addMaskedAvalanches(const Scene& scene, RasterCache& rasters, const SnowSta
 }
 
 // Masked skiers start from cells drawn by the mask's values.
-void addMaskedSkiers(const Scene& scene, RasterCache& rasters, const SnowState& state, ArtDirectionPlan& plan) {
-  const size_t n = state.spec.cellCount();
-  const auto& valid = state.validCell.values();
+void addMaskedSkiers(const Scene& scene, RasterCache& rasters, const Grid<uint8_t>& wholeValid, ArtDirectionPlan& plan) {
+  const size_t n = wholeValid.size();
+  const auto& valid = wholeValid.values();
   for (const auto& a : scene.userSkiers) {
     if (!a.mask) continue;
     const Grid<float>& m = rasters.get(*a.mask, RasterUse::Mask, "events (skier, line " + std::to_string(a.line) + ").mask");
@@ -243,18 +243,21 @@ void addMaskedSkiers(const Scene& scene, RasterCache& rasters, const SnowState& 
 
 }  // namespace
 
-ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terrain, SnowState& state, std::ostream& log) {
+ArtDirectionPlan prepareArtDirection(const Scene& scene, const Terrain& terrain, const CellRect& cells, SnowState& state, std::ostream& log) {
   ArtDirectionPlan plan;
   if (!needsArtDirection(scene)) return plan;
+  if (state.spec.width != cells.width() || state.spec.height != cells.height())
+    throw std::invalid_argument("prepareArtDirection: the state does not hold the cells");
   log << "art direction:\n";
   // The order below is the order of the log lines and of the manifest's raster records.
-  RasterCache rasters(terrain, state, log, plan.rasters);
-  plan.initialSnowM3 = placeInitialSnow(scene, rasters, state, log);
-  applyMultipliers(scene.multipliers, rasters, state, log);
-  if (scene.bedforms.enabled && scene.bedforms.mask) applyBedformMask(*scene.bedforms.mask, rasters, state, log);
+  const Grid<uint8_t>& valid = terrain.valid;
+  RasterCache rasters(terrain, log, plan.rasters);
+  plan.initialSnowM3 = placeInitialSnow(scene, rasters, valid, cells, state, log);
+  applyMultipliers(scene.multipliers, rasters, valid, cells, state, log);
+  if (scene.bedforms.enabled && scene.bedforms.mask) applyBedformMask(*scene.bedforms.mask, rasters, valid, cells, state, log);
   for (size_t k = 0; k < scene.edits.size(); ++k) addEdit(k, scene.edits[k], rasters, plan);
-  addMaskedAvalanches(scene, rasters, state, plan);
-  addMaskedSkiers(scene, rasters, state, plan);
+  addMaskedAvalanches(scene, rasters, valid, plan);
+  addMaskedSkiers(scene, rasters, valid, plan);
   return plan;
 }
 

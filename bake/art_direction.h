@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bakers/manifest.h"
+#include "core/grid_window.h"
 #include "core/season.h"
 #include "inputs/terrain_loader.h"
 #include "scene/scene.h"
@@ -23,11 +24,11 @@ struct ArtDirectionPlan {
   bool any() const { return !rasters.empty() || !edits.empty(); }
 };
 
-// Whether the scene asks for any art direction; otherwise prepareArtDirection does nothing.
-bool needsArtDirection(const Scene& scene);
-
-// Reads the rasters the scene names and fills `state` (initial layers, multipliers, noSnow).
+// Reads the rasters the scene names and fills `state` (initial layers, multipliers, noSnow) on
+// `cells` of the terrain's grid, the cells it holds: the whole grid, or across ranks a rank's
+// local grid. The rasters are placed, and the volumes and cells the log and the manifest report
+// taken, on the whole grid (in its order), so every rank's plan is the single process's.
 // Throws InputError naming the raster file and the problem.
-ArtDirectionPlan prepareArtDirection(const Scene& scene, const TerrainInfo& terrain, SnowState& state, std::ostream& log);
+ArtDirectionPlan prepareArtDirection(const Scene& scene, const Terrain& terrain, const CellRect& cells, SnowState& state, std::ostream& log);
 
 }  // namespace snow

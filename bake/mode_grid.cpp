@@ -146,12 +146,12 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const std::vector<std::string> layers = layersToWrite(scene, terrain.info());
   const uint8_t needs = layersNeeds(layers);
   const PrecomputeParts parts = rankPrecomputeParts(scene, wholeSpec, needs);
-  SnowState state = initialState(terrain, initialStateCells(scene, wholeSpec, parts));  // across ranks, maybe its local grid alone
-  const ArtDirectionPlan art = prepareArtDirection(scene, terrain.info(), state, log);
+  const CellRect cells = initialStateCells(scene, wholeSpec, parts);  // across ranks, maybe the rank's local grid alone
+  SnowState state = initialState(terrain, cells);
+  const ArtDirectionPlan art = prepareArtDirection(scene, terrain.terrain, cells, state, log);
   checkBedformsSuitTheGrid(scene, wholeSpec);
   const PrecomputeCache cache(options.cacheDir.value_or(PrecomputeCache::defaultDirectory()), options.useCache, &log);
   stage.emplace("precompute");
-  keepTheRanksCellsOfTheState(scene, wholeSpec, state, parts);
   Precomputed pre = runPrecompute(scene, terrain, state, cache, parts, log);
   // A constant wind's fields are the state's copy from here on, unless a layer reads the wind
   // (across ranks with parts, each rank's local state's: runSeasonAcrossRanks).

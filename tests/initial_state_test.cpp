@@ -1,6 +1,6 @@
 // The bake's initial state made on a rank's local grid alone (bake/stages.h: initialState) holds
 // exactly what the whole grid's initial state cut to that grid holds (dist::cutLocalState): the
-// bake across ranks makes it so where no art direction reads the whole grid.
+// bake across ranks makes each rank's so (initialStateCells).
 #include <gtest/gtest.h>
 
 #include <cstring>

@@ -5,7 +5,8 @@
 # art-direction preset whole (painted masks, initial snow, multipliers, no-snow road, timeline
 # edits, a masked avalanche event and a skier group); the bedform window; and a real DEM with NODATA
 # from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
-# subdomain; the ranks' parts of the precompute read from the cache by a second bake. Their manifests differ in the "memory" line alone (the measured peak varies from run
+# subdomain, with art direction placed on each rank's local grid; the ranks' parts of the
+# precompute read from the cache by a second bake. Their manifests differ in the "memory" line alone (the measured peak varies from run
 # to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
 # the ranks), each exit 2 with one message and nothing written, a failure on rank 0 alone, and one
 # rank failing to write its tile.
@@ -166,6 +167,34 @@ nosnow=("${tiles[@]}" --set initial_snow.stable=0.2 --set "multipliers.no_snow=\
 bake nosnow "$work/nosnow/alone" alone "${nosnow[@]}" && bake nosnow "$work/nosnow/4" 4 "${nosnow[@]}" &&
   same "tiles with a no-snow mask on 4 ranks" "$work/nosnow/alone" "$work/nosnow/4"
 grep -qE "no-snow mask: [1-9]" "$work/nosnow/alone/log" || fail "nosnow: the mask removed no snow"
+
+# Art direction without events on ranks that each make their initial state on their local grid
+# (rank 0 too: every rank writes its tiles and no no-snow mask needs the whole grid): initial snow
+# from a constant and a mask, snowfall and melt multipliers from rasters, a masked timeline edit;
+# the rasters placed and their volumes summed on the whole grid.
+{ cat "$work/winds.toml"; cat <<TOML
+[initial_snow]
+stable = 0.2
+powder = { mask = "$root/presets/art_direction/precipitation.png", depth_m = 0.3 }
+[multipliers]
+snowfall = { file = "$root/presets/art_direction/precipitation.png", range = [0.6, 1.4] }
+melt = "$root/presets/art_direction/ski_area.png"
+[[edits]]
+day = 20
+op = "add"
+layer = "compacted"
+depth_m = 0.4
+mask = "$root/presets/art_direction/ski_area.png"
+TOML
+} > "$work/art_local.toml"
+art_local=("$work/art_local.toml" "${tiles[@]:1}")
+bake art-local "$work/art-local/alone" alone "${art_local[@]}"
+for ranks in 3 4; do
+  bake art-local "$work/art-local/$ranks" "$ranks" "${art_local[@]}" &&
+    same "art direction on each rank's local grid, $ranks ranks" "$work/art-local/alone" "$work/art-local/$ranks"
+done
+grep -qE "edit 1: .*: [1-9]" "$work/art-local/alone/log" || fail "art-local: its edit added no snow"
+grep -q "initial_snow.powder: [1-9].* m^3 placed" "$work/art-local/alone/log" || fail "art-local: no powder placed"
 
 # GeoTIFF tiles of Unreal's 127 (2 x 2 on a grid of 253), frames beside the season (written in
 # place where the ranks write their tiles): 4 ranks write their own, 3 cannot share 2 x 2 tiles
