@@ -48,8 +48,8 @@ struct OtherRankFailed {
 };
 
 // An agreement before the ranks exchange (each wind state's cache read and solve on the local
-// grids, the season's start): every rank's status (0: fine), in rank order. A rank that failed joins the next one from
-// runBakeAcrossRanks, where every other rank ends.
+// grids, the season's start): every rank's status (0: fine), in rank order. A rank that failed
+// joins the next one from runBakeAcrossRanks, where every other rank ends.
 std::vector<double> agreedStatuses(const dist::Communicator& comm, int status, bool seasonStart) {
   seasonAgreed = seasonAgreed || seasonStart;
   return comm.allGather({static_cast<double>(status)});
@@ -161,10 +161,7 @@ double initialStateBytesPerCell(const Scene& scene) {
   if (FieldRole::role == FieldRole::Terrain || FieldRole::role == FieldRole::Evolved) bytes += sizeof(Element);
   SNOW_STATE_FIELDS(SNOW_INITIAL_BYTES)
 #undef SNOW_INITIAL_BYTES
-  const Multipliers& m = scene.multipliers;
-  for (const auto* factor : {&m.snowfall, &m.melt, &m.windErosion, &m.avalancheRelease, &m.skierSpawn})
-    bytes += factor->has_value() ? sizeof(float) : 0;
-  return bytes;
+  return bytes + sizeof(float) * scene.multipliers.factorCount();
 }
 
 // Bytes a cell of the whole grid art direction holds on every rank (prepareArtDirection): each
@@ -175,8 +172,7 @@ double artDirectionBytesPerCell(const Scene& scene) {
   for (const InitialSnowLayer& l : scene.initialSnow)
     rasters += l.kind == InitialSnowLayer::Kind::Raster || l.kind == InitialSnowLayer::Kind::Mask;
   const Multipliers& m = scene.multipliers;
-  for (const auto* factor : {&m.snowfall, &m.melt, &m.windErosion, &m.avalancheRelease, &m.skierSpawn, &m.noSnow})
-    rasters += factor->has_value();
+  rasters += m.factorCount() + m.noSnow.has_value();
   for (const EditSpec& e : scene.edits) rasters += 2 * e.mask.has_value();  // placed, and its weights kept
   return sizeof(float) * static_cast<double>(rasters) + (m.noSnow ? sizeof(uint8_t) : 0);  // the no-snow mask thresholded whole
 }

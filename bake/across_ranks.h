@@ -8,11 +8,11 @@
 // subdomain and rank 0 the manifest (tiles_on_ranks.h): the single process's bytes.
 //
 // Failures: the ranks work alone but for the wind's solve and the season, and they agree on the
-// exit status before each wind state's cache read and solve, at the season's start and at the end
-// (the largest of theirs), so a bad input ends every rank with exit 2 and one message (rank 0's; another rank's
-// own when rank 0 did not fail); a failure while the others wait in an exchange (the season, and
-// the tiles' outputs until their files are merged) ends every rank at once with its status
-// (MPI_Abort).
+// exit status before each wind state's cache read and solve, at the season's start and at the
+// end (the largest of theirs), so a bad input ends every rank with exit 2 and one message (rank
+// 0's; another rank's own when rank 0 did not fail); a failure while the others wait in an
+// exchange (the season, and the tiles' outputs until their files are merged) ends every rank at
+// once with its status (MPI_Abort).
 #pragma once
 #include <cstdint>
 #include <exception>

@@ -26,6 +26,20 @@ std::string windCacheKey(const Grid<float>& altitude, const Grid<uint8_t>& valid
   return h.hex();
 }
 
+// One state's fields and loading on a part's cells: its own solver, or the whole grid's solved
+// and cut to them where the part's solver cannot (the free stream turns).
+void solvePart(const WindPart& part, const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WindState& s,
+               const ModelParameters& params, const WindSolverOptions& options, WindField& f, Grid<float>& loading) {
+  if (part.solve(altitude, valid, spec, s, params, options, f, loading)) return;
+  const CellRect& c = part.cells;
+  const WindField whole = computeWindField(altitude, valid, spec, s, params, options);
+  f.windXMps = gridWindow(whole.windXMps, c), f.windYMps = gridWindow(whole.windYMps, c);
+  f.windEffectZM = gridWindow(whole.windEffectZM, c), f.verticalSpeedMps = gridWindow(whole.verticalSpeedMps, c);
+  f.stats = whole.stats;
+  f.stats.ordering += " of the whole grid (the free stream turns)";
+  loading = gridWindow(windLoading(whole, valid, spec), c);
+}
+
 }  // namespace
 
 WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec,
@@ -55,43 +69,31 @@ WindTimeline::WindTimeline(const Grid<float>& altitude, const Grid<uint8_t>& val
   for (const WindState& s : states_) {
     WindField f;
     Grid<float> loading;
-    if (part) {
-      const CellRect& c = part->cells;
-      const std::string key = partCacheKey(windCacheKey(altitude, valid, spec, s, params, options), c);
-      const bool found = cache.load("wind", key, c.width(), c.height(), {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps, &loading});
-      if (part->everyRankFound ? part->everyRankFound(found) : found) {
-        ++cached_;
-        f.stats.ordering = "cache";
-        f.stats.converged = true;
-        if (log) *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: from the cache, each rank its local grid's\n";
-      } else {
-        f = WindField(), loading = Grid<float>();  // a part some other rank did not find: all solve
-        if (!part->solve(altitude, valid, spec, s, params, options, f, loading)) {  // the whole grid's, then its cells
-          const WindField whole = computeWindField(altitude, valid, spec, s, params, options);
-          f.windXMps = gridWindow(whole.windXMps, c), f.windYMps = gridWindow(whole.windYMps, c);
-          f.windEffectZM = gridWindow(whole.windEffectZM, c), f.verticalSpeedMps = gridWindow(whole.verticalSpeedMps, c);
-          f.stats = whole.stats;
-          f.stats.ordering += " of the whole grid (the free stream turns)";
-          loading = gridWindow(windLoading(whole, valid, spec), c);
-        }
-        ++computed_;
-        cache.store("wind", key, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps, &loading});
-      }
-    } else if (const std::string key = windCacheKey(altitude, valid, spec, s, params, options);
-               cache.load("wind", key, spec.width, spec.height, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps})) {
+    // A part's entry keeps its loading: that needs the neighbouring ranks' vertical speeds.
+    const CellRect c = part ? part->cells : CellRect::whole(spec);
+    const std::string whole = windCacheKey(altitude, valid, spec, s, params, options);
+    const std::string key = part ? partCacheKey(whole, c) : whole;
+    std::vector<Grid<float>*> entry = {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps};
+    if (part) entry.push_back(&loading);
+    const bool found = cache.load("wind", key, c.width(), c.height(), entry);
+    if (part && part->everyRankFound ? part->everyRankFound(found) : found) {
       ++cached_;
       f.stats.ordering = "cache";
       f.stats.converged = true;
-      if (log) *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: from the cache\n";
+      if (log)
+        *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: from the cache"
+             << (part ? ", each rank its local grid's" : "") << "\n";
     } else {
-      f = computeWindField(altitude, valid, spec, s, params, options);
+      f = WindField(), loading = Grid<float>();  // a part some other rank did not find: all solve
+      if (part) solvePart(*part, altitude, valid, spec, s, params, options, f, loading);
+      else f = computeWindField(altitude, valid, spec, s, params, options);
       ++computed_;
-      cache.store("wind", key, {&f.windXMps, &f.windYMps, &f.windEffectZM, &f.verticalSpeedMps});
+      if (!found) cache.store("wind", key, {entry.begin(), entry.end()});  // a part this rank found stays as it is
+      if (log)
+        *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: " << f.stats.ordering << ", "
+             << f.stats.iterations << " iterations, residual " << f.stats.residual << " (" << f.stats.seconds << " s)"
+             << (f.stats.converged ? "" : " NOT CONVERGED") << (part ? ", each rank its local grid" : "") << "\n";
     }
-    if (log && f.stats.ordering != "cache")
-      *log << "  wind from " << s.directionDeg << " deg at " << s.speedMps << " m/s: " << f.stats.ordering << ", " << f.stats.iterations
-           << " iterations, residual " << f.stats.residual << " (" << f.stats.seconds << " s)" << (f.stats.converged ? "" : " NOT CONVERGED")
-           << (part ? ", each rank its local grid" : "") << "\n";
     loading_.push_back(loading.empty() ? windLoading(f, valid, spec) : std::move(loading));
     fields_.push_back(std::move(f));
   }

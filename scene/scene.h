@@ -94,7 +94,15 @@ struct EditSpec {
 struct Multipliers {
   std::optional<RasterRef> snowfall, melt, windErosion, avalancheRelease, skierSpawn;
   std::optional<RasterRef> noSnow;  // a mask: cells >= 0.5 stay bare
-  bool any() const { return snowfall || melt || windErosion || avalancheRelease || skierSpawn || noSnow; }
+  // The factor rasters, each a float a cell once placed (the no-snow mask is thresholded to bytes).
+  static constexpr std::optional<RasterRef> Multipliers::* kFactors[] = {
+      &Multipliers::snowfall, &Multipliers::melt, &Multipliers::windErosion, &Multipliers::avalancheRelease, &Multipliers::skierSpawn};
+  int factorCount() const {
+    int n = 0;
+    for (auto factor : kFactors) n += (this->*factor).has_value();
+    return n;
+  }
+  bool any() const { return factorCount() > 0 || noSnow; }
 };
 
 // [bedforms]: the slab-saltation bedform model (core/phenomena/bedforms.h) in the season, over the
