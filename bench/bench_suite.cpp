@@ -426,7 +426,7 @@ const KernelBytes kKernelBytes[] = {
     {"snowfall", 75, "slope pass: B, C, S, U, P read, valid, slope written (25); snowfall: valid, B+4 layers, slope, T_base read, P, U, S, delta written (45); sum: delta, valid (5)"},
     {"melt", 54, "valid, T_base, 4 layers, melted read; 4 layers, delta, melted written (49); sum: delta, valid (5)"},
     {"stability", 58, "slope pass (25); valid, T_base, slope, wind loading, S, U read, S, U written (33)"},
-    {"wind transport", 73, "snapshot: B+4 layers read, A and P written (28); colour passes: valid, A, P, W_z, W_x, W_y read, P, scour, deposit read and written (45)"},
+    {"wind transport", 74, "shares pass: valid, B+4 layers, W_x, W_y, W_z read, two shares written (41); gather pass: valid, the shares read, P, scour, deposit read and written (33)"},
     {"powder diffusion (one substep)", 34,
      "base pass, once a step: B, C, S, U, valid read, B + C + S + U written (21); the substep's two passes row by row (shares in cache): base, P, "
      "valid read, P written (13)"},

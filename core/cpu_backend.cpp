@@ -12,6 +12,7 @@
 #include "phenomena/avalanche_rows.h"
 #include "phenomena/powder_diffusion_rows.h"
 #include "phenomena/surface_slope_rows.h"
+#include "phenomena/wind_transport_rows.h"
 #include "serial_exec.h"
 
 namespace snow {

@@ -113,9 +113,8 @@ enum class ScratchExtent {
   /* |grad A| of the snow surface, taken before a per-cell pass that changes A, so the pass never \
      reads a neighbour that another thread is writing */                                           \
   X(surfaceSlope, float, Cell)                                                                     \
-  /* for transport: wind transport's snapshot of A and P before its colour passes; powder        \
-     diffusion's surface below the powder in scratchSurface; the avalanche's outflow scales in    \
-     scratchPowder */                                                                              \
+  /* for transport: wind transport's shares along x and y; powder diffusion's surface below the \
+     powder in scratchSurface; the avalanche's outflow scales in scratchPowder */                  \
   X(scratchSurface, float, Cell)                                                                   \
   X(scratchPowder, float, Cell)                                                                    \
   X(powderFlow, float, PowderShares)                                                               \

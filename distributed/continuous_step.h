@@ -11,10 +11,11 @@
 
 namespace snow::dist {
 
-// Cells a phenomenon's passes reach beyond a cell between two refreshes: wind transport one a
-// colour pass (a giver's powder, changed by gifts of earlier colours, bounds its gift) and two for
-// the curvature of its snapshot; powder diffusion two a substep (shares from the neighbours'
-// surfaces, then the neighbours' shares); the slopes of snowfall and stability one.
+// Cells a phenomenon's passes reach beyond a cell between two refreshes: wind transport two
+// (shares from the neighbours' surfaces, then the neighbours' shares), powder diffusion two a
+// substep (the same), the slopes of snowfall and stability one. The halo is still the bound of
+// wind transport's former colour passes (one cell a colour and two for the curvature): narrowing
+// it to 2 changes the decomposition's refusals and its measured exchange (docs/distributed.md).
 constexpr int kContinuousHalo = 5 + 2;
 
 // What the step's snowfall added and its melt removed (m³), as the backend returns them.

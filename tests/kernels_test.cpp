@@ -363,6 +363,43 @@ TEST(WindTransport, ScoursTheCrestAndDepositsDownwind) {
   EXPECT_NEAR(totalDepth(s), before, 1e-5 * before);
 }
 
+// One step moves what each cell erodes at the step's start (windSharesAt reads nothing else) to
+// its downwind neighbours: the powder is, cell for cell, what moving every cell's shares one after
+// another in double gives, to float rounding; no share is lost, doubled or sent the wrong way, and
+// no visiting order enters. Winds of every sign and calm cells, NODATA holes, a wind shadow.
+TEST(WindTransport, OneStepIsEveryCellsShareFromTheStepsStartMovedOneAfterAnotherInDouble) {
+  SnowState s = test::makeRoughState(41, 29, 6, 4.0, 5.0);
+  for (int y = 0; y < 29; ++y)
+    for (int x = 0; x < 41; ++x) {
+      const int k = (3 * x + 5 * y) % 11;
+      s.windXMps(x, y) = k < 3 ? 0.f : (k < 7 ? 9.f : -6.f);
+      s.windYMps(x, y) = k % 3 == 0 ? 0.f : (k % 3 == 1 ? 4.f : -7.f);
+    }
+  std::vector<float> delta;
+  const SnowFieldsView v = viewOf(s, delta);
+  const WindTransportArgs a{0.5f, 0.05f, 0.1f};
+  std::vector<double> expected(s.powderM.values().begin(), s.powderM.values().end());
+  int givers = 0, capped = 0;
+  for (int y = 0; y < 29; ++y)
+    for (int x = 0; x < 41; ++x) {
+      float shareX, shareY;
+      windSharesAt(v, a, x, y, shareX, shareY);
+      const int i = v.index(x, y);
+      if (shareX != 0.f) expected[i] -= std::fabs(shareX), expected[i + (shareX > 0.f ? 1 : -1)] += std::fabs(shareX);
+      if (shareY != 0.f) expected[i] -= std::fabs(shareY), expected[i + (shareY > 0.f ? 41 : -41)] += std::fabs(shareY);
+      givers += shareX != 0.f || shareY != 0.f;
+      capped += std::fabs(shareX) + std::fabs(shareY) > 0.99f * s.powderM.values()[i];
+    }
+  ASSERT_GT(givers, 200);
+  ASSERT_GT(capped, 10);  // cells that give (almost) all their powder: the cap is exercised
+  SerialExec exec;
+  runWindTransport(exec, v, a);
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_GE(s.powderM.values()[i], 0.f) << i;
+    EXPECT_NEAR(s.powderM.values()[i], expected[i], 4e-7 * (1.0 + expected[i])) << i;
+  }
+}
+
 TEST(WindTransport, NothingMovesInTheShadowOrWithoutWindOrOnFlatGround) {
   for (int c = 0; c < 3; ++c) {
     SnowState s = c == 0 ? ridge(10.f, 0.f, 5.f) : (c == 1 ? ridge(0.f, 0.f, 0.f) : plane(9, 9, 10.0, 0.f, 2000.f, -10.f));

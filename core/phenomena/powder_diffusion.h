@@ -57,9 +57,9 @@ struct PowderDiffusionArgs {
 // actually gained, (P_n + a) - P_n, which is exact in float: a share far below a deep receiver's
 // last bit then stays at the source instead of vanishing (a bias that added up over long
 // seasons). A gain that rounding makes larger than what the source still has is not made, so
-// the source never goes negative and needs no clamp. `record`, if given, adds the gain. (Wind
-// transport and ski tracks give this way; powder diffusion's shares do the same against the
-// receiver's powder at the substep's start, powderSharesAt.)
+// the source never goes negative and needs no clamp. `record`, if given, adds the gain. (Ski
+// tracks give this way; powder diffusion's and wind transport's shares do the same against the
+// receiver's powder at the step's start, powderSharesAt and windSharesAt.)
 SNOW_HD SNOW_INLINE float giveTo(float& receiver, float amount, float remaining, float* record) {
   const float before = receiver;
   const float after = before + amount;
@@ -103,16 +103,6 @@ SNOW_HD SNOW_INLINE PowderSlopes powderSlopes(const SnowFieldsView& v, int x, in
   r.excess = sqrtf(sx * sx + sy * sy) - restSlope;
   return r;
 }
-
-// Copies A and P before the colour passes of a wind-transport step (per cell, no neighbour reads).
-struct PowderSnapshotKernel {
-  SnowFieldsView v;
-  SNOW_HD void operator()(int x, int y) const {
-    const int i = v.index(x, y);
-    v.scratchSurface[i] = v.surface(i);
-    v.scratchPowder[i] = v.powder[i];
-  }
-};
 
 // Once a step, before its substeps: the snow surface without the powder, B + ((C + S) + U), which
 // the substeps do not change, into scratchSurface (+inf at NODATA cells: a valid cell then sees
