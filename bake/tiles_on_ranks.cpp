@@ -29,12 +29,13 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
   return "";
 }
 
-std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int halo) {
+std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo) {
   if (!whyRankZeroWritesEveryFile(scene).empty()) return std::nullopt;
   const TileLayout l = tileLayout(scene.outputs.tiles, spec.width, spec.height);
-  // A tile reaches its overlap past the next tile's start, into the next rank's subdomain: the halo
-  // holds it, and the next cell its normals and slopes read.
-  if (l.tileWidth - l.step >= halo) return std::nullopt;
+  // A tile reaches its overlap past the next tile's start, into the next rank's subdomain, and its
+  // normals and slopes read the cell after that: the halo is widened to hold both (the season
+  // runs on any halo of at least its own).
+  const int halo = std::max(minHalo, std::max(l.tileWidth, l.tileHeight) - l.step + 1);
   return dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
 }
 

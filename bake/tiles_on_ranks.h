@@ -21,9 +21,10 @@ namespace snow {
 // says (the grid must also split into bands of whole tiles: decompositionOnTiles).
 std::string whyRankZeroWritesEveryFile(const Scene& scene);
 
-// The ranks' subdomains cut on the starts of the scene's tiles of a grid of `spec`'s size (halo
-// `halo`), where whyRankZeroWritesEveryFile is empty and the tiles can be shared; else nullopt.
-std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int halo);
+// The ranks' subdomains cut on the starts of the scene's tiles of a grid of `spec`'s size, where
+// whyRankZeroWritesEveryFile is empty and the tiles can be shared; else nullopt. The halo is
+// `minHalo`, or wider where the tiles' overlap and the next cell need it.
+std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo);
 
 // Points `sources` at this rank's tiles of decomposition `d`: its local grid's state, the tiles
 // starting in its subdomain, a layer's range combined over the ranks.

@@ -1,7 +1,7 @@
 // The season's view of a compute backend: one group of virtuals per phenomenon (core/phenomena/,
 // one module header each, says what it models). The CPU backend (TBB, core/cpu_backend.cpp) and
 // the CUDA backend (cuda/) both implement it with ExecBackend<Exec> (core/exec_backend.h), which
-// runs each module's runX over the backend's forEachCell / forEachCellOfColour.
+// runs each module's runX over the backend's forEachCell and fixed-order reductions.
 // This header is plain C++ so that host code never needs CUDA headers.
 #pragma once
 #include <algorithm>

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <limits>
 
-#include "colour_wavefront.h"
 #include "exec_backend.h"
 #include "phenomena/avalanche_rows.h"
 #include "phenomena/powder_diffusion_rows.h"
@@ -20,9 +19,6 @@ namespace {
 
 // Rows per task: large enough to amortise scheduling, small enough to balance 2..64 threads.
 constexpr int kRowGrain = 8;
-// Rows of a band of the colour passes' wavefront: its rows of one colour a task, its working set
-// (about 16 rows) in cache.
-constexpr int kColourBandRows = 64;
 
 class TbbExec : public HostStorage {
  public:
@@ -100,22 +96,6 @@ class TbbExec : public HostStorage {
     tbb::parallel_for(tbb::blocked_range<int>(0, n, 2), [&](const tbb::blocked_range<int>& r) {
       for (int i = r.begin(); i < r.end(); ++i) kernel(i);
     });
-  }
-  template <class K>
-  void forEachCellOfColour(int width, int height, int colour, const K& kernel) {
-    tbb::parallel_for(tbb::blocked_range<int>(0, height, kRowGrain), [&](const tbb::blocked_range<int>& rows) {
-      for (int y = rows.begin(); y < rows.end(); ++y)
-        for (int x = firstColumnOfColour(y, colour); x < width; x += 5) kernel(x, y);
-    });
-  }
-  // The five colour passes as a wavefront in bands (colour_wavefront.h): the same bytes.
-  template <class K>
-  void forEachCellInColourOrder(int width, int height, const K& kernel) {
-    colourWavefront(
-        height, kColourBandRows, [](int n, const auto& task) { tbb::parallel_for(0, n, task); },
-        [&](int y, int colour) {
-          for (int x = firstColumnOfColour(y, colour); x < width; x += 5) kernel(x, y);
-        });
   }
   // Row sums in parallel, each row in order; then the rows in order: the same bytes as SerialExec.
   double sum(const float* values, const uint8_t* valid, int width, int height) {

@@ -1,5 +1,5 @@
 // SnowBackend implemented once over any Exec: the Exec supplies storage (host vectors or
-// device buffers), forEachCell / forEachCellOfColour and fixed-order reductions; this class
+// device buffers), forEachCell and fixed-order reductions; this class
 // owns the fields and runs each phenomenon's runX (core/phenomena/) over them. Included by
 // core/cpu_backend.cpp and by the CUDA backend's .cu file, so it must stay free of TBB and CUDA
 // headers.

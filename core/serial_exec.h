@@ -6,11 +6,9 @@
 // provides, and each phenomenon's runX<Exec> (core/phenomena/) uses:
 //   template <class T> using Buffer = ...;  // the storage ExecBackend keeps per field
 //   template <class K> void forEachCell(int width, int height, const K& kernel);
-//   template <class K> void forEachCellOfColour(int width, int height, int colour, const K& kernel);
-//   template <class K> void forEachCellInColourOrder(int width, int height, const K& kernel);
-//     (the five colours' passes, one after the other, or any order that gives their bytes)
 //   template <class F, class G> void forEachCellThen(int width, int height, const F& first, const G& second);
 //     (first on every cell, then second)
+//   template <class K> void forEachIndex(int n, const K& kernel);  // agents, not cells
 //   double sum(const float* values, const uint8_t* valid, int width, int height);  // fixed order
 //   float maxValue(const float* values, const uint8_t* valid, int width, int height);
 //   void finish();  // waits for queued work (GPU) and reports its errors
@@ -20,8 +18,6 @@
 #include <limits>
 #include <string>
 #include <vector>
-
-#include "tiling.h"
 
 namespace snow {
 
@@ -107,15 +103,6 @@ class SerialExec : public HostStorage {
   template <class K>
   void forEachIndex(int n, const K& kernel) {
     for (int i = 0; i < n; ++i) kernel(i);
-  }
-  template <class K>
-  void forEachCellOfColour(int width, int height, int colour, const K& kernel) {
-    for (int y = 0; y < height; ++y)
-      for (int x = firstColumnOfColour(y, colour); x < width; x += 5) kernel(x, y);
-  }
-  template <class K>
-  void forEachCellInColourOrder(int width, int height, const K& kernel) {
-    for (int colour = 0; colour < kColours; ++colour) forEachCellOfColour(width, height, colour, kernel);
   }
   double sum(const float* values, const uint8_t* valid, int width, int height) {
     double s = 0.0;

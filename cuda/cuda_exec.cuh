@@ -8,8 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "../core/tiling.h"
-
 namespace snow::cuda {
 
 inline void check(cudaError_t e, const char* what) {
@@ -53,15 +51,6 @@ template <class K>
 __global__ void forEachIndexKernel(K kernel, int n) {
   const int i = blockIdx.x * blockDim.x + threadIdx.x;
   if (i < n) kernel(i);
-}
-
-template <class K>
-__global__ void forEachCellOfColourKernel(K kernel, int width, int height, int colour) {
-  const int k = blockIdx.x * blockDim.x + threadIdx.x;
-  const int y = blockIdx.y * blockDim.y + threadIdx.y;
-  if (y >= height) return;
-  const int x = firstColumnOfColour(y, colour) + 5 * k;
-  if (x < width) kernel(x, y);
 }
 
 // One thread per row, summing left to right in double: the same order, and so the same bytes,
@@ -151,18 +140,6 @@ class CudaExec {
     if (n <= 0) return;
     forEachIndexKernel<<<(n + 127) / 128, 128>>>(kernel, n);
     check(cudaGetLastError(), "forEachIndex launch");
-  }
-  template <class K>
-  void forEachCellOfColour(int width, int height, int colour, const K& kernel) {
-    const int perRow = (width + 4) / 5;
-    const dim3 block(32, 8);
-    const dim3 grid((perRow + block.x - 1) / block.x, (height + block.y - 1) / block.y);
-    forEachCellOfColourKernel<<<grid, block>>>(kernel, width, height, colour);
-    check(cudaGetLastError(), "forEachCellOfColour launch");
-  }
-  template <class K>
-  void forEachCellInColourOrder(int width, int height, const K& kernel) {
-    for (int colour = 0; colour < kColours; ++colour) forEachCellOfColour(width, height, colour, kernel);
   }
   double sum(const float* values, const uint8_t* valid, int width, int height) {
     rowSums_.resize(static_cast<size_t>(height));

@@ -13,10 +13,8 @@ namespace snow::dist {
 
 // Cells a phenomenon's passes reach beyond a cell between two refreshes: wind transport two
 // (shares from the neighbours' surfaces, then the neighbours' shares), powder diffusion two a
-// substep (the same), the slopes of snowfall and stability one. The halo is still the bound of
-// wind transport's former colour passes (one cell a colour and two for the curvature): narrowing
-// it to 2 changes the decomposition's refusals and its measured exchange (docs/distributed.md).
-constexpr int kContinuousHalo = 5 + 2;
+// substep (the same), the slopes of snowfall and stability one.
+constexpr int kContinuousHalo = 2;
 
 // What the step's snowfall added and its melt removed (m³), as the backend returns them.
 struct StepVolumes {

@@ -11,7 +11,6 @@ namespace snow::dist {
 
 namespace {
 int cut(int extent, int parts, int k) { return static_cast<int>(static_cast<int64_t>(extent) * k / parts); }
-int lowerToMultiple(int v) { return v - v % kLocalOriginMultiple; }
 }  // namespace
 
 CellRect Decomposition::owned(int rank) const {
@@ -22,8 +21,7 @@ CellRect Decomposition::owned(int rank) const {
 
 CellRect Decomposition::local(int rank) const {
   const CellRect o = owned(rank);
-  return CellRect{lowerToMultiple(std::max(0, o.x0 - halo)), lowerToMultiple(std::max(0, o.y0 - halo)), std::min(width, o.x1 + halo),
-                  std::min(height, o.y1 + halo)};
+  return CellRect{std::max(0, o.x0 - halo), std::max(0, o.y0 - halo), std::min(width, o.x1 + halo), std::min(height, o.y1 + halo)};
 }
 
 Decomposition Decomposition::choose(int ranks, int width, int height, int halo) {

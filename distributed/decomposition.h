@@ -12,11 +12,6 @@ namespace snow::dist {
 
 using snow::CellRect;  // core/grid_window.h
 
-// Local grids start on whole-grid cells whose coordinates are multiples of this: the 5-colour
-// cross tiling (core/tiling.h) then gives every local cell its whole-grid colour, so the
-// colour passes of wind transport and the bedforms run in the same order on every rank.
-constexpr int kLocalOriginMultiple = 5;
-
 struct Decomposition {
   int width = 0, height = 0;    // the whole grid, cells
   int columns = 1, rows = 1;    // the process grid; rank = row * columns + column
@@ -32,8 +27,7 @@ struct Decomposition {
   // The cells `rank` owns: balanced splits, the first cut at width * column / columns (or at
   // columnStarts and rowStarts).
   CellRect owned(int rank) const;
-  // Its local grid: `owned` widened by `halo` within the grid, its origin lowered to multiples of
-  // kLocalOriginMultiple.
+  // Its local grid: `owned` widened by `halo` within the grid.
   CellRect local(int rank) const;
 
   // The process grid for `ranks` processes on a width × height grid: of the factorisations

@@ -17,7 +17,9 @@
 #include <sstream>
 
 #include "bake_support.h"
+#include "bake/tiles_on_ranks.h"
 #include "bakers/raster_tiles.h"
+#include "distributed/continuous_step.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
@@ -122,6 +124,41 @@ ProcessResult snowbake(const fs::path& dir, const std::string& args) {
 // 96 pixels in grid tiles of 40 sharing 3: 3 x 3 tiles of layers.exr (both channels), of the
 // frame's layers.exr, and of each avalanche map and motion frame; every one cut from the untiled
 // file, bit for bit.
+// Tiles sharing more rows than the season's halo widen it to their overlap and the next cell
+// (their normals read it), so every tile and that cell lie in the local grid of the rank the
+// tile starts in, and the ranks still write them; tiles sharing one row keep the season's halo.
+TEST(TileSets, TilesSharingMoreThanTheSeasonsHaloWidenItSoTheRankATileStartsInHoldsIt) {
+  Scene scene;
+  scene.outputs.layers = {"depth"};
+  scene.outputs.tiles.convention = TileConvention::Grid;
+  scene.outputs.tiles.sizePx = 64;
+  scene.outputs.tiles.overlapPx = 5;
+  GridSpec spec;
+  spec.width = 300, spec.height = 240;
+  const TileLayout l = tileLayout(scene.outputs.tiles, spec.width, spec.height);
+  ASSERT_EQ(l.step, 59);
+  for (const int ranks : {2, 3, 4}) {
+    const std::optional<dist::Decomposition> d = decompositionOnTiles(scene, spec, ranks, dist::kContinuousHalo);
+    ASSERT_TRUE(d) << ranks << " ranks";
+    EXPECT_EQ(d->halo, 6);
+    int tiles = 0;
+    for (int r = 0; r < ranks; ++r)
+      for (int ty = 0; ty < l.rows; ++ty)
+        for (int tx = 0; tx < l.columns; ++tx) {
+          const int x0 = tx * l.step, y0 = ty * l.step;
+          if (!d->owned(r).contains(x0, y0)) continue;
+          ++tiles;
+          const CellRect needs{x0, y0, std::min(spec.width, x0 + l.tileWidth + 1), std::min(spec.height, y0 + l.tileHeight + 1)};
+          EXPECT_EQ(d->local(r).intersect(needs), needs) << "tile " << tx << ", " << ty << " on rank " << r << " of " << ranks;
+        }
+    EXPECT_EQ(tiles, l.columns * l.rows);
+  }
+  scene.outputs.tiles.overlapPx = 1;
+  const std::optional<dist::Decomposition> d = decompositionOnTiles(scene, spec, 4, dist::kContinuousHalo);
+  ASSERT_TRUE(d);
+  EXPECT_EQ(d->halo, dist::kContinuousHalo);
+}
+
 TEST(TileSets, ATileCutFromAWindowOfTheImageIsTheTileCutFromTheWholeImage) {
   // What a rank writes from its local grid (bakers across ranks): any window holding the tile's
   // pixels, those past the image's edge repeated from it as the whole image's tiles have them.

@@ -277,7 +277,9 @@ refused() {  # NAME EXPECTED ARGS...
 refused cuda 'run.backend = "cuda": a bake across ranks' preset:default --set 'run.backend="cuda"'
 refused missing-terrain /nonexistent/dem.asc preset:default --terrain /nonexistent/dem.asc "${no_avalanches[@]}"
 # Found once the ranks have joined (the terrain loaded): they agree on the status.
-refused tiny-grid "cannot be baked across ranks" preset:default --set terrain.size=12 "${no_avalanches[@]}"
+# A 3 x 3 DEM: two ranks would each own a band one cell wide, narrower than the halo (2 cells).
+printf 'ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\n100 110 120\n105 115 125\n110 120 130\n' > "$work/tiny.asc"
+refused tiny-grid "cannot be baked across ranks" preset:default --terrain "$work/tiny.asc" "${no_avalanches[@]}"
 # This machine's ranks need more than the budget together, though one process alone fits it: refused
 # up front on every rank, the message counting the ranks.
 small_budget=(preset:default --set terrain.size=512 --set season.days=2 --set 'outputs.frames_days=[]' --set run.max_memory_gb=0.25

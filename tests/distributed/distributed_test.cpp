@@ -50,7 +50,7 @@ TEST(Decomposition, ChoosesTheShortestCutsFewerColumnsOnATie) {
   EXPECT_EQ(Decomposition::choose(1, 7, 5, 3).ranks(), 1);
 }
 
-TEST(Decomposition, OwnedCellsCoverTheGridOnceAndLocalGridsHoldTheirHaloOnMultiplesOfFive) {
+TEST(Decomposition, OwnedCellsCoverTheGridOnceAndLocalGridsAreThemWidenedByTheHalo) {
   for (int ranks = 1; ranks <= 8; ++ranks)
     for (auto [w, h] : {std::pair{97, 61}, std::pair{1000, 100}, std::pair{64, 640}, std::pair{37, 23}}) {
       const int halo = 4;
@@ -64,9 +64,8 @@ TEST(Decomposition, OwnedCellsCoverTheGridOnceAndLocalGridsHoldTheirHaloOnMultip
         for (int y = o.y0; y < o.y1; ++y)
           for (int x = o.x0; x < o.x1; ++x) ++owners[static_cast<size_t>(y) * w + x];
         EXPECT_EQ(l.intersect(o), o);
-        EXPECT_EQ(l.x0 % kLocalOriginMultiple, 0);
-        EXPECT_EQ(l.y0 % kLocalOriginMultiple, 0);
-        EXPECT_TRUE(l.x0 <= std::max(0, o.x0 - halo) && l.y0 <= std::max(0, o.y0 - halo));
+        EXPECT_EQ(l.x0, std::max(0, o.x0 - halo));
+        EXPECT_EQ(l.y0, std::max(0, o.y0 - halo));
         EXPECT_EQ(l.x1, std::min(w, o.x1 + halo));
         EXPECT_EQ(l.y1, std::min(h, o.y1 + halo));
       }
@@ -405,7 +404,7 @@ TEST(DistributedSeason, RefusesAStateThatIsNotTheRanksLocalGrid) {
   const Decomposition d = Decomposition::choose(comm.size(), 60, 40, kContinuousHalo);
   DistributedBackend b(createCpuBackend(), comm, d);
   EXPECT_THROW(b.upload(testState(61, 40)), std::invalid_argument);
-  EXPECT_THROW(DistributedBackend(createCpuBackend(), comm, Decomposition::choose(comm.size(), 60, 40, 3)), std::invalid_argument);
+  EXPECT_THROW(DistributedBackend(createCpuBackend(), comm, Decomposition::choose(comm.size(), 60, 40, kContinuousHalo - 1)), std::invalid_argument);
 }
 
 // A season on the whole grid (one process's CPU backend) and on this rank's local grid through a

@@ -147,7 +147,7 @@ inline std::vector<double> skierBatch(SnowBackend& b, const SnowState& s) {
 inline std::vector<ParityCase> backendParityCases() {
   std::vector<ParityCase> cases;
   for (RegisteredStep& step : registeredSteps(parityParameters(), parityWarmWeather()))
-    cases.push_back({step.name, [] { return makeRoughState(203, 157, 17); },  // odd sizes: partial blocks and colour rows
+    cases.push_back({step.name, [] { return makeRoughState(203, 157, 17); },  // odd sizes: partial blocks and rows
                      [run = step.run](SnowBackend& b, const SnowState&) { return std::vector<double>{run(b)}; }});
   cases.push_back({"art direction and edits", artDirectionFixture, artDirectionAndEdits});
   cases.push_back({"avalanche", avalancheFixture, avalancheToRest});
