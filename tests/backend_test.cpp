@@ -4,6 +4,7 @@
 
 #include <tbb/global_control.h>
 
+#include <functional>
 #include <set>
 #include <string>
 
@@ -121,77 +122,76 @@ TEST(CpuBackend, TotalsAreLayerSumsTimesCellArea) {
   EXPECT_DOUBLE_EQ(b->totals().powderM3, expected * 12.0);
 }
 
-// Powder diffusion's row path (its passes interleaved in strips of 32 rows, four cells at a time)
-// gives the per-cell bodies' bytes on any shape: grids narrower than four cells, a last strip of
-// one row, strips that end in the middle of the grid, NODATA holes and cliffs.
-// Run with AVX2 allowed (where the CPU has it: eight cells, then four, then one) and with SSE2 alone.
-TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
+namespace {
+// AVX2 lanes allowed or not for a scope, allowed again when it ends (whatever ends it).
+struct Avx2LanesAllowed {
+  explicit Avx2LanesAllowed(bool allowed) { lanesAvx2Allowed() = allowed; }
+  ~Avx2LanesAllowed() { lanesAvx2Allowed() = true; }
+};
+
+// Runs `steps` on the serial and the CPU backend from `initial(width, height)` on grids of any
+// shape (narrower than a vector, a last strip of one row, strips that end mid-grid), with AVX2
+// allowed (where the CPU has it: eight cells, then four, then one) and with SSE2 alone: the same
+// bytes, and powder moved on the grids 37 cells wide or more.
+void expectRowPathGivesTheSerialBytesOnAnyShape(const std::function<SnowState(int, int)>& initial,
+                                                const std::function<void(SnowBackend&)>& steps) {
   const int shapes[][2] = {{1, 1}, {3, 2}, {2, 40}, {5, 33}, {37, 31}, {38, 32}, {41, 65}, {64, 97}};
   for (const bool avx2 : {true, false}) {
     for (const auto& shape : shapes) {
       SCOPED_TRACE(std::to_string(shape[0]) + " x " + std::to_string(shape[1]) + (avx2 ? ", AVX2 allowed" : ", SSE2 alone"));
-      lanesAvx2Allowed() = avx2;
-      const SnowState initial = test::makeRoughState(shape[0], shape[1], 3, 2.0, 3.0);
+      const SnowState start = initial(shape[0], shape[1]);
+      SnowState a = start, b = start;
       auto serial = createSerialBackend();
       auto cpu = createCpuBackend();
-      SnowState a = initial, b = initial;
       serial->upload(a);
       cpu->upload(b);
-      PowderDiffusionArgs args;
-      args.dtDays = 0.3f;
-      for (int i = 0; i < 4; ++i) {
-        serial->powderDiffusion(args);
-        cpu->powderDiffusion(args);
+      {
+        const Avx2LanesAllowed lanes(avx2);
+        steps(*serial);
+        steps(*cpu);
       }
       serial->download(a);
       cpu->download(b);
-      lanesAvx2Allowed() = true;
       test::expectSameBytes(a, b);
       if (shape[0] >= 37) {
-        EXPECT_NE(a.powderM.values(), initial.powderM.values()) << "no powder moved";
+        EXPECT_NE(a.powderM.values(), start.powderM.values()) << "no powder moved";
       }
     }
   }
 }
+}  // namespace
+
+// Powder diffusion's row path (its passes interleaved in strips of 32 rows, four or eight cells at
+// a time) gives the per-cell bodies' bytes on any shape, with NODATA holes and cliffs.
+TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
+  expectRowPathGivesTheSerialBytesOnAnyShape([](int w, int h) { return test::makeRoughState(w, h, 3, 2.0, 3.0); },
+                                             [](SnowBackend& backend) {
+                                               PowderDiffusionArgs args;
+                                               args.dtDays = 0.3f;
+                                               for (int i = 0; i < 4; ++i) backend.powderDiffusion(args);
+                                             });
+}
 
 // Wind transport's row paths (four or eight cells at a time on the inner cells) give the per-cell
 // bodies' bytes on any shape, with winds of either sign along each axis, calm cells, wind shadows,
-// NODATA holes, an erosion multiplier and the scour and deposit records; with AVX2 allowed and
-// with SSE2 alone.
+// NODATA holes, an erosion multiplier and the scour and deposit records.
 TEST(CpuBackend, WindTransportRowPathMatchesSerialOnAnyShape) {
-  const int shapes[][2] = {{1, 1}, {3, 2}, {2, 40}, {5, 33}, {37, 31}, {38, 32}, {41, 65}, {64, 97}};
-  for (const bool avx2 : {true, false}) {
-    for (const auto& shape : shapes) {
-      SCOPED_TRACE(std::to_string(shape[0]) + " x " + std::to_string(shape[1]) + (avx2 ? ", AVX2 allowed" : ", SSE2 alone"));
-      lanesAvx2Allowed() = avx2;
-      SnowState initial = test::makeRoughState(shape[0], shape[1], 4, 2.0, 3.0);
-      initial.windErosionFactor.resize(shape[0], shape[1]);
-      for (int y = 0; y < shape[1]; ++y)
-        for (int x = 0; x < shape[0]; ++x) {
-          const int k = (3 * x + 5 * y) % 11;  // every sign and calm along each axis
-          initial.windXMps(x, y) = k < 3 ? 0.f : (k < 7 ? 9.f - x % 4 : -6.f - y % 3);
-          initial.windYMps(x, y) = k % 3 == 0 ? 0.f : (k % 3 == 1 ? 4.f : -7.f + x % 2);
-          initial.windErosionFactor(x, y) = 0.5f + 0.25f * static_cast<float>((x + y) % 4);
-        }
-      auto serial = createSerialBackend();
-      auto cpu = createCpuBackend();
-      SnowState a = initial, b = initial;
-      serial->upload(a);
-      cpu->upload(b);
-      const WindTransportArgs args{0.5f, 20.f, 0.1f};  // a strong erosion: shares cut by the powder
-      for (int i = 0; i < 3; ++i) {
-        serial->windTransport(args);
-        cpu->windTransport(args);
+  auto windy = [](int w, int h) {
+    SnowState s = test::makeRoughState(w, h, 4, 2.0, 3.0);
+    s.windErosionFactor.resize(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const int k = (3 * x + 5 * y) % 11;  // every sign and calm along each axis
+        s.windXMps(x, y) = k < 3 ? 0.f : (k < 7 ? 9.f - x % 4 : -6.f - y % 3);
+        s.windYMps(x, y) = k % 3 == 0 ? 0.f : (k % 3 == 1 ? 4.f : -7.f + x % 2);
+        s.windErosionFactor(x, y) = 0.5f + 0.25f * static_cast<float>((x + y) % 4);
       }
-      serial->download(a);
-      cpu->download(b);
-      lanesAvx2Allowed() = true;
-      test::expectSameBytes(a, b);
-      if (shape[0] >= 37) {
-        EXPECT_NE(a.powderM.values(), initial.powderM.values()) << "no powder moved";
-      }
-    }
-  }
+    return s;
+  };
+  expectRowPathGivesTheSerialBytesOnAnyShape(windy, [](SnowBackend& backend) {
+    const WindTransportArgs args{0.5f, 20.f, 0.1f};  // a strong erosion: shares cut by the powder
+    for (int i = 0; i < 3; ++i) backend.windTransport(args);
+  });
 }
 
 namespace {

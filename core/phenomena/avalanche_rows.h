@@ -11,23 +11,9 @@
 
 namespace snow {
 
-#if defined(__SSE2__)
-namespace sse2_lanes {
-using V = simd_detail::Sse2;
-#include "avalanche_lanes.inc"
-}  // namespace sse2_lanes
-#endif
-
-#if SNOW_LANES_AVX2
-#pragma GCC push_options
-#pragma GCC target("avx2")
-namespace avx2_lanes {
-using V = simd_detail::Avx2;
-#include "avalanche_lanes.inc"
-}  // namespace avx2_lanes
-#include "avalanche_height_avx2.inc"
-#pragma GCC pop_options
-#endif
+#define SNOW_LANES_BODY "phenomena/avalanche_lanes.inc"
+#define SNOW_LANES_AVX2_EXTRA "phenomena/avalanche_height_avx2.inc"
+#include "../simd_lanes_for_each_isa.inc"
 
 // Where lanes `lanes` wide starting at x stop for cells [x, end): at end, or past it to the end of
 // their last whole vector when that stays within `limit`. The box's cells past a row's span hold

@@ -47,25 +47,10 @@ class PowderRowBuffer {
   int stride_ = 0;
 };
 
-#if defined(__SSE2__)
-namespace sse2_lanes {
-using V = simd_detail::Sse2;
-#include "powder_diffusion_lanes.inc"
-}  // namespace sse2_lanes
-#endif
-
-#if SNOW_LANES_AVX2
-// The same body eight cells at a time, compiled for AVX2 (no FMA) and used when the CPU has it:
-// the same bytes as SSE2 and the per-cell body.
-#pragma GCC push_options
-#pragma GCC target("avx2")
-namespace avx2_lanes {
-using V = simd_detail::Avx2;
-#include "powder_diffusion_lanes.inc"
-}  // namespace avx2_lanes
-#pragma GCC pop_options
-
-#endif
+// The shares body four cells at a time with SSE2 and eight with AVX2 (used when the CPU has it):
+// the same bytes as each other and as the per-cell body.
+#define SNOW_LANES_BODY "phenomena/powder_diffusion_lanes.inc"
+#include "../simd_lanes_for_each_isa.inc"
 
 // Pass 1 on row y: every cell's shares and what it keeps, into `out` (PowderBaseKernel has run).
 inline void powderSharesRow(const PowderFlowKernel& k, int y, const PowderRowShares& out) {

@@ -11,22 +11,8 @@
 
 namespace snow {
 
-#if defined(__SSE2__)
-namespace sse2_lanes {
-using V = simd_detail::Sse2;
-#include "wind_transport_lanes.inc"
-}  // namespace sse2_lanes
-#endif
-
-#if SNOW_LANES_AVX2
-#pragma GCC push_options
-#pragma GCC target("avx2")
-namespace avx2_lanes {
-using V = simd_detail::Avx2;
-#include "wind_transport_lanes.inc"
-}  // namespace avx2_lanes
-#pragma GCC pop_options
-#endif
+#define SNOW_LANES_BODY "phenomena/wind_transport_lanes.inc"
+#include "../simd_lanes_for_each_isa.inc"
 
 // Cells [x0, x1) of row y of either pass: the lanes on the inner cells, the per-cell body elsewhere.
 template <class K>
