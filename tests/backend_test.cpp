@@ -134,7 +134,7 @@ struct Avx2LanesAllowed {
 // allowed (where the CPU has it: eight cells, then four, then one) and with SSE2 alone: the same
 // bytes, and powder moved on the grids 37 cells wide or more.
 void expectRowPathGivesTheSerialBytesOnAnyShape(const std::function<SnowState(int, int)>& initial,
-                                                const std::function<void(SnowBackend&)>& steps) {
+                                                const std::function<void(SnowBackend&, const SnowState&)>& steps) {
   const int shapes[][2] = {{1, 1}, {3, 2}, {2, 40}, {5, 33}, {37, 31}, {38, 32}, {41, 65}, {64, 97}};
   for (const bool avx2 : {true, false}) {
     for (const auto& shape : shapes) {
@@ -147,8 +147,8 @@ void expectRowPathGivesTheSerialBytesOnAnyShape(const std::function<SnowState(in
       cpu->upload(b);
       {
         const Avx2LanesAllowed lanes(avx2);
-        steps(*serial);
-        steps(*cpu);
+        steps(*serial, start);
+        steps(*cpu, start);
       }
       serial->download(a);
       cpu->download(b);
@@ -165,7 +165,7 @@ void expectRowPathGivesTheSerialBytesOnAnyShape(const std::function<SnowState(in
 // a time) gives the per-cell bodies' bytes on any shape, with NODATA holes and cliffs.
 TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
   expectRowPathGivesTheSerialBytesOnAnyShape([](int w, int h) { return test::makeRoughState(w, h, 3, 2.0, 3.0); },
-                                             [](SnowBackend& backend) {
+                                             [](SnowBackend& backend, const SnowState&) {
                                                PowderDiffusionArgs args;
                                                args.dtDays = 0.3f;
                                                for (int i = 0; i < 4; ++i) backend.powderDiffusion(args);
@@ -174,7 +174,8 @@ TEST(CpuBackend, PowderDiffusionRowPathMatchesSerialOnAnyShape) {
 
 // Wind transport's row paths (four or eight cells at a time on the inner cells) give the per-cell
 // bodies' bytes on any shape, with winds of either sign along each axis, calm cells, wind shadows,
-// NODATA holes, an erosion multiplier and the scour and deposit records.
+// NODATA holes, an erosion multiplier, the scour and deposit records, and then cells the bedform
+// model holds (they give nothing).
 TEST(CpuBackend, WindTransportRowPathMatchesSerialOnAnyShape) {
   auto windy = [](int w, int h) {
     SnowState s = test::makeRoughState(w, h, 4, 2.0, 3.0);
@@ -188,9 +189,13 @@ TEST(CpuBackend, WindTransportRowPathMatchesSerialOnAnyShape) {
       }
     return s;
   };
-  expectRowPathGivesTheSerialBytesOnAnyShape(windy, [](SnowBackend& backend) {
+  expectRowPathGivesTheSerialBytesOnAnyShape(windy, [](SnowBackend& backend, const SnowState& start) {
     const WindTransportArgs args{0.5f, 20.f, 0.1f};  // a strong erosion: shares cut by the powder
     for (int i = 0; i < 3; ++i) backend.windTransport(args);
+    std::vector<uint8_t> bedforms(start.spec.cellCount());
+    for (size_t i = 0; i < bedforms.size(); ++i) bedforms[i] = i % 5 == 2 || i % 7 == 0;
+    backend.useBedformDomain(bedforms);
+    for (int i = 0; i < 2; ++i) backend.windTransport(args);
   });
 }
 
