@@ -202,16 +202,17 @@ void AvalancheRun::weighRows(int r0, int r1) {
   weights_.resize(static_cast<size_t>(std::min(bandRows, terrain_.spec.height)) * width);
   for (int b0 = r0; b0 < r1; b0 += bandRows) {
     const int b1 = std::min(r1, b0 + bandRows);
+    // Each row's sum in order beside its weights: the same doubles on any thread count.
     backend_.forEachHostChunk(b1 - b0, kRowsPerChunk, [&](int a, int b) {
       releaseWeights(b0 + a, b0 + b, &weights_[static_cast<size_t>(a) * width]);
+      for (int y = b0 + a; y < b0 + b; ++y) {
+        const double* w = &weights_[static_cast<size_t>(y - b0) * width];
+        double sum = 0.0;
+        for (int x = 0; x < width; ++x)
+          if (w[x] != 0.0) sum += w[x];
+        rowWeights_[static_cast<size_t>(y)] = sum;
+      }
     });
-    for (int y = b0; y < b1; ++y) {
-      const double* w = &weights_[static_cast<size_t>(y - b0) * width];
-      double sum = 0.0;
-      for (int x = 0; x < width; ++x)
-        if (w[x] != 0.0) sum += w[x];
-      rowWeights_[static_cast<size_t>(y)] = sum;
-    }
   }
 }
 

@@ -20,6 +20,21 @@ namespace {
 // Rows per task: large enough to amortise scheduling, small enough to balance 2..64 threads.
 constexpr int kRowGrain = 8;
 
+// An avalanche pass over a box of fewer cells than this runs on the calling thread. Its passes
+// take a few microseconds each, four to a step, hundreds of thousands of steps a season: a TBB
+// pass that woke a sleeping worker for each took twice as long on two threads as on one, and a
+// team of helpers spinning between passes gained under 10 % (bench/RESULTS.md).
+constexpr long long kAvalancheTaskCells = 1 << 17;
+inline long long boxCells(const AvalancheArgs& a) { return static_cast<long long>(a.x1 - a.x0) * (a.y1 - a.y0); }
+// The cells of an avalanche pass's box; -1 for any other pass.
+template <class K>
+long long avalancheBoxCells(const K&, int, int) { return -1; }
+template <class K>
+long long avalancheBoxCells(const InBox<K>&, int width, int height) { return static_cast<long long>(width) * height; }
+template <class K>
+long long avalancheBoxCells(const InRowSpans<K>& k, int, int) { return boxCells(k.a); }
+inline long long avalancheBoxCells(const AvalancheRowStatsKernel& k, int, int) { return boxCells(k.a); }
+
 class TbbExec : public HostStorage {
  public:
   std::string name() const { return "cpu"; }
@@ -27,8 +42,7 @@ class TbbExec : public HostStorage {
   static constexpr bool kPowderSharesInRows = true;
 
   // A kernel with a row path (rowSpan, found by argument-dependent lookup) runs it per row. A
-  // pass of one task's rows runs on the calling thread (an avalanche's small boxes, thousands of
-  // passes a second: the task's scheduling would cost more than the rows).
+  // pass of one task's rows, or an avalanche's pass on a small box, runs on the calling thread.
   template <class K>
   void forEachCell(int width, int height, const K& kernel) {
     auto rows = [&](int y0, int y1) {
@@ -38,7 +52,8 @@ class TbbExec : public HostStorage {
           for (int x = 0; x < width; ++x) kernel(x, y);
       }
     };
-    if (height <= kRowGrain) return rows(0, height);
+    const long long box = avalancheBoxCells(kernel, width, height);
+    if (height <= kRowGrain || (box >= 0 && box < kAvalancheTaskCells)) return rows(0, height);
     tbb::parallel_for(tbb::blocked_range<int>(0, height, kRowGrain),
                       [&](const tbb::blocked_range<int>& r) { rows(r.begin(), r.end()); });
   }

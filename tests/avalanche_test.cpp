@@ -391,6 +391,37 @@ TEST(Avalanche, SameBytesSerialAndOnOneAndTwoThreads) {
   }
 }
 
+// A box of 2^17 cells or more shares its rows among TBB's threads (smaller ones run on the
+// calling thread): a release over the whole of a 400 x 340 grid, a few steps, the serial
+// executor's bytes on two threads.
+TEST(Avalanche, ABoxLargeEnoughToShareAmongThreadsGivesTheSerialBytes) {
+  constexpr int w = 400, h = 340;
+  SnowState s = test::makeRoughState(w, h, 5);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (s.validCell(x, y)) s.unstableM(x, y) = 1.5f;
+  ModelParameters p;
+  p.avalancheMaxDurationS = 0.5;
+  const std::vector<uint8_t> zone(static_cast<size_t>(w) * h, 1);
+  auto run = [&](std::unique_ptr<SnowBackend> backend) {
+    SnowState t = s;
+    backend->upload(t);
+    AvalancheRun r(*backend, p, t);
+    EXPECT_TRUE(r.releaseZone(zone, 0.0, 0.0, true));
+    Outcome o;
+    o.record = r.runToRest();
+    backend->download(t);
+    o.state = std::move(t);
+    return o;
+  };
+  const Outcome serial = run(createSerialBackend());
+  ASSERT_GE(serial.record.boxCellsMax, 1 << 17);
+  ASSERT_GE(serial.record.steps, 3);
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+  const Outcome shared = run(createCpuBackend());
+  test::expectSameBytes(serial.state, shared.state);
+}
+
 // The TBB executor's row paths for the avalanche passes (avalanche_rows.h: flow, scale and row
 // statistics eight cells at a time with AVX2 or four with SSE2, heights four with AVX2; the
 // grid's edges and the spans' tails cell by cell) give the per-cell bodies' bytes, as the serial

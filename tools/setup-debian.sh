@@ -17,7 +17,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libembree-dev libopenvdb-dev libboost-iostreams-dev libassimp-dev
-  libopenimageio-dev libeigen3-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
+  libopenimageio-dev libtbb-dev libgtest-dev libcli11-dev nlohmann-json3-dev
   libtomlplusplus-dev libgdal-dev
   libopenmpi-dev openmpi-bin
   time
