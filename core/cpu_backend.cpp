@@ -10,6 +10,8 @@
 #include "exec_backend.h"
 #include "phenomena/avalanche_rows.h"
 #include "phenomena/powder_diffusion_rows.h"
+#include "phenomena/snowfall_rows.h"
+#include "phenomena/stability_rows.h"
 #include "phenomena/surface_slope_rows.h"
 #include "phenomena/wind_transport_rows.h"
 #include "serial_exec.h"
@@ -101,6 +103,34 @@ class TbbExec : public HostStorage {
       }
     });
   }
+  // The slope snapshot and a pass that reads its own cell's slope only (stability, snowfall),
+  // fused by rows, with powder diffusion's strips: the slopes of each strip's first and last rows
+  // into edgeSlopes_ first, then each strip, as a task of its own, takes the slope of its next
+  // inner row (into a ring of two row buffers) before the pass changes the row above it. A slope
+  // on row r reads rows r - 1 .. r + 1, which the pass has not changed yet, so the results are
+  // the two whole-grid passes' bytes, without the snapshot's write and read of 8 bytes a cell.
+  template <class G>
+    requires ReadsOwnSlope<G>
+  void forEachCellThen(int width, int height, const SurfaceSlopeKernel& first, const G& second) {
+    const int strips = (height + kStripRows - 1) / kStripRows;
+    edgeSlopes_.resize(2 * static_cast<size_t>(strips) * width);
+    auto edgeRow = [&](int r) { return &edgeSlopes_[static_cast<size_t>(2 * (r / kStripRows) + (r % kStripRows == 0 ? 0 : 1)) * width]; };
+    tbb::parallel_for(0, strips, [&](int k) {
+      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
+      surfaceSlopeRow(first.v, a, 0, width, edgeRow(a));
+      if (b - 1 > a) surfaceSlopeRow(first.v, b - 1, 0, width, edgeRow(b - 1));
+    });
+    tbb::parallel_for(0, strips, [&](int k) {
+      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
+      std::vector<float>& ring = slopeRings_.local();
+      ring.resize(2 * static_cast<size_t>(width));
+      auto rowOf = [&](int r) { return r == a || r == b - 1 ? edgeRow(r) : &ring[static_cast<size_t>(r % 2) * width]; };
+      for (int y = a; y < b; ++y) {
+        if (y + 1 < b - 1) surfaceSlopeRow(first.v, y + 1, 0, width, rowOf(y + 1));
+        withSlopeRow(second, y, width, rowOf(y));
+      }
+    });
+  }
   // kernel(i) for i in [0, n) (agents, not cells): a few per task, they are few and costly.
   template <class K>
   void forEachIndex(int n, const K& kernel) {
@@ -136,6 +166,8 @@ class TbbExec : public HostStorage {
   static constexpr int kStripRows = 32;
   PowderRowBuffer edgeRows_, zeroRow_;
   tbb::enumerable_thread_specific<PowderRowBuffer> rings_;
+  std::vector<float> edgeSlopes_;
+  tbb::enumerable_thread_specific<std::vector<float>> slopeRings_;
 };
 
 }  // namespace

@@ -199,6 +199,39 @@ TEST(CpuBackend, WindTransportRowPathMatchesSerialOnAnyShape) {
   });
 }
 
+// Snowfall and the stability change fused with their slope snapshot by rows (TbbExec::
+// forEachCellThen: each strip's edge rows first, then a ring of two slope rows; each row's cells
+// in lanes, snowfall_lanes.inc and stability_lanes.inc) give the two
+// whole-grid passes' bytes on any shape: heavy snowfall (which changes the surface the next row's
+// slope reads) under a precipitation map, stability days from cold to hot (its lanes, stability_lanes.inc, take every
+// piece of the rate), NODATA holes, cliffs and wind loading.
+TEST(CpuBackend, SlopeFusedWithSnowfallAndStabilityMatchesSerialOnAnyShape) {
+  auto withPrecipitationMap = [](int w, int h) {
+    SnowState s = test::makeRoughState(w, h, 6, 2.0, 3.0);
+    s.snowfallFactor.resize(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) s.snowfallFactor(x, y) = 0.25f * static_cast<float>((x + 2 * y) % 5);  // none to twice
+    return s;
+  };
+  expectRowPathGivesTheSerialBytesOnAnyShape(withPrecipitationMap,
+                                             [](SnowBackend& backend, const SnowState&) {
+                                               SnowfallArgs fall;
+                                               fall.snowfallRatePerDay = 2e-3f;  // about a metre a day at 1500 m
+                                               fall.rainSnowLimitM = 1000.f;
+                                               // Days whose cells span each piece of the rate: below T_freeze,
+                                               // between T_freeze and T_cool, T_cool and T_warm, above T_warm.
+                                               StabilityArgs days[3];
+                                               days[0].seaLevelTemperatureC = 12.f;
+                                               days[0].windInstabilityPerMps2 = 0.5f;
+                                               days[1].seaLevelTemperatureC = -2.f;
+                                               days[2].seaLevelTemperatureC = 30.f;
+                                               for (int i = 0; i < 3; ++i) {
+                                                 backend.snowfall(fall);
+                                                 backend.stabilityChange(days[i]);
+                                               }
+                                             });
+}
+
 namespace {
 // Host storage whose upload of nothing frees the buffer, as CUDA's does (CudaBuffer::resize(0)).
 struct FreeingEmptyUploads : SerialExec {

@@ -5,7 +5,8 @@
 //                 s_c = s_c0 + k_sc * max(0, T_0powdery - T)
 //   of the rest, unstable share x_U = clamp(k_unstable * (|grad A| - s_U), 0, 1), stable the remainder.
 // Per cell, no neighbour writes. The slope comes from the SurfaceSlopeKernel snapshot
-// (surface_slope.h) runSnowfall takes just before, because this pass changes A.
+// (surface_slope.h) runSnowfall takes just before, because this pass changes A (the TBB executor
+// takes it a row at a time, fused with this pass).
 // Scratch: surfaceSlope, delta (what each cell's layers gained).
 // Mass: adds snow; runSnowfall returns the volume added (m^3) for the season's ledger.
 // Backend: SnowBackend::snowfall (ExecBackend runs runSnowfall). Season: SeasonRun::addSnowfall
@@ -37,7 +38,9 @@ struct SnowfallKernel {
   SnowFieldsView v;
   SnowfallArgs a;
 
-  SNOW_HD void operator()(int x, int y) const {
+  SNOW_HD void operator()(int x, int y) const { withSlope(x, y, v.surfaceSlope[v.index(x, y)]); }
+  // The snowfall at (x, y) given its slope, read from the snapshot or a row of it (TbbExec).
+  SNOW_HD void withSlope(int x, int y, float slope) const {
     const int i = v.index(x, y);
     if (!v.valid[i]) {
       v.delta[i] = 0.f;
@@ -50,7 +53,6 @@ struct SnowfallKernel {
       v.delta[i] = 0.f;
       return;
     }
-    const float slope = v.surfaceSlope[i];
     const float temperature = a.seaLevelTemperatureC + v.temperatureBase[i];
     const float criticalSlope =
         a.powderCriticalSlopeMin + a.powderCriticalSlopePerC * maxf(0.f, a.powderSlopeTemperatureC - temperature);
@@ -86,11 +88,11 @@ inline SnowfallArgs makeSnowfallArgs(const ModelParameters& p, double dtDays, co
   return a;
 }
 
-// The slope snapshot, then the snowfall; returns the volume added (m^3).
+// The slope snapshot, then the snowfall (the TBB executor fuses them by rows, the slopes in row
+// buffers: surface_slope_rows.h); returns the volume added (m^3).
 template <class Exec>
 double runSnowfall(Exec& exec, const SnowFieldsView& v, const SnowfallArgs& a) {
-  exec.forEachCell(v.width, v.height, SurfaceSlopeKernel{v});
-  exec.forEachCell(v.width, v.height, SnowfallKernel{v, a});
+  exec.forEachCellThen(v.width, v.height, SurfaceSlopeKernel{v}, SnowfallKernel{v, a});
   return exec.sum(v.delta, v.valid, v.width, v.height) * static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
 }
 

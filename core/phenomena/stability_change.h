@@ -6,7 +6,7 @@
 // steep ones). Wind loading adds instability where the wind-effect surface's vertical speed
 // rises (§5.4): at wind_instability_per_mps2 times max(0, W . grad W_sz). Per cell, no neighbour
 // writes; the slope comes from the SurfaceSlopeKernel snapshot (surface_slope.h) runStability
-// takes just before.
+// takes just before (the TBB executor takes it a row at a time, fused with this pass).
 // Scratch: surfaceSlope.
 // Mass: moves snow between two layers only; the total changes only by float rounding.
 // Backend: SnowBackend::stabilityChange (ExecBackend runs runStability). Season:
@@ -49,11 +49,12 @@ struct StabilityKernel {
   SnowFieldsView v;
   StabilityArgs a;
 
-  SNOW_HD void operator()(int x, int y) const {
+  SNOW_HD void operator()(int x, int y) const { withSlope(x, y, v.surfaceSlope[v.index(x, y)]); }
+  // The change at (x, y) given its slope, read from the snapshot or a row of it (TbbExec).
+  SNOW_HD void withSlope(int x, int y, float slope) const {
     const int i = v.index(x, y);
     if (!v.valid[i]) return;
     const float t = a.seaLevelTemperatureC + v.temperatureBase[i];
-    const float slope = v.surfaceSlope[i];
     const float g = slope / (slope + a.unstableCriticalSlope + 1e-12f);
     float rate = stabilityRate(a, t);
     rate = rate > 0.f ? rate * (1.f - g) : rate * g;
@@ -85,11 +86,11 @@ inline StabilityArgs makeStabilityArgs(const ModelParameters& p, double dtDays, 
   return a;
 }
 
-// The slope snapshot, then the stability change.
+// The slope snapshot, then the stability change (the TBB executor fuses them by rows, the
+// slopes in row buffers: surface_slope_rows.h).
 template <class Exec>
 void runStability(Exec& exec, const SnowFieldsView& v, const StabilityArgs& a) {
-  exec.forEachCell(v.width, v.height, SurfaceSlopeKernel{v});
-  exec.forEachCell(v.width, v.height, StabilityKernel{v, a});
+  exec.forEachCellThen(v.width, v.height, SurfaceSlopeKernel{v}, StabilityKernel{v, a});
 }
 
 }  // namespace snow

@@ -1,4 +1,5 @@
-// The TBB executor's row path for SurfaceSlopeKernel: four cells at a time with SSE2 where a cell
+// The TBB executor's row path for SurfaceSlopeKernel (into the snapshot, or into a row buffer for a
+// pass fused with it, surfaceSlopeRow): four cells at a time with SSE2 where a cell
 // and its four neighbours are all valid (central differences on both axes), the per-cell body
 // elsewhere. The same IEEE operations in the same order as surfaceGradient / surfaceSlope (no
 // fused multiply-add; 2 * dx is exact; division and square root correctly rounded), so the slopes
@@ -21,12 +22,29 @@ namespace snow {
 template <class K>
 concept HasRowSpan = requires(const K& k, int y, int x0, int x1) { rowSpan(k, y, x0, x1); };
 
-inline void rowSpan(const SurfaceSlopeKernel& k, int y, int x0, int x1) {
-  const SnowFieldsView& v = k.v;
+// A pass that reads the slope snapshot at its own cell only, and takes it as an argument
+// (withSlope): the TBB executor fuses it with the snapshot by rows (TbbExec::forEachCellThen).
+template <class K>
+concept ReadsOwnSlope = requires(const K& k, int x, int y, float slope) { k.withSlope(x, y, slope); };
+
+// Row y of such a pass, its slopes at slope[0 .. width), cell by cell; a pass with lanes has an
+// overload of its own (stability_rows.h).
+template <class K>
+  requires ReadsOwnSlope<K>
+void withSlopeRow(const K& k, int y, int width, const float* slope) {
+  for (int x = 0; x < width; ++x) k.withSlope(x, y, slope[x]);
+}
+
+// The slopes of cells [x0, x1) of row y into out[x0 .. x1) (out points at the row's cell 0).
+inline void surfaceSlopeRow(const SnowFieldsView& v, int y, int x0, int x1, float* out) {
+  auto cell = [&](int x) {
+    const int i = v.index(x, y);
+    out[x] = v.valid[i] ? surfaceSlope(v, x, y) : 0.f;  // SurfaceSlopeKernel's value
+  };
   int x = x0;
 #if defined(__SSE2__)
   if (y > 0 && y < v.height - 1) {
-    for (; x < x1 && x < 1; ++x) k(x, y);  // the west edge: one-sided differences
+    for (; x < x1 && x < 1; ++x) cell(x);  // the west edge: one-sided differences
     const int end = x1 < v.width - 1 ? x1 : v.width - 1;
     const int w = v.width;
     const __m128 twoDx = _mm_set1_ps(2.f * v.cellSizeXM), twoDy = _mm_set1_ps(2.f * v.cellSizeYM);
@@ -47,16 +65,20 @@ inline void rowSpan(const SurfaceSlopeKernel& k, int y, int x0, int x1) {
     for (; x + 4 <= end; x += 4) {
       const int i = v.index(x, y);
       if (!allValid(i)) {
-        for (int lane = 0; lane < 4; ++lane) k(x + lane, y);
+        for (int lane = 0; lane < 4; ++lane) cell(x + lane);
         continue;
       }
       const __m128 gx = _mm_div_ps(_mm_sub_ps(surfaceAt(i + 1), surfaceAt(i - 1)), twoDx);
       const __m128 gy = _mm_div_ps(_mm_sub_ps(surfaceAt(i + w), surfaceAt(i - w)), twoDy);
-      _mm_storeu_ps(v.surfaceSlope + i, _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(gx, gx), _mm_mul_ps(gy, gy))));
+      _mm_storeu_ps(out + x, _mm_sqrt_ps(_mm_add_ps(_mm_mul_ps(gx, gx), _mm_mul_ps(gy, gy))));
     }
   }
 #endif
-  for (; x < x1; ++x) k(x, y);
+  for (; x < x1; ++x) cell(x);
+}
+
+inline void rowSpan(const SurfaceSlopeKernel& k, int y, int x0, int x1) {
+  surfaceSlopeRow(k.v, y, x0, x1, k.v.surfaceSlope + static_cast<size_t>(y) * k.v.width);
 }
 
 }  // namespace snow
