@@ -66,6 +66,7 @@ struct Sse2 {
   static F bitAndNot(F a, F b) { return _mm_andnot_ps(a, b); }
   static F select(F mask, F a, F b) { return simd_detail::select(mask, a, b); }
   static bool none(F mask) { return _mm_movemask_ps(mask) == 0; }
+  static int bits(F mask) { return _mm_movemask_ps(mask); }  // lane k's mask at bit k
   static F byteMask(const uint8_t* p) { return simd_detail::byteMask(p); }
   // Four floats a cell (cell j's at p[4 j ..]) as four vectors, one per float, and back.
   static void loadQuads(const float* p, F out[4]) {
@@ -114,6 +115,7 @@ struct Avx2 {
   static F bitAndNot(F a, F b) { return _mm256_andnot_ps(a, b); }
   static F select(F mask, F a, F b) { return _mm256_blendv_ps(b, a, mask); }
   static bool none(F mask) { return _mm256_movemask_ps(mask) == 0; }
+  static int bits(F mask) { return _mm256_movemask_ps(mask); }
   static F byteMask(const uint8_t* p) {
     const __m256i wide = _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
     return _mm256_castsi256_ps(_mm256_xor_si256(_mm256_cmpeq_epi32(wide, _mm256_setzero_si256()), _mm256_set1_epi32(-1)));
