@@ -113,7 +113,7 @@ class TbbExec : public HostStorage {
   void forEachCellThen(int width, int height, const SurfaceSlopeKernel& first, const G& second) {
     const int strips = (height + kStripRows - 1) / kStripRows;
     edgeSlopes_.resize(2 * static_cast<size_t>(strips) * width);
-    auto edgeRow = [&](int r) { return &edgeSlopes_[static_cast<size_t>(2 * (r / kStripRows) + (r % kStripRows == 0 ? 0 : 1)) * width]; };
+    auto edgeRow = [&](int r) { return edgeSlopes_.data() + static_cast<size_t>(2 * (r / kStripRows) + (r % kStripRows == 0 ? 0 : 1)) * width; };
     tbb::parallel_for(0, strips, [&](int k) {
       const int a = k * kStripRows, b = std::min(height, a + kStripRows);
       surfaceSlopeRow(first.v, a, 0, width, edgeRow(a));
@@ -123,7 +123,7 @@ class TbbExec : public HostStorage {
       const int a = k * kStripRows, b = std::min(height, a + kStripRows);
       std::vector<float>& ring = slopeRings_.local();
       ring.resize(2 * static_cast<size_t>(width));
-      auto rowOf = [&](int r) { return r == a || r == b - 1 ? edgeRow(r) : &ring[static_cast<size_t>(r % 2) * width]; };
+      auto rowOf = [&](int r) { return r == a || r == b - 1 ? edgeRow(r) : ring.data() + static_cast<size_t>(r % 2) * width; };
       for (int y = a; y < b; ++y) {
         if (y + 1 < b - 1) surfaceSlopeRow(first.v, y + 1, 0, width, rowOf(y + 1));
         withSlopeRow(second, y, width, rowOf(y));

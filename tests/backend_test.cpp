@@ -207,7 +207,7 @@ TEST(CpuBackend, WindTransportRowPathMatchesSerialOnAnyShape) {
 // piece of the rate), NODATA holes, cliffs and wind loading.
 TEST(CpuBackend, SlopeFusedWithSnowfallAndStabilityMatchesSerialOnAnyShape) {
   auto withPrecipitationMap = [](int w, int h) {
-    SnowState s = test::makeRoughState(w, h, 6, 2.0, 3.0);
+    SnowState s = test::makeRoughState(w, h, 6, 60.0, 80.0);  // slopes of about 0.3 to 1.5: the shares do not clamp
     s.snowfallFactor.resize(w, h);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) s.snowfallFactor(x, y) = 0.25f * static_cast<float>((x + 2 * y) % 5);  // none to twice
@@ -220,7 +220,10 @@ TEST(CpuBackend, SlopeFusedWithSnowfallAndStabilityMatchesSerialOnAnyShape) {
                                                fall.rainSnowLimitM = 1000.f;
                                                // Days whose cells span each piece of the rate: below T_freeze,
                                                // between T_freeze and T_cool, T_cool and T_warm, above T_warm.
+                                               // The model's rates (the struct's 1e4 m a day would move whole
+                                               // layers whatever the slope).
                                                StabilityArgs days[3];
+                                               for (StabilityArgs& d : days) d.instabilityByWarmthMPerDay = 1.f, d.stabilityByColdMPerDay = 0.3f;
                                                days[0].seaLevelTemperatureC = 12.f;
                                                days[0].windInstabilityPerMps2 = 0.5f;
                                                days[1].seaLevelTemperatureC = -2.f;

@@ -1,8 +1,8 @@
 // The TBB executor's row paths for the passes it fuses with their slope snapshot
 // (TbbExec::forEachCellThen): snowfall and the stability change, a row's cells eight at a time
 // with AVX2, four with SSE2 (snowfall_lanes.inc, stability_lanes.inc), the tail by the per-cell
-// body; the same bytes as the serial executor and CUDA
-// (CpuBackend.SlopeFusedWithSnowfallAndStabilityMatchesSerialOnAnyShape). Host only.
+// body; the serial executor's bytes (CpuBackend.SlopeFusedWithSnowfallAndStabilityMatchesSerialOnAnyShape),
+// and so CUDA's, which runs the same per-cell bodies. Host only.
 #pragma once
 #include "snowfall.h"
 #include "stability_change.h"

@@ -89,7 +89,7 @@ inline SnowfallArgs makeSnowfallArgs(const ModelParameters& p, double dtDays, co
 }
 
 // The slope snapshot, then the snowfall (the TBB executor fuses them by rows, the slopes in row
-// buffers: surface_slope_rows.h); returns the volume added (m^3).
+// buffers: TbbExec::forEachCellThen, slope_pass_rows.h); returns the volume added (m^3).
 template <class Exec>
 double runSnowfall(Exec& exec, const SnowFieldsView& v, const SnowfallArgs& a) {
   exec.forEachCellThen(v.width, v.height, SurfaceSlopeKernel{v}, SnowfallKernel{v, a});

@@ -87,7 +87,7 @@ inline StabilityArgs makeStabilityArgs(const ModelParameters& p, double dtDays, 
 }
 
 // The slope snapshot, then the stability change (the TBB executor fuses them by rows, the
-// slopes in row buffers: surface_slope_rows.h).
+// slopes in row buffers: TbbExec::forEachCellThen, slope_pass_rows.h).
 template <class Exec>
 void runStability(Exec& exec, const SnowFieldsView& v, const StabilityArgs& a) {
   exec.forEachCellThen(v.width, v.height, SurfaceSlopeKernel{v}, StabilityKernel{v, a});
