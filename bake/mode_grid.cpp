@@ -112,8 +112,8 @@ std::string manifestPath(const std::string& outDir) { return (fs::path(outDir) /
 std::string writeResolvedScene(const Scene& scene, const std::string& outDir) {
   const std::string path = resolvedScenePath(outDir);
   writeTextAtomically(path, resolvedSceneToml(scene));
-  currentSink().files.push_back({"scene.resolved.toml", "the resolved scene: every key, defaults and --set overrides included, paths absolute",
-                                 "", "TOML"});
+  currentSink().files.push_back(
+      {.path = "scene.resolved.toml", .content = "the resolved scene: every key, defaults and --set overrides included, paths absolute", .format = "TOML"});
   currentSink().paths.push_back(path);
   return path;
 }
@@ -171,8 +171,17 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const SinkScope filesScope(files);
   OcclusionResult occlusion;
   SeasonOutputs seasonOutputs;
-  OutputSources sources{&scene, options.outDir, terrain.latitudeDeg, layers, &*pre.wind, pre.exposure ? &*pre.exposure : nullptr,
-                        &occlusion.grids, &seasonOutputs.routeMap, scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())};
+  OutputSources sources{.scene = &scene,
+                        .outDir = options.outDir,
+                        .latitudeDeg = terrain.latitudeDeg,
+                        .layers = layers,
+                        .wind = &*pre.wind,
+                        .exposure = pre.exposure ? &*pre.exposure : nullptr,
+                        .occlusion = &occlusion.grids,
+                        .routeMap = &seasonOutputs.routeMap,
+                        .skiTrackFactor = scene.outputs.skiTrackFactor,
+                        .occluders = &terrain.occluders,
+                        .geo = geoFrameOf(terrain.info())};
   // "file" events as each file is written: a frame's during the season, the rest in the outputs stage.
   sources.fileWritten = [](const std::string& path, double day) { reportFilesWritten({path}, day >= 0.0 ? "season" : "outputs"); };
   shareTheRanksTiles(sources, scene, terrain.info().spec);

@@ -140,11 +140,11 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
 std::vector<PlannedFile> planMeshBakeFiles(const Scene& scene, const std::string& outDir) {
   std::vector<PlannedFile> files;
   if (scene.outputs.vdb)
-    files.push_back({(fs::path(outDir) / kMeshVdbName).string(), "OpenVDB", "the snow body: snow_sdf (level set) and density (fog)"});
+    files.push_back({.path = (fs::path(outDir) / kMeshVdbName).string(), .format = "OpenVDB", .content = "the snow body: snow_sdf (level set) and density (fog)"});
   for (const std::string& format : scene.outputs.meshes)
-    files.push_back({(fs::path(outDir) / meshBodyName(format)).string(), meshFormatDescription(format), "the snow body, closed"});
-  files.push_back({resolvedScenePath(outDir), "TOML", "the resolved scene"});
-  files.push_back({manifestPath(outDir), "JSON", "the manifest"});
+    files.push_back({.path = (fs::path(outDir) / meshBodyName(format)).string(), .format = meshFormatDescription(format), .content = "the snow body, closed"});
+  files.push_back({.path = resolvedScenePath(outDir), .format = "TOML", .content = "the resolved scene"});
+  files.push_back({.path = manifestPath(outDir), .format = "JSON", .content = "the manifest"});
   return files;
 }
 

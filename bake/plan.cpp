@@ -76,9 +76,14 @@ void planGrid(const Scene& scene, const BakeOptions& options, BakePlan& plan) {
   OutputSink sink;
   {
     const SinkScope scope(sink);
-    OutputSources src{&scene, options.outDir, terrain.latitudeDeg, layersToWrite(scene, terrain.info()), nullptr, nullptr, nullptr, nullptr,
-                      scene.outputs.skiTrackFactor, &terrain.occluders, nullptr, geoFrameOf(terrain.info())};
-    src.plan = true;
+    OutputSources src{.scene = &scene,
+                      .outDir = options.outDir,
+                      .latitudeDeg = terrain.latitudeDeg,
+                      .layers = layersToWrite(scene, terrain.info()),
+                      .skiTrackFactor = scene.outputs.skiTrackFactor,
+                      .occluders = &terrain.occluders,
+                      .geo = geoFrameOf(terrain.info()),
+                      .plan = true};
     src.planSnowMesh = occlusion && occlusionWritesSnowMesh(scene, terrain.info());
     src.planNodata = terrain.info().nodataCells > 0;
     std::ostringstream quiet;

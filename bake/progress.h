@@ -38,12 +38,12 @@ std::string jsonNumber(double v);
 
 // How a bake ended, for the final line.
 struct ProgressOutcome {
-  std::string outcome;  // "ok", "input_error", "interrupted" (exit status 130) or "failed"
+  std::string outcome{};  // "ok", "input_error", "interrupted" (exit status 130) or "failed"
   int exitStatus = 0;
   long long files = -1;  // the files the manifest lists (-1: no manifest)
-  std::string manifest;
+  std::string manifest{};
   double massBalance = -1;  // the season's relative mass-balance error (-1: none)
-  std::string message;
+  std::string message{};
 };
 
 class ProgressSink {

@@ -12,21 +12,21 @@
 namespace snow {
 
 struct ManifestFile {
-  std::string path;      // relative to the output folder
-  std::string content;   // e.g. "snow layer: powder"
-  std::string unit;      // e.g. "m"
-  std::string format;    // e.g. "OpenEXR, 1 channel float32, linear"
+  std::string path{};    // relative to the output folder
+  std::string content{}; // e.g. "snow layer: powder"
+  std::string unit{};    // e.g. "m"
+  std::string format{};  // e.g. "OpenEXR, 1 channel float32, linear"
   double day = -1.0;     // season day of the frame; -1 for the end of the season
   float minValue = 0.f, maxValue = 0.f;
   int width = 0, height = 0;  // 0: the grid's
   // Quantised encodings (png16, png8, r16): value = lo + (hi - lo) p / (2^bits - 1), NODATA cells
   // written as `nodataPixel`; rangeMode "fixed", "season" or "own" (empty: not quantised).
-  std::string rangeMode;
+  std::string rangeMode{};
   double rangeLo = 0, rangeHi = 0;
   int nodataPixel = 0;
   // [outputs.tiles]: which tile of the output this file is, its first pixel in the untiled image,
   // and its georeference (its north-west corner in the terrain's coordinates, and a pixel's size).
-  std::string tileConvention;  // empty: not a tile
+  std::string tileConvention{};  // empty: not a tile
   int tileColumn = 0, tileRow = 0, tileX = 0, tileY = 0;
   double tileOriginX = 0, tileOriginY = 0, pixelSizeX = 0, pixelSizeY = 0;
   // Not written: the writer's count when it listed the file, the order in which a bake across

@@ -15,13 +15,13 @@ namespace snow {
 // A file `snowbake plan` says the bake would write: listed by the same writers in plan mode
 // (OutputSources::plan), which write nothing and compute no values.
 struct PlannedFile {
-  std::string path;       // absolute, as the bake writes it
-  std::string format;     // the manifest's format line
-  std::string content;
+  std::string path{};     // absolute, as the bake writes it
+  std::string format{};   // the manifest's format line
+  std::string content{};
   double dataBytes = 0;   // pixel or sample bytes, uncompressed (0: not known before the bake: meshes, VDB, text)
   bool exactBytes = false;  // the file is exactly dataBytes long (r16, r32: no header, no compression)
-  std::string condition;  // empty: always written; else when it is left out (it depends on the season's snow)
-  std::string note;       // printed beside the file: why it stays whole under [outputs.tiles]
+  std::string condition{};  // empty: always written; else when it is left out (it depends on the season's snow)
+  std::string note{};     // printed beside the file: why it stays whole under [outputs.tiles]
 };
 
 struct OutputSink {

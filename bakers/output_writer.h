@@ -32,9 +32,9 @@ namespace snow {
 // scene has none (no exposure with precompute.sun = false, no occlusion fields in a season).
 struct OutputSources {
   const Scene* scene = nullptr;
-  std::string outDir;
+  std::string outDir{};
   double latitudeDeg = 0.0;
-  std::vector<std::string> layers;       // the scene's, with valid_mask added on terrains with NODATA
+  std::vector<std::string> layers{};    // the scene's, with valid_mask added on terrains with NODATA
   const WindTimeline* wind = nullptr;
   const Exposure* exposure = nullptr;
   const OcclusionGrids* occlusion = nullptr;
@@ -42,7 +42,7 @@ struct OutputSources {
   int skiTrackFactor = 0;                 // the ski-track texture's texels per cell, 0 without one
   const std::vector<TriangleMesh>* occluders = nullptr;
   const TriangleMesh* snowMesh = nullptr;  // occlusion mode on a mesh terrain: the mesh with its snow
-  GeoFrame geo;                            // the terrain's georeference (tiles and GeoTIFFs)
+  GeoFrame geo{};                         // the terrain's georeference (tiles and GeoTIFFs)
   // `snowbake plan`: every writer lists its files (PlannedFile, output_sink.h) from the grid's
   // size and the scene alone; no value is computed, nothing is written. The state given to
   // writeDay then needs only its spec.
@@ -50,7 +50,7 @@ struct OutputSources {
   bool planSnowMesh = false;  // plan mode: occlusion on a mesh terrain writes snow_mesh (occlusionWritesSnowMesh)
   bool planNodata = false;    // plan mode: the terrain has NODATA cells (mesh tiles over them may be left out)
   // Called as each file is written (from the writers' threads): the progress's live "file" events.
-  std::function<void(const std::string& path, double day)> fileWritten;
+  std::function<void(const std::string& path, double day)> fileWritten{};
   // Across ranks, where each rank writes the tiles that start in its subdomain (docs/distributed.md):
   // the states given to writeDay are this rank's local grid, which lies at `stateCells` of the
   // whole grid (empty: the state is the whole grid); the writer writes the tiles whose first
@@ -58,9 +58,9 @@ struct OutputSources {
   // seen on this rank's cells with every other rank's (on every rank alike, in the same order).
   // `wholeThumbnail` puts each rank's pixels of a preview's thumbnail (0 on the others' cells)
   // together on rank 0 (the contact sheet's).
-  CellRect stateCells, tilesStartingIn;
-  std::function<SeenRange(const SeenRange&)> wholeRange;
-  std::function<std::vector<uint8_t>(std::vector<uint8_t>)> wholeThumbnail;
+  CellRect stateCells{}, tilesStartingIn{};
+  std::function<SeenRange(const SeenRange&)> wholeRange{};
+  std::function<std::vector<uint8_t>(std::vector<uint8_t>)> wholeThumbnail{};
 };
 
 class OutputWriter {

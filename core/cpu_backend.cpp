@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <utility>
 
 #include "exec_backend.h"
 #include "phenomena/avalanche_rows.h"
@@ -68,67 +69,48 @@ class TbbExec : public HostStorage {
     forEachCell(width, height, second);
   }
   // A powder-diffusion substep, its two passes interleaved by rows (powder_diffusion_rows.h) so
-  // the shares stay in cache-sized row buffers. The grid is cut into strips of kStripRows rows.
-  // First, pass 1 on each strip's first and last rows (into edgeRows_). Then each strip, as a
-  // task of its own, runs pass 1 on its next inner row and pass 2 on the row above it, in order:
-  // pass 1 on row r reads the powder of rows r - 1 .. r + 1 before pass 2 writes them (pass 2 on
-  // row r comes after pass 1 on row r + 1, and the tasks of other strips only read their own
-  // rows), and pass 2 on row r finds the shares of rows r - 1 .. r + 1 computed. So the result is
-  // the two whole-grid passes' bytes.
+  // the shares stay in cache-sized row buffers: pass 1 on row r reads the powder of rows
+  // r - 1 .. r + 1 before pass 2 writes them (pass 2 on row r comes after pass 1 on row r + 1),
+  // and pass 2 on row r finds the shares of rows r - 1 .. r + 1 computed. So the result is the
+  // two whole-grid passes' bytes.
   void forEachCellThen(int width, int height, const PowderFlowKernel& first, const PowderGatherKernel& second) {
-    const int strips = (height + kStripRows - 1) / kStripRows;
-    edgeRows_.resize(2 * strips, width);
+    edgeRows_.resize(2 * stripCount(height), width);
     zeroRow_.resize(1, width);
-    auto edgeSlot = [&](int r) { return 2 * (r / kStripRows) + (r % kStripRows == 0 ? 0 : 1); };
-    auto isEdge = [&](int r) { return r % kStripRows == 0 || r % kStripRows == kStripRows - 1 || r == height - 1; };
-    tbb::parallel_for(0, strips, [&](int k) {
-      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
-      powderSharesRow(first, a, edgeRows_.row(edgeSlot(a)));
-      if (b - 1 > a) powderSharesRow(first, b - 1, edgeRows_.row(edgeSlot(b - 1)));
-    });
-    tbb::parallel_for(0, strips, [&](int k) {
-      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
-      // Each thread's three row buffers, kept from task to task (every cell of a buffer is written
-      // before it is read; the zero padding is never written).
-      PowderRowBuffer& ring = rings_.local();
-      ring.resize(3, width);
-      auto rowOf = [&](int r) {
-        if (r < 0 || r >= height) return zeroRow_.row(0);
-        return isEdge(r) ? edgeRows_.row(edgeSlot(r)) : ring.row(r % 3);
-      };
-      for (int y = a; y < b; ++y) {
-        if (y + 1 < b && !isEdge(y + 1)) powderSharesRow(first, y + 1, ring.row((y + 1) % 3));
-        powderGatherRow(second.v, y, rowOf(y - 1), rowOf(y), rowOf(y + 1));
-      }
-    });
+    forEachStrip(
+        height, [&](int r) { powderSharesRow(first, r, edgeRows_.row(edgeSlot(r))); },
+        [&] {
+          // Each thread's three row buffers, kept from task to task (every cell of a buffer is
+          // written before it is read; the zero padding is never written).
+          PowderRowBuffer& ring = rings_.local();
+          ring.resize(3, width);
+          auto rowOf = [&](int r) {
+            if (r < 0 || r >= height) return zeroRow_.row(0);
+            return isEdgeRow(r, height) ? edgeRows_.row(edgeSlot(r)) : ring.row(r % 3);
+          };
+          auto inner = [&ring, &first](int r) { powderSharesRow(first, r, ring.row(r % 3)); };
+          auto pass = [&second, rowOf](int y) { powderGatherRow(second.v, y, rowOf(y - 1), rowOf(y), rowOf(y + 1)); };
+          return std::pair{inner, pass};
+        });
   }
   // The slope snapshot and a pass that reads its own cell's slope only (stability, snowfall),
-  // fused by rows, with powder diffusion's strips: the slopes of each strip's first and last rows
-  // into edgeSlopes_ first, then each strip, as a task of its own, takes the slope of its next
-  // inner row (into a ring of two row buffers) before the pass changes the row above it. A slope
-  // on row r reads rows r - 1 .. r + 1, which the pass has not changed yet, so the results are
-  // the two whole-grid passes' bytes, without the snapshot's write and read of 8 bytes a cell.
+  // fused by rows: the slope of each row is taken before the pass changes the rows it reads
+  // (r - 1 .. r + 1), so the results are the two whole-grid passes' bytes, without the
+  // snapshot's write and read of 8 bytes a cell.
   template <class G>
     requires ReadsOwnSlope<G>
   void forEachCellThen(int width, int height, const SurfaceSlopeKernel& first, const G& second) {
-    const int strips = (height + kStripRows - 1) / kStripRows;
-    edgeSlopes_.resize(2 * static_cast<size_t>(strips) * width);
-    auto edgeRow = [&](int r) { return edgeSlopes_.data() + static_cast<size_t>(2 * (r / kStripRows) + (r % kStripRows == 0 ? 0 : 1)) * width; };
-    tbb::parallel_for(0, strips, [&](int k) {
-      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
-      surfaceSlopeRow(first.v, a, 0, width, edgeRow(a));
-      if (b - 1 > a) surfaceSlopeRow(first.v, b - 1, 0, width, edgeRow(b - 1));
-    });
-    tbb::parallel_for(0, strips, [&](int k) {
-      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
-      std::vector<float>& ring = slopeRings_.local();
-      ring.resize(2 * static_cast<size_t>(width));
-      auto rowOf = [&](int r) { return r == a || r == b - 1 ? edgeRow(r) : ring.data() + static_cast<size_t>(r % 2) * width; };
-      for (int y = a; y < b; ++y) {
-        if (y + 1 < b - 1) surfaceSlopeRow(first.v, y + 1, 0, width, rowOf(y + 1));
-        withSlopeRow(second, y, width, rowOf(y));
-      }
-    });
+    edgeSlopes_.resize(2 * static_cast<size_t>(stripCount(height)) * width);
+    auto edgeRow = [&](int r) { return edgeSlopes_.data() + static_cast<size_t>(edgeSlot(r)) * width; };
+    forEachStrip(
+        height, [&](int r) { surfaceSlopeRow(first.v, r, 0, width, edgeRow(r)); },
+        [&] {
+          std::vector<float>& ring = slopeRings_.local();
+          ring.resize(2 * static_cast<size_t>(width));
+          auto rowOf = [&](int r) { return isEdgeRow(r, height) ? edgeRow(r) : ring.data() + static_cast<size_t>(r % 2) * width; };
+          auto inner = [&first, width, rowOf](int r) { surfaceSlopeRow(first.v, r, 0, width, rowOf(r)); };
+          auto pass = [&second, width, rowOf](int y) { withSlopeRow(second, y, width, rowOf(y)); };
+          return std::pair{inner, pass};
+        });
   }
   // kernel(i) for i in [0, n) (agents, not cells): a few per task, they are few and costly.
   template <class K>
@@ -163,6 +145,32 @@ class TbbExec : public HostStorage {
   std::vector<double> rowSums_;
   std::vector<float> rowMax_;
   static constexpr int kStripRows = 32;
+  static int stripCount(int height) { return (height + kStripRows - 1) / kStripRows; }
+  static bool isEdgeRow(int r, int height) { return r % kStripRows == 0 || r % kStripRows == kStripRows - 1 || r == height - 1; }
+  // The slot of a strip's first (2k) or last (2k + 1) row among the strips' edge rows.
+  static int edgeSlot(int r) { return 2 * (r / kStripRows) + (r % kStripRows == 0 ? 0 : 1); }
+  // A pass that reads rows r - 1 .. r + 1 of a per-row product (`edge` / `inner`, written to row
+  // buffers) and then changes what that product reads (`pass`), fused by strips of kStripRows
+  // rows: first `edge` on each strip's first and last rows, whose neighbours other strips change;
+  // then each strip as a task of its own, `inner` on its next inner row before `pass` on the row
+  // above it. `strip()` gives a task's (inner, pass) pair, bound to its thread's buffers.
+  template <class Edge, class Strip>
+  void forEachStrip(int height, const Edge& edge, const Strip& strip) {
+    const int strips = stripCount(height);
+    tbb::parallel_for(0, strips, [&](int k) {
+      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
+      edge(a);
+      if (b - 1 > a) edge(b - 1);
+    });
+    tbb::parallel_for(0, strips, [&](int k) {
+      const int a = k * kStripRows, b = std::min(height, a + kStripRows);
+      const auto [inner, pass] = strip();
+      for (int y = a; y < b; ++y) {
+        if (y + 1 < b - 1) inner(y + 1);
+        pass(y);
+      }
+    });
+  }
   PowderRowBuffer edgeRows_, zeroRow_;
   tbb::enumerable_thread_specific<PowderRowBuffer> rings_;
   std::vector<float> edgeSlopes_;

@@ -1,6 +1,6 @@
 // Vector operations for the host row paths' lane bodies (powder_diffusion_lanes.inc,
 // wind_transport_lanes.inc, avalanche_lanes.inc, surface_slope_lanes.inc, snowfall_lanes.inc,
-// stability_lanes.inc): one body written over a namespace V, compiled for SSE2 (four lanes)
+// stability_lanes.inc, and field_lanes.inc, the helpers they share): one body written over a namespace V, compiled for SSE2 (four lanes)
 // and, where GCC can target it per function, AVX2 (eight). Each operation is one IEEE operation
 // or an exact select, so a body doing the per-cell kernel's operations in its order gives its
 // bytes: MINPS / MAXPS return the second operand unless the first is strictly less / greater

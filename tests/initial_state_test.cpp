@@ -32,7 +32,9 @@ template <class T>
 void expectSameGrid(const Grid<T>& a, const Grid<T>& b, const char* name, const std::string& where) {
   ASSERT_EQ(a.width(), b.width()) << name << where;
   ASSERT_EQ(a.height(), b.height()) << name << where;
-  if (a.size() > 0) EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(T))) << name << where;  // an absent field: no data
+  if (a.size() > 0) {  // an absent field: no data
+    EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(T))) << name << where;
+  }
 }
 
 TEST(InitialState, MadeOnALocalGridIsTheWholeInitialStateCutToItFieldForField) {

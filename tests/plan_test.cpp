@@ -93,7 +93,9 @@ TEST(Plan, ListsExactlyTheFilesTheBakeWritesOnSixScenesOfEveryModeAndWritesNothi
         ++exact;
         EXPECT_EQ(static_cast<double>(fs::file_size(f.path)), f.dataBytes) << f.path;
       }
-    if (c.name == "encodings" || c.name == "tiles") EXPECT_GT(exact, 0u);
+    if (c.name == "encodings" || c.name == "tiles") {
+      EXPECT_GT(exact, 0u);
+    }
     EXPECT_GT(plan.memory.peakBytes(), 0.0);
     EXPECT_FALSE(plan.timeClass.empty());
   }

@@ -215,8 +215,11 @@ TEST(TileSets, LayersExrAndAvalancheMapTilesReassembleToTheUntiledFilesBitForBit
   // The contact sheet stays whole (a picture of the previews, not a map) and says so.
   EXPECT_TRUE(fs::exists(tiled.out() / "contact_sheet.png"));
   const nlohmann::json tiledManifest = manifestOf(tiled.out());
-  for (const auto& f : tiledManifest["files"])
-    if (f["path"] == "contact_sheet.png") EXPECT_NE(f["content"].get<std::string>().find("not a map"), std::string::npos);
+  for (const auto& f : tiledManifest["files"]) {
+    if (f["path"] == "contact_sheet.png") {
+      EXPECT_NE(f["content"].get<std::string>().find("not a map"), std::string::npos);
+    }
+  }
   std::printf("[ measure ] %zu untiled files of layers.exr and avalanche maps, each cut into 9 tiles\n", covered.size());
   fs::remove_all(whole.dir);
   fs::remove_all(tiled.dir);

@@ -6,7 +6,7 @@
 // operations in their order, so the results are the serial executor's and CUDA's bytes (the
 // tests compare them). Host only: never included by CUDA translation units.
 #pragma once
-#include "../simd_lanes.h"
+#include "field_lanes.h"
 #include "avalanche_kernels.h"
 
 namespace snow {

@@ -60,11 +60,14 @@ struct PowderDiffusionArgs {
 // the source never goes negative and needs no clamp. `record`, if given, adds the gain. (Ski
 // tracks give this way; powder diffusion's and wind transport's shares do the same against the
 // receiver's powder at the step's start, powderSharesAt and windSharesAt.)
+// Whether a gain can be given: positive, and not more than the source has left.
+SNOW_HD SNOW_INLINE bool acceptedGain(float gained, float remaining) { return gained > 0.f && !(gained > remaining); }
+
 SNOW_HD SNOW_INLINE float giveTo(float& receiver, float amount, float remaining, float* record) {
   const float before = receiver;
   const float after = before + amount;
   const float gained = after - before;
-  if (!(gained > 0.f) || gained > remaining) return remaining;
+  if (!acceptedGain(gained, remaining)) return remaining;
   receiver = after;
   if (record) *record = *record + gained;
   return remaining - gained;
@@ -163,7 +166,7 @@ SNOW_HD SNOW_INLINE void powderSharesAt(const SnowFieldsView& v, const PowderDif
     if (!(amount > 0.f)) continue;
     const float before = v.powder[v.index(x + powderDx(d), y + powderDy(d))];
     const float gained = (before + amount) - before;
-    if (!(gained > 0.f) || gained > remaining) continue;
+    if (!acceptedGain(gained, remaining)) continue;
     share[d] = gained;
     remaining = remaining - gained;
   }

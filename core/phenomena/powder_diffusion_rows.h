@@ -11,7 +11,7 @@
 
 #include "powder_diffusion.h"
 
-#include "../simd_lanes.h"
+#include "field_lanes.h"
 
 namespace snow {
 

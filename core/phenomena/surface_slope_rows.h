@@ -10,7 +10,7 @@
 #pragma once
 #include "surface_slope.h"
 
-#include "../simd_lanes.h"
+#include "field_lanes.h"
 
 namespace snow {
 

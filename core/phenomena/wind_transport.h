@@ -72,12 +72,12 @@ SNOW_HD SNOW_INLINE void windSharesAt(const SnowFieldsView& v, const WindTranspo
   if (toX > 0.f) {
     const float before = v.powder[v.index(nx, y)];
     const float gained = (before + toX) - before;
-    if (gained > 0.f && gained <= remaining) shareX = wx > 0.f ? gained : -gained, remaining = remaining - gained;
+    if (acceptedGain(gained, remaining)) shareX = wx > 0.f ? gained : -gained, remaining = remaining - gained;
   }
   if (toY > 0.f) {
     const float before = v.powder[v.index(x, ny)];
     const float gained = (before + toY) - before;
-    if (gained > 0.f && gained <= remaining) shareY = wy > 0.f ? gained : -gained;
+    if (acceptedGain(gained, remaining)) shareY = wy > 0.f ? gained : -gained;
   }
 }
 

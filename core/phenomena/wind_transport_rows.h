@@ -7,7 +7,7 @@
 #pragma once
 #include "wind_transport.h"
 
-#include "../simd_lanes.h"
+#include "field_lanes.h"
 
 namespace snow {
 
