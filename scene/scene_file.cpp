@@ -532,6 +532,9 @@ Scene buildScene(const toml::table& root, const std::string& source, const std::
   readEdits(scene, root, source);
   readEvents(scene, root, source);
   readParameters(scene, root, source);
+  // Frames of each avalanche's motion come with its maps (the key's text): one switch for the
+  // season's peak records, the runner and the writer.
+  if (scene.outputs.avalancheFrameIntervalS > 0) scene.outputs.avalancheMaps = true;
   validateOutputs(scene, root, source);
   validateBedforms(scene, root, source);
   validateOcclusion(scene, root, source);

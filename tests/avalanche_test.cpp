@@ -626,3 +626,26 @@ TEST(Avalanche, TyrolUserReleaseRunsDownTheGullyAndDepositsAtItsFoot) {
   EXPECT_FALSE(fs::exists(dir / "out" / "avalanches" / "001" / extra));
   fs::remove_all(dir);
 }
+
+// outputs.avalanche_frame_interval_s alone asks for the maps too (its key's text): the season keeps
+// the peak records the maps read (it failed in downloadBox at the first release without
+// avalanche_maps = true), and each released avalanche gets its maps and motion frames.
+TEST(Avalanche, FrameIntervalAloneWritesEachAvalanchesMapsAndFrames) {
+  namespace fs = std::filesystem;
+  const fs::path dir = test::uniqueTestDir("frame_interval");
+  BakeOptions o;
+  o.outDir = (dir / "out").string();
+  o.backend = "cpu";
+  o.useCache = false;
+  o.progress = false;
+  o.sets = {"terrain.size=96", "season.days=40", "outputs.frames_days=[]", "outputs.vdb=false", "outputs.meshes=[]",
+            "outputs.avalanche_frame_interval_s=5"};
+  std::ostringstream log;
+  const BakeResult r = runBake(o, log);
+  int released = 0;
+  for (const AvalancheRecord& a : r.season.avalanches) released += a.released;
+  ASSERT_GT(released, 0) << "no avalanche released: nothing to map";
+  EXPECT_TRUE(fs::exists(dir / "out" / "avalanches" / "001_deposit.exr"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "avalanches" / "001_peak_speed.exr"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "avalanches" / "001" / "depth.0000.exr"));
+}
