@@ -245,9 +245,15 @@ TEST(Deliverables, MasksMapStraightAndNodataIsLeftOutOfTheRange) {
   EXPECT_GT(nodata, 1000u);
   EXPECT_GT(lo, 1000.f);  // NODATA (written as 0 m in the float file) left out
   for (const auto& f : m["files"]) {
-    if (f["path"] == "surface.16.png") EXPECT_EQ(f["range"], (nlohmann::json{{"mode", "own"}, {"lo", lo}, {"hi", hi}, {"nodata_pixel", 0}}));
-    if (f["path"] == "depth.r16") EXPECT_EQ(f["range"]["mode"], "fixed");
-    if (f["path"] == "snow_coverage.8.png") EXPECT_EQ(f["range"]["hi"], 1.0);
+    if (f["path"] == "surface.16.png") {
+      EXPECT_EQ(f["range"], (nlohmann::json{{"mode", "own"}, {"lo", lo}, {"hi", hi}, {"nodata_pixel", 0}}));
+    }
+    if (f["path"] == "depth.r16") {
+      EXPECT_EQ(f["range"]["mode"], "fixed");
+    }
+    if (f["path"] == "snow_coverage.8.png") {
+      EXPECT_EQ(f["range"]["hi"], 1.0);
+    }
   }
   fs::remove_all(b.dir);
 }

@@ -254,7 +254,9 @@ TEST(Season, FramesLentWhileTheSeasonWaitsAreTheBytesOfFramesCopied) {
   for (size_t k = 0; k <= lent.frames.size(); ++k) {
     const SnowState& a = k < lent.frames.size() ? lent.frames[k].second : lent.end;
     const SnowState& b = k < copied.frames.size() ? copied.frames[k].second : copied.end;
-    if (k < lent.frames.size()) EXPECT_EQ(lent.frames[k].first, copied.frames[k].first);
+    if (k < lent.frames.size()) {
+      EXPECT_EQ(lent.frames[k].first, copied.frames[k].first);
+    }
 #define SNOW_COMPARE(member, view, Element, role, access, fill) \
   EXPECT_TRUE(a.member.values() == b.member.values()) << #member << " of " << (k < lent.frames.size() ? "frame " + std::to_string(k) : "the end");
     SNOW_STATE_FIELDS(SNOW_COMPARE)

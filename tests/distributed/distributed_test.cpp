@@ -103,6 +103,7 @@ TEST(Decomposition, OnTilesEveryCutFallsOnATileStartAndEachTileLiesInTheLocalGri
       std::vector<int> owners(static_cast<size_t>(c.width) * c.height, 0);
       for (int r = 0; r < ranks; ++r) {
         const CellRect o = d->owned(r), l = d->local(r);
+        EXPECT_TRUE(l.x0 <= o.x0 && l.y0 <= o.y0 && l.x1 >= o.x1 && l.y1 >= o.y1) << "rank " << r << "'s local grid holds its own cells";
         EXPECT_GE(o.width(), halo);
         EXPECT_GE(o.height(), halo);
         EXPECT_EQ(o.x0 % c.step, 0) << "a cut between tile starts";

@@ -166,13 +166,10 @@ AvalancheRecord avalancheOn(SnowBackend& backend, SnowState& s, int rx, int ry) 
 // timing is not asserted here); asserts that both released and ran.
 TEST(CudaBackend, AvalancheOn512And4096SquaredReleasesAndPrintsItsStepTime) {
   SKIP_WITHOUT_CUDA();
-  double perStep[2] = {0, 0};
-  int k = 0;
   for (int size : {512, 4096}) {
     SnowState s = referenceAvalancheState(size);
     auto gpu = cuda::createCudaBackend();
     const AvalancheRecord r = avalancheOn(*gpu, s, size / 2, size / 2);
-    perStep[k++] = r.secondsPerStep();
     std::printf("[ timing ] avalanche on %d^2: %d steps, %.3f ms a step, largest box %d cells\n", size, r.steps,
                 r.secondsPerStep() * 1e3, r.boxCellsMax);
     EXPECT_TRUE(r.released) << size << ": " << r.why;
