@@ -224,12 +224,14 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
   writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
   writer.writeSeasonEncodings();
+  writer.writeContactSheet();
+  // The whole grid's maps (the state may be this rank's local grid), each rank its tiles where
+  // the ranks write their tiles.
+  writer.writeAvalancheMaps(report.avalanches, terrain.info().spec);
   if (tilesOnRanks) {  // each rank wrote its tiles; rank 0 lists every rank's
     mergeTheRanksFiles(files);
     if (!writesOutputs()) return result;
   }
-  writer.writeContactSheet();
-  writer.writeAvalancheMaps(report.avalanches, state.spec);
   writeResolvedScene(scene, options.outDir);
   progress().stage("outputs", 1.0);
   stage.emplace("manifest");  // the outputs stage's memory noted: every owner has had its peak

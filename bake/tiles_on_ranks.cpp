@@ -25,7 +25,6 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
   if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";
   if (out.vdb) return "outputs.vdb (one file of the whole snow body)";
   if (!out.meshes.empty()) return "outputs.meshes (triangulated over the whole grid)";
-  if (out.avalancheMaps) return "outputs.avalanche_maps";
   return "";
 }
 
@@ -42,6 +41,7 @@ std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, cons
 void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const dist::Decomposition& d) {
   sources.stateCells = d.local(comm.rank());
   sources.tilesStartingIn = d.owned(comm.rank());
+  sources.wholeFilesElsewhere = comm.rank() != 0;
   sources.wholeRange = [comm](const SeenRange& mine) {
     // Each rank's lowest and highest (an empty range's infinities included): their extremes are
     // the whole grid's, whatever the order.

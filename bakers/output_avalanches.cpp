@@ -40,6 +40,7 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
                                                       std::to_string(image.height()) + " over the same extent";
         for (int r = 0; r < l.rows; ++r)
           for (int col = 0; col < l.columns; ++col) {
+            if (!writesTile(l, col, r)) continue;  // across ranks, another rank's tile
             const std::string base = (fs::path(src_.outDir) / (rel + tileSuffix(l, col, r) + tag)).string();
             const Grid<float> cut = l.tiled() ? cutTile(image, l, col, r) : Grid<float>();
             const Grid<float>& tile = l.tiled() ? cut : image;

@@ -303,6 +303,10 @@ void OutputWriter::writeContactSheet() {
     if (tiled) currentSink().planned.back().note = "not tiled: a picture of the previews, not a map";
     return;
   }
+  if (src_.wholeFilesElsewhere) {
+    ++listings_;  // rank 0's file
+    return;
+  }
   writeRgbPng(path, sw, sh, sheet, scene_.outputs.compressionLevel);
   listFile(path,
            "contact sheet of the season: the previews of the frame days in order, then the season's end, " + std::to_string(columns) +

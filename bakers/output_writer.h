@@ -58,7 +58,10 @@ struct OutputSources {
   // seen on this rank's cells with every other rank's (on every rank alike, in the same order).
   // `wholeThumbnail` puts each rank's pixels of a preview's thumbnail (0 on the others' cells)
   // together on rank 0 (the contact sheet's).
+  // There, the files that are never tiled (the contact sheet) are rank 0's: `wholeFilesElsewhere`
+  // on the others, which count them in the listing order only.
   CellRect stateCells{}, tilesStartingIn{};
+  bool wholeFilesElsewhere = false;
   std::function<SeenRange(const SeenRange&)> wholeRange{};
   std::function<std::vector<uint8_t>(std::vector<uint8_t>)> wholeThumbnail{};
 };

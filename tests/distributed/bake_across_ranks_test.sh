@@ -5,7 +5,8 @@
 # art-direction preset whole (painted masks, initial snow, multipliers, no-snow road, timeline
 # edits, a masked avalanche event and a skier group); the bedform window; and a real DEM with NODATA
 # from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
-# subdomain, with art direction placed on each rank's local grid; the ranks' parts of the
+# subdomain, with art direction placed on each rank's local grid, and the avalanche maps' tiles
+# from each rank's replica; the ranks' parts of the
 # precompute read from the cache by a second bake. Their manifests differ in the "memory" line alone (the measured peak varies from run
 # to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
 # the ranks), each exit 2 with one message and nothing written, a failure on rank 0 alone, and one
@@ -159,6 +160,21 @@ for ranks in 2 3 4; do
   grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tiles/$ranks/log" ||
     fail "tiles on $ranks ranks: the ranks did not write their own tiles"
 done
+# Avalanche maps and their motion frames under [outputs.tiles] with the default preset's avalanches
+# and skiers (its displacement maps, VDB and meshes left out): each rank writes the maps' tiles
+# that start in its subdomain from its replica's records, rank 0 the contact sheet, counted in
+# the listing order on the others; on 3 ranks.
+sed '/^displacement_size/d' "$root/presets/default.toml" > "$work/avmaps.toml"
+avmaps=("$work/avmaps.toml" --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' --set outputs.vdb=false
+        --set 'outputs.meshes=[]' --set outputs.avalanche_frame_interval_s=5 --set 'outputs.tiles.convention="unity"'
+        --set outputs.tiles.size_px=33)
+bake avmaps "$work/avmaps/alone" alone "${avmaps[@]}" && bake avmaps "$work/avmaps/3" 3 "${avmaps[@]}" &&
+  same "avalanche maps in tiles on 3 ranks" "$work/avmaps/alone" "$work/avmaps/3"
+grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/avmaps/3/log" ||
+  fail "avalanche maps in tiles on 3 ranks: the ranks did not write their own tiles"
+ls "$work/avmaps/alone/out/avalanches" | grep -q "^001_deposit_0_0.exr$" || fail "avalanche maps in tiles: no map of the first avalanche"
+ls "$work/avmaps/alone/out" | grep -q "^contact_sheet.png$" || fail "avalanche maps in tiles: no contact sheet"
+
 # A no-snow mask on initial snow (rank 0 keeps the whole state until the season to take what it
 # removes in the single process's order) and weight_rock, whose slopes read the next cells, on its
 # own range (over each rank's own cells): on 4 ranks.
