@@ -172,8 +172,8 @@ bake avmaps "$work/avmaps/alone" alone "${avmaps[@]}" && bake avmaps "$work/avma
   same "avalanche maps in tiles on 3 ranks" "$work/avmaps/alone" "$work/avmaps/3"
 grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/avmaps/3/log" ||
   fail "avalanche maps in tiles on 3 ranks: the ranks did not write their own tiles"
-ls "$work/avmaps/alone/out/avalanches" | grep -q "^001_deposit_0_0.exr$" || fail "avalanche maps in tiles: no map of the first avalanche"
-ls "$work/avmaps/alone/out" | grep -q "^contact_sheet.png$" || fail "avalanche maps in tiles: no contact sheet"
+[ -f "$work/avmaps/alone/out/avalanches/001_deposit_0_0.exr" ] || fail "avalanche maps in tiles: no map of the first avalanche"
+[ -f "$work/avmaps/alone/out/contact_sheet.png" ] || fail "avalanche maps in tiles: no contact sheet"
 
 # A no-snow mask on initial snow (rank 0 keeps the whole state until the season to take what it
 # removes in the single process's order) and weight_rock, whose slopes read the next cells, on its
