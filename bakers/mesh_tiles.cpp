@@ -64,8 +64,8 @@ class TriangleClipper {
   ClipVertex crossing(const ClipVertex& p, const ClipVertex& q, int axis, double value, int line) const {
     for (int e = 0; e < 3; ++e) {
       const uint32_t a = std::min(t_[e], t_[(e + 1) % 3]), b = std::max(t_[e], t_[(e + 1) % 3]);
-      const bool pOn = p.onEdge(a, b) || std::get<0>(p.key) == 0 && (std::get<1>(p.key) == a || std::get<1>(p.key) == b);
-      const bool qOn = q.onEdge(a, b) || std::get<0>(q.key) == 0 && (std::get<1>(q.key) == a || std::get<1>(q.key) == b);
+      const bool pOn = p.onEdge(a, b) || (std::get<0>(p.key) == 0 && (std::get<1>(p.key) == a || std::get<1>(p.key) == b));
+      const bool qOn = q.onEdge(a, b) || (std::get<0>(q.key) == 0 && (std::get<1>(q.key) == a || std::get<1>(q.key) == b));
       if (!pOn || !qOn) continue;
       const auto& pa = m_.positions[a];
       const auto& pb = m_.positions[b];

@@ -81,13 +81,13 @@ class TbbExec : public HostStorage {
         [&] {
           // Each thread's three row buffers, kept from task to task (every cell of a buffer is
           // written before it is read; the zero padding is never written).
-          PowderRowBuffer& ring = rings_.local();
-          ring.resize(3, width);
-          auto rowOf = [&](int r) {
+          PowderRowBuffer* ring = &rings_.local();
+          ring->resize(3, width);
+          auto rowOf = [this, ring, height](int r) {
             if (r < 0 || r >= height) return zeroRow_.row(0);
-            return isEdgeRow(r, height) ? edgeRows_.row(edgeSlot(r)) : ring.row(r % 3);
+            return isEdgeRow(r, height) ? edgeRows_.row(edgeSlot(r)) : ring->row(r % 3);
           };
-          auto inner = [&ring, &first](int r) { powderSharesRow(first, r, ring.row(r % 3)); };
+          auto inner = [ring, &first](int r) { powderSharesRow(first, r, ring->row(r % 3)); };
           auto pass = [&second, rowOf](int y) { powderGatherRow(second.v, y, rowOf(y - 1), rowOf(y), rowOf(y + 1)); };
           return std::pair{inner, pass};
         });
@@ -104,9 +104,11 @@ class TbbExec : public HostStorage {
     forEachStrip(
         height, [&](int r) { surfaceSlopeRow(first.v, r, 0, width, edgeRow(r)); },
         [&] {
-          std::vector<float>& ring = slopeRings_.local();
-          ring.resize(2 * static_cast<size_t>(width));
-          auto rowOf = [&](int r) { return isEdgeRow(r, height) ? edgeRow(r) : ring.data() + static_cast<size_t>(r % 2) * width; };
+          std::vector<float>* ring = &slopeRings_.local();
+          ring->resize(2 * static_cast<size_t>(width));
+          auto rowOf = [&edgeRow, ring, width, height](int r) {
+            return isEdgeRow(r, height) ? edgeRow(r) : ring->data() + static_cast<size_t>(r % 2) * width;
+          };
           auto inner = [&first, width, rowOf](int r) { surfaceSlopeRow(first.v, r, 0, width, rowOf(r)); };
           auto pass = [&second, width, rowOf](int y) { withSlopeRow(second, y, width, rowOf(y)); };
           return std::pair{inner, pass};

@@ -40,7 +40,7 @@ struct WindPart {
   std::function<bool(const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& spec, const WindState& state,
                      const ModelParameters& params, const WindSolverOptions& options, WindField& fields, Grid<float>& loading)>
       solve;
-  std::function<bool(bool found)> everyRankFound;
+  std::function<bool(bool found)> everyRankFound{};
 };
 
 class WindTimeline {

@@ -20,9 +20,13 @@ void checkCase(const std::string& name, bool checkSpeed, bool checkIou) {
   std::printf("[ measure ] %s: runout %+.1f %%, IoU %.2f, alpha %.1f (reference %.1f), speed %.1f (reference %.1f) m/s, %.1f s\n",
               name.c_str(), 100 * r.runoutError, r.iou, r.alphaDeg, r.referenceAlphaDeg, r.peakSpeedMps, r.referencePeakSpeedMps, r.seconds);
   EXPECT_LE(std::abs(r.runoutError), 0.10);
-  if (checkIou) EXPECT_GE(r.iou, 0.65);
+  if (checkIou) {
+    EXPECT_GE(r.iou, 0.65);
+  }
   EXPECT_LE(std::abs(r.alphaDeg - r.referenceAlphaDeg), 2.0);
-  if (checkSpeed) EXPECT_NEAR(r.peakSpeedMps / r.referencePeakSpeedMps, 1.0, 0.35);
+  if (checkSpeed) {
+    EXPECT_NEAR(r.peakSpeedMps / r.referencePeakSpeedMps, 1.0, 0.35);
+  }
   EXPECT_LT(r.massError, 1e-8);
 }
 

@@ -309,7 +309,9 @@ TEST(Exposure, ATermOfZeroWeightIsSkippedAndIsTheBytesComputingItWouldGive) {
     ASSERT_EQ(b.timings.skipped.size(), 2u) << sweep;  // the direct sun, and the indirect it scales
     EXPECT_TRUE(full.timings.skipped.empty());
     EXPECT_EQ(a.timings.skyRays, 0u);
-    if (!sweep) EXPECT_EQ(b.timings.sunRays, 0u);
+    if (!sweep) {
+      EXPECT_EQ(b.timings.sunRays, 0u);
+    }
     const Grid<float> sky0 = sweep ? skyFromHorizons(computeHorizonsBySweep(f.heights, f.valid, f.spec, s.quality.azimuths), f.valid, 0.0)
                                    : computeSkyExposure(scene, f.heights, f.valid, f.spec, s.quality.azimuths, s.quality.bisections, 0.0);
     EXPECT_TRUE(same(a.skyHours, sky0)) << sweep;

@@ -59,7 +59,9 @@ TEST(Progress, JsonLinesHaveEveryStageFractionsNeverDecreaseFileAndAvalancheEven
       const double f = l["fraction"];
       EXPECT_GE(f, 0.0);
       EXPECT_LE(f, 1.0);
-      if (last.count(stage)) EXPECT_GE(f, last[stage]) << stage;
+      if (last.count(stage)) {
+        EXPECT_GE(f, last[stage]) << stage;
+      }
       last[stage] = f;
       EXPECT_GE(l["elapsed_s"].get<double>(), 0.0);
     } else if (l.value("type", "") == "event") {
