@@ -161,14 +161,14 @@ class TbbExec : public HostStorage {
     const int strips = stripCount(height);
     tbb::parallel_for(0, strips, [&](int k) {
       const int a = k * kStripRows, b = std::min(height, a + kStripRows);
-      edge(a);
-      if (b - 1 > a) edge(b - 1);
+      for (int r = a; r < b; ++r)
+        if (isEdgeRow(r, height)) edge(r);
     });
     tbb::parallel_for(0, strips, [&](int k) {
       const int a = k * kStripRows, b = std::min(height, a + kStripRows);
       const auto [inner, pass] = strip();
       for (int y = a; y < b; ++y) {
-        if (y + 1 < b - 1) inner(y + 1);
+        if (y + 1 < b && !isEdgeRow(y + 1, height)) inner(y + 1);
         pass(y);
       }
     });
