@@ -23,29 +23,49 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
     if (!a.maps) continue;
     std::ostringstream stem;
     stem << "avalanches/" << std::setw(3) << std::setfill('0') << number;
-    // A crop of the avalanche's box pasted into a full-size grid, then in each raster set at its
-    // size (bilinear), whole or cut into its tiles (the suffix before a motion frame's tag, as on
-    // the layers).
-    auto write = [&](const std::string& rel, const std::string& tag, Grid<float> full, const GridCrop& c, const std::string& content,
+    // A crop of the avalanche's box over a background (zero, or the depth at release for the
+    // frames), in each raster set at its size (bilinear), whole or cut into its tiles (the suffix
+    // before a motion frame's tag, as on the layers). An unresized tile is cut from the crop and
+    // the background directly, so a rank writing its tiles never makes the whole grid's image.
+    auto write = [&](const std::string& rel, const std::string& tag, const Grid<float>* background, const GridCrop& c, const std::string& content,
                      const std::string& unit, double day) {
-      for (int y = 0; y < c.grid.height(); ++y)
-        for (int x = 0; x < c.grid.width(); ++x) full(c.x0 + x, c.y0 + y) = c.grid(x, y);
+      auto at = [&](int x, int y) {
+        const int cx = x - c.x0, cy = y - c.y0;
+        if (cx >= 0 && cy >= 0 && cx < c.grid.width() && cy < c.grid.height()) return c.grid(cx, cy);
+        return background ? (*background)(x, y) : 0.f;
+      };
+      Grid<float> full;  // the whole grid's image, made once where a set needs it
+      auto wholeImage = [&]() -> const Grid<float>& {
+        if (full.size() == 0) {
+          full = Grid<float>(spec.width, spec.height);
+          for (int y = 0; y < spec.height; ++y)
+            for (int x = 0; x < spec.width; ++x) full(x, y) = at(x, y);
+        }
+        return full;
+      };
       fs::create_directories((fs::path(src_.outDir) / rel).parent_path());
       for (const RasterSet& set : sets_) {
-        const Grid<float> sized = set.resized() ? resampleBilinear(full, set.resizeWidth, set.resizeHeight) : Grid<float>();
-        const Grid<float>& image = set.resized() ? sized : full;
-        const TileLayout l = tileLayout(set.tiles, image.width(), image.height());
+        const Grid<float> sized = set.resized() ? resampleBilinear(wholeImage(), set.resizeWidth, set.resizeHeight) : Grid<float>();
+        const int width = set.resized() ? sized.width() : spec.width, height = set.resized() ? sized.height() : spec.height;
+        const TileLayout l = tileLayout(set.tiles, width, height);
         const std::string what = !set.resized() ? content
-                                                : content + ", resampled (bilinear) to " + std::to_string(image.width()) + " x " +
-                                                      std::to_string(image.height()) + " over the same extent";
+                                                : content + ", resampled (bilinear) to " + std::to_string(width) + " x " +
+                                                      std::to_string(height) + " over the same extent";
         for (int r = 0; r < l.rows; ++r)
           for (int col = 0; col < l.columns; ++col) {
             if (!writesTile(l, col, r)) continue;  // across ranks, another rank's tile
             const std::string base = (fs::path(src_.outDir) / (rel + tileSuffix(l, col, r) + tag)).string();
-            const Grid<float> cut = l.tiled() ? cutTile(image, l, col, r) : Grid<float>();
-            const Grid<float>& tile = l.tiled() ? cut : image;
+            Grid<float> cut;
+            if (l.tiled() && set.resized()) cut = cutTile(sized, l, col, r);
+            if (l.tiled() && !set.resized()) {
+              // cutTile's pixels: the image's edge repeated past it.
+              cut = Grid<float>(l.tileWidth, l.tileHeight);
+              for (int y = 0; y < l.tileHeight; ++y)
+                for (int x = 0; x < l.tileWidth; ++x) cut(x, y) = at(std::min(col * l.step + x, width - 1), std::min(r * l.step + y, height - 1));
+            }
+            const Grid<float>& tile = l.tiled() ? cut : set.resized() ? sized : wholeImage();
             if (scene_.outputs.format == ImageFormat::Tiff) {
-              const GeoFrame geo = l.tiled() || set.resized() ? src_.geo.pixels(image.width(), image.height(), col * l.step, r * l.step) : src_.geo;
+              const GeoFrame geo = l.tiled() || set.resized() ? src_.geo.pixels(width, height, col * l.step, r * l.step) : src_.geo;
               writeGeoTiff(base + ".tif", tile, geo, "value");
               const auto [lo, hi] = std::minmax_element(tile.values().begin(), tile.values().end());
               listFile(base + ".tif", what, unit, floatImageFormat_, day, *lo, *hi);
@@ -53,22 +73,21 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
               const WrittenImage img = writeFloatImage(base, "exr", tile, "value", scene_.outputs.compressionLevel);
               listFile(img.path, what, unit, floatImageFormat_, day, img.minValue, img.maxValue);
             }
-            if (l.tiled() || set.resized()) noteTile(l, col, r, image.width(), image.height());
+            if (l.tiled() || set.resized()) noteTile(l, col, r, width, height);
           }
       }
     };
-    const Grid<float> zero(spec.width, spec.height, 0.f);
     const std::string which = "avalanche " + std::to_string(number) + " (day " + fixed(a.day, 2) + ")";
-    write(stem.str() + "_release", "", zero, a.maps->release, which + ": release zone (1 released, 0 not)", "1", a.day);
-    write(stem.str() + "_scour", "", zero, a.maps->scour, which + ": snow taken away, net (m)", "m", a.day);
-    write(stem.str() + "_deposit", "", zero, a.maps->deposit, which + ": snow left, net (m)", "m", a.day);
-    write(stem.str() + "_peak_thickness", "", zero, a.maps->peakThickness, which + ": peak flowing thickness (m)", "m", a.day);
-    write(stem.str() + "_peak_speed", "", zero, a.maps->peakSpeed, which + ": peak speed, the fastest pipe (m/s)", "m/s", a.day);
+    write(stem.str() + "_release", "", nullptr, a.maps->release, which + ": release zone (1 released, 0 not)", "1", a.day);
+    write(stem.str() + "_scour", "", nullptr, a.maps->scour, which + ": snow taken away, net (m)", "m", a.day);
+    write(stem.str() + "_deposit", "", nullptr, a.maps->deposit, which + ": snow left, net (m)", "m", a.day);
+    write(stem.str() + "_peak_thickness", "", nullptr, a.maps->peakThickness, which + ": peak flowing thickness (m)", "m", a.day);
+    write(stem.str() + "_peak_speed", "", nullptr, a.maps->peakSpeed, which + ": peak speed, the fastest pipe (m/s)", "m/s", a.day);
     for (size_t k = 0; k < a.maps->frames.size(); ++k) {
       std::ostringstream rel;
       rel << "." << std::setw(4) << std::setfill('0') << k;
       const auto& [seconds, c] = a.maps->frames[k];
-      write(stem.str() + "/depth", rel.str(), a.maps->depthAtRelease, c,
+      write(stem.str() + "/depth", rel.str(), &a.maps->depthAtRelease, c,
             which + ": snow depth C+S+U+P at " + fixed(seconds, 2) + " s after the release (m)", "m", a.day + seconds / 86400.0);
     }
   }
