@@ -9,12 +9,11 @@
 #include <string>
 
 #include "core/cpu_backend.h"
-#include "core/exec_backend.h"
 #include "core/season.h"
-#include "core/serial_exec.h"
 #include "core/kernel_registry.h"
 #include "core/phenomena/powder_diffusion_rows.h"
 #include "gpu/backend_parity.h"
+#include "host_like_a_device.h"
 #include "test_support.h"
 
 using namespace snow;
@@ -235,17 +234,6 @@ TEST(CpuBackend, SlopeFusedWithSnowfallAndStabilityMatchesSerialOnAnyShape) {
                                              });
 }
 
-namespace {
-// Host storage whose upload of nothing frees the buffer, as CUDA's does (CudaBuffer::resize(0)).
-struct FreeingEmptyUploads : SerialExec {
-  template <class T>
-  void upload(Buffer<T>& b, const std::vector<T>& host) {
-    b.values() = host;
-    b.values().shrink_to_fit();
-  }
-};
-}  // namespace
-
 // The bake's daily refill of the temperature with a constant wind: the season releases the host's
 // static fields and refills the exposure and temperature only; the wind the backend holds must stay
 // (it was uploaded empty, and freed on CUDA). The same bytes as a season refilling the wind too.
@@ -268,22 +256,15 @@ TEST(Backend, StaticFieldsTheHostReleasedKeepTheBackendsValuesThroughADailyRefil
     EXPECT_GT(r.phenomena.size(), 0u);
     return s;
   };
-  ExecBackend<FreeingEmptyUploads> freeing, reference;
-  const SnowState kept = season(freeing, false);
-  const SnowState refilled = season(reference, true);
+  // Host storage whose upload of nothing frees the buffer, as CUDA's does.
+  auto freeing = test::createHostLikeADeviceBackend(), reference = test::createHostLikeADeviceBackend();
+  const SnowState kept = season(*freeing, false);
+  const SnowState refilled = season(*reference, true);
   test::expectSameBytes(kept, refilled);
   double scour = 0;
   for (float v : kept.windScourM.values()) scour += v;
   EXPECT_GT(scour, 0.0);  // the wind moved snow after the first day
 }
-
-namespace {
-// Host storage the avalanche runner takes for a device's (SnowBackend::hostSnowLayers false): it
-// keeps a snapshot of the layers, as on CUDA.
-struct SnapshotLikeADevice : SerialExec {
-  static constexpr bool kDevice = true;
-};
-}  // namespace
 
 // On a host backend the avalanche runner reads the backend's own layers in place of a 16-byte
 // snapshot, and keeps the layers at release of the cells each step may reach: the same season,
@@ -307,10 +288,10 @@ TEST(Backend, AvalanchesReadingTheLayersInPlaceAreTheBytesOfAvalanchesFromASnaps
     report = runSeason(backend, s, c);
     return s;
   };
-  ExecBackend<SerialExec> inPlace;
-  ExecBackend<SnapshotLikeADevice> snapshot;
+  // The snapshot: host storage the avalanche runner takes for a device's (hostSnowLayers false).
+  auto inPlace = createSerialBackend(), snapshot = test::createHostLikeADeviceBackend();
   SeasonReport a, b;
-  const SnowState endA = season(inPlace, a), endB = season(snapshot, b);
+  const SnowState endA = season(*inPlace, a), endB = season(*snapshot, b);
   test::expectSameBytes(endA, endB);
   ASSERT_EQ(a.avalanches.size(), b.avalanches.size());
   size_t released = 0, moved = 0;
@@ -342,7 +323,8 @@ TEST(Backend, AvalancheDepositAndFootprintFromTheCellsItMayReachAreTheWholeGrids
   SnowState s = test::makeRoughState(64, 48, 11);
   for (auto& u : s.unstableM.values()) u += 0.8f;
   const ModelParameters p = testParameters();
-  ExecBackend<SerialExec> backend;
+  auto serial = createSerialBackend();
+  SnowBackend& backend = *serial;
   backend.upload(s);
   AvalancheRun run(backend, p, s);
   int ran = 0;
@@ -385,9 +367,8 @@ TEST(Backend, ALayerWrittenWhileAnAvalancheRunsLeavesItsRecordsAsFromASnapshotAt
     backend.applyEdit(add, {});
     return run.runToRest();
   };
-  ExecBackend<SerialExec> inPlace;
-  ExecBackend<SnapshotLikeADevice> snapshot;
-  const AvalancheRecord a = avalanche(inPlace), b = avalanche(snapshot);
+  auto inPlace = createSerialBackend(), snapshot = test::createHostLikeADeviceBackend();
+  const AvalancheRecord a = avalanche(*inPlace), b = avalanche(*snapshot);
   ASSERT_GT(a.steps, 6);
   EXPECT_GT(a.footprintCells, 0);
   EXPECT_EQ(a.footprintCells, b.footprintCells);
@@ -403,7 +384,8 @@ TEST(Backend, ScratchFreedForAFrameChangesNoByteOfTheAvalanchesAfterIt) {
   for (auto& u : s.unstableM.values()) u += 0.8f;
   const ModelParameters p = testParameters();
   auto season = [&](bool frame) {
-    ExecBackend<SerialExec> backend;
+    auto serial = createSerialBackend();
+    SnowBackend& backend = *serial;
     backend.upload(s);
     AvalancheRun run(backend, p, s);
     EXPECT_TRUE(run.release(8, 5, 1.0, -5.0, true));

@@ -8,12 +8,11 @@
 #include <numeric>
 
 #include "core/cpu_backend.h"
-#include "core/exec_backend.h"
-#include "core/serial_exec.h"
 #include "core/season.h"
 #include "core/ski_runs.h"
 #include "core/reference_scenario.h"
 #include "core/util.h"
+#include "host_like_a_device.h"
 #include "test_support.h"
 #include "bake_support.h"
 #include "bakers/grid_writer.h"
@@ -24,12 +23,6 @@
 namespace snow {
 namespace {
 
-// The route map's device code path (ExecBackend::routeMapOnDevice: the paper's automaton,
-// iterated until it stops changing), run on a host executor dressed as a device.
-struct HostAsDevice : SerialExec {
-  static constexpr bool kDevice = true;
-};
-
 TEST(Ski, RouteMapIsTheLongestDescentOnAPlaneAndTheAutomatonAgrees) {
   // A plane falling east: every step must move one column east, diagonally when it can.
   SnowState s = test::terrainFrom(40, 12, 10.0, -5.f, [](double x, double) { return 1000.0 - 0.5 * x; });
@@ -38,10 +31,12 @@ TEST(Ski, RouteMapIsTheLongestDescentOnAPlaneAndTheAutomatonAgrees) {
     for (int x = 0; x < 40; ++x) ASSERT_NEAR(d(x, y), (39 - x) * std::sqrt(200.0), 1e-3 * (40 - x)) << x << "," << y;
   // A rough terrain with NODATA holes: the cellular automaton gives the same bytes.
   SnowState r = test::makeRoughState(64, 48, 7);
-  ExecBackend<HostAsDevice> automaton;
-  automaton.upload(r);
+  // The route map's device code path (ExecBackend::routeMapOnDevice: the paper's automaton,
+  // iterated until it stops changing), run on a host executor dressed as a device.
+  auto automaton = test::createHostLikeADeviceBackend();
+  automaton->upload(r);
   Grid<float> a;
-  ASSERT_TRUE(automaton.routeMapOnDevice(a));
+  ASSERT_TRUE(automaton->routeMapOnDevice(a));
   const Grid<float> b = routeMap(r.bedrockM, r.validCell, r.spec);
   EXPECT_EQ(a.values(), b.values());
   // Routes longer than a couple of cells: the automaton had to carry them over many iterations.
@@ -321,10 +316,10 @@ namespace {
 
 TEST(Ski, DeviceRouteMapLoopGivesTheSameBytes) {
   SnowState r = test::makeRoughState(70, 51, 13);
-  ExecBackend<HostAsDevice> backend;
-  backend.upload(r);
+  auto backend = test::createHostLikeADeviceBackend();
+  backend->upload(r);
   Grid<float> out;
-  ASSERT_TRUE(backend.routeMapOnDevice(out));
+  ASSERT_TRUE(backend->routeMapOnDevice(out));
   EXPECT_EQ(out.values(), routeMap(r.bedrockM, r.validCell, r.spec).values());
   auto cpu = createCpuBackend();
   Grid<float> unused;
@@ -484,9 +479,9 @@ TEST(Ski, SkierBatchSameBytesOnEveryExecutor) {
     b.download(out);
     return records;
   };
-  ExecBackend<SerialExec> serial;
+  auto serial = createSerialBackend();
   SnowState a, b1, b2;
-  const auto ra = runOn(serial, a);
+  const auto ra = runOn(*serial, a);
   std::vector<SkierRecord> rb1, rb2;
   {
     tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
