@@ -131,6 +131,10 @@ std::function<void(int, SnowState&)> wholeThenCutFill(std::function<void(int, Sn
 // on rank 0 where its layers read it.
 void fillFromOwnCells(Precomputed& pre, Precomputed& mine, dist::CellRect cells, const ModelParameters& params, bool keepWhole,
                       uint8_t outputNeeds, SeasonConfig& config) {
+  if ((!pre.exposure || pre.exposure->cells == cells) && (!pre.wind || pre.wind->cells() == cells)) {
+    config.updateStaticFields = dailyStaticFill(pre, params);  // the precompute is the rank's part alone
+    return;
+  }
   if (pre.exposure)
     mine.exposure = pre.exposure->cells == cells ? *pre.exposure : pre.exposure->window(cells.x0, cells.y0, cells.width(), cells.height());
   if (pre.wind) mine.wind = pre.wind->cells() == cells ? *pre.wind : pre.wind->window(cells.x0, cells.y0, cells.width(), cells.height());
@@ -232,8 +236,10 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
   const dist::Communicator comm = dist::Communicator::world();
   const dist::Decomposition d = decompositionOf(scene, spec);
   const dist::CellRect cells = d.local(comm.rank());
-  if (!(comm.rank() == 0 && (outputNeeds & kNeedsSun))) parts.exposure = cells;
-  if (!(outputNeeds & kNeedsWind))
+  // Where each rank writes its tiles, the sun's and the wind's layers read the rank's part too.
+  const bool tilesOnRanks = ranksWriteTheirTiles(scene, spec);
+  if (tilesOnRanks || !(comm.rank() == 0 && (outputNeeds & kNeedsSun))) parts.exposure = cells;
+  if (tilesOnRanks || !(outputNeeds & kNeedsWind))
     parts.wind = WindPart{cells, [comm, d](const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& s, const WindState& state,
                                            const ModelParameters& p, const WindSolverOptions& o, WindField& f, Grid<float>& loading) {
                             agreeBeforeExchanges(comm, false);
@@ -261,9 +267,22 @@ bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec) {
   return acrossRanks && decompositionOnTiles(scene, spec, dist::Communicator::world().size(), dist::kContinuousHalo).has_value();
 }
 
-void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSpec& spec) {
+void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSpec& spec, const Precomputed& pre, Precomputed& local) {
   if (!ranksWriteTheirTiles(scene, spec)) return;
-  shareTheTiles(sources, dist::Communicator::world(), decompositionOf(scene, spec));
+  const dist::Communicator comm = dist::Communicator::world();
+  const dist::Decomposition d = decompositionOf(scene, spec);
+  shareTheTiles(sources, comm, d);
+  if (pre.partsOnRanks) return;  // rankPrecomputeParts: both parts on the local grid
+  const uint8_t needs = layersNeeds(sources.layers);
+  const dist::CellRect c = d.local(comm.rank());
+  if ((needs & kNeedsSun) && pre.exposure) {
+    local.exposure = pre.exposure->window(c.x0, c.y0, c.width(), c.height());
+    sources.exposure = &*local.exposure;
+  }
+  if ((needs & kNeedsWind) && pre.wind) {
+    local.wind = pre.wind->window(c.x0, c.y0, c.width(), c.height());
+    sources.wind = &*local.wind;
+  }
 }
 
 void mergeTheRanksFiles(OutputSink& files) {

@@ -81,8 +81,10 @@ CellRect initialStateCells(const Scene& scene, const GridSpec& whole, const Prec
 // that splits into bands of whole tiles. Then every rank keeps its local grid alone and none
 // gathers the whole grid's state.
 bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec);
-// Where they do, points `sources` at this rank's tiles (else leaves them as they are).
-void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSpec& spec);
+// Where they do, points `sources` at this rank's tiles (else leaves them as they are), and the
+// sun's and wind's layers at the rank's local grid of the precompute: `pre`, made in the rank's
+// parts, or (a season on the replica keeps the whole grid's) its window, kept in `local`.
+void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSpec& spec, const Precomputed& pre, Precomputed& local);
 // Every rank's files merged into rank 0's `files`, in the single process's order, where each rank
 // writes its tiles: from the season's end until this returns, the ranks exchange (each layer's
 // range, then the lists of files), so a failure on one rank ends every rank at once.

@@ -184,7 +184,8 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
                         .geo = geoFrameOf(terrain.info())};
   // "file" events as each file is written: a frame's during the season, the rest in the outputs stage.
   sources.fileWritten = [](const std::string& path, double day) { reportFilesWritten({path}, day >= 0.0 ? "season" : "outputs"); };
-  shareTheRanksTiles(sources, scene, terrain.info().spec);
+  Precomputed tilesPre;  // across ranks on the replica: the local grid's cells of the precompute the layers read
+  shareTheRanksTiles(sources, scene, terrain.info().spec, pre, tilesPre);
   OutputWriter writer(sources, log);
   SeasonReport report;
   if (occlusionMode) {

@@ -19,8 +19,10 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
     if (!layer) continue;
     // Every layer of the snow state is: the pictures too, drawn cell by cell with their normals
     // from the next cells (in the halo), the preview's altitude range and contact-sheet thumbnails
-    // put together over the ranks.
-    if (layer->needs != kNeedsState) return "outputs.layers: \"" + name + "\" (read from the precompute or the skiers, not the snow state)";
+    // put together over the ranks. So are the sun's and the wind's, each cell from its own cell of
+    // the rank's part of the precompute.
+    if ((layer->needs & ~(kNeedsSun | kNeedsWind)) != 0)
+      return "outputs.layers: \"" + name + "\" (read from the skiers or the occlusion, not the snow state or the precompute)";
   }
   if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";
   if (out.vdb) return "outputs.vdb (one file of the whole snow body)";

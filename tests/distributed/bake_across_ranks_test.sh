@@ -150,9 +150,11 @@ fi
 # the tiles' starts, each rank writing the tiles that start in its subdomain (frames, "season",
 # "own" and fixed ranges combined over the ranks, r32, layers.exr, the engine maps and previews, whose normals
 # read the next cells, the preview's altitude range and the contact sheet's thumbnails put
-# together); one manifest in the single process's order.
+# together; the sun's and the wind's layers from each rank's part of the precompute); one manifest
+# in the single process's order.
 tiles=("$work/winds.toml" --set 'outputs.layers=["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour",
-       "melt", "splat_map", "snow_normal", "avalanche_preview", "preview"]' --set 'outputs.encodings=["png16", "png8", "r32"]'
+       "melt", "splat_map", "snow_normal", "avalanche_preview", "preview", "sun_exposure", "temperature", "wind_speed",
+       "wind_direction", "wind_shadow_depth", "wind_shadow_mask"]' --set 'outputs.encodings=["png16", "png8", "r32"]'
        --set 'outputs.ranges.surface="own"' --set outputs.multichannel_exr=true --set 'outputs.tiles.convention="unity"'
        --set outputs.tiles.size_px=33)
 check_scene tiles "${tiles[@]}"
@@ -163,8 +165,10 @@ done
 # Avalanche maps and their motion frames under [outputs.tiles] with the default preset's avalanches
 # and skiers (its displacement maps, VDB and meshes left out): each rank writes the maps' tiles
 # that start in its subdomain from its replica's records, rank 0 the contact sheet, counted in
-# the listing order on the others; on 3 ranks.
-sed '/^displacement_size/d' "$root/presets/default.toml" > "$work/avmaps.toml"
+# the listing order on the others; and the sun's and the wind's layers from each rank's window of
+# the whole grid's precompute that the replica keeps; on 3 ranks.
+sed -e '/^displacement_size/d' -e 's/^layers = \[/layers = ["temperature", "wind_shadow_mask", /' "$root/presets/default.toml" > "$work/avmaps.toml"
+grep -q '^layers = \["temperature", "wind_shadow_mask", ' "$work/avmaps.toml" || fail "avalanche maps: the layers were not added"
 avmaps=("$work/avmaps.toml" --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' --set outputs.vdb=false
         --set 'outputs.meshes=[]' --set outputs.avalanche_frame_interval_s=5 --set 'outputs.tiles.convention="unity"'
         --set outputs.tiles.size_px=33)
@@ -174,6 +178,7 @@ grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$wor
   fail "avalanche maps in tiles on 3 ranks: the ranks did not write their own tiles"
 [ -f "$work/avmaps/alone/out/avalanches/001_deposit_0_0.exr" ] || fail "avalanche maps in tiles: no map of the first avalanche"
 [ -f "$work/avmaps/alone/out/contact_sheet.png" ] || fail "avalanche maps in tiles: no contact sheet"
+[ -f "$work/avmaps/3/out/temperature_0_0.exr" ] || fail "avalanche maps in tiles: no temperature tile"
 
 # A no-snow mask on initial snow (rank 0 keeps the whole state until the season to take what it
 # removes in the single process's order) and weight_rock, whose slopes read the next cells, on its
