@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The test suite under AddressSanitizer and UndefinedBehaviorSanitizer, then the fuzzer
+# The test suite under AddressSanitizer and UndefinedBehaviorSanitizer, and the fuzzer
 # (docs/testing.md). Builds build-asan (SNOWBAKE_SANITIZE=ON, CPU only) with only the binaries
 # it runs: snowbake (the CLI tests run it), snowbake_tests, bench_tests, snowbake_fuzz and
 # distributed_tests (alone and on 3 ranks where mpiexec is).
@@ -32,15 +32,16 @@ export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:allocator_may_return_null=0
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 
 # The suite in `shards` processes at once (gtest's sharding), each with its own log; a shard's
-# log is printed when it fails.
+# log is printed when it fails. The fuzzer runs once the first shard ends: the shards seldom end
+# together, and a core would idle until the last did.
 start=$(date +%s)
 logs=build-asan/sanitized-logs
 rm -rf "$logs" && mkdir -p "$logs"
-pids=()
+declare -A shardOf
 for ((i = 0; i < shards; ++i)); do
   GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i ./build-asan/snowbake_tests --gtest_filter="$filter" --gtest_brief=1 \
     --gtest_output="xml:$logs/shard$i.xml" > "$logs/shard$i.log" 2>&1 &
-  pids+=($!)
+  shardOf[$!]=$i
 done
 ./build-asan/bench_tests --gtest_filter="$filter" --gtest_brief=1 --gtest_output="xml:$logs/bench.xml" > "$logs/bench.log" 2>&1 || { cat "$logs/bench.log"; failed=1; }
 # The decomposition alone and on 3 ranks (a 3 x 1 process grid: every halo path but corners, which
@@ -50,8 +51,18 @@ if command -v mpiexec > /dev/null; then
   OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpiexec --oversubscribe -n 3 ./build-asan/distributed_tests --gtest_brief=1 \
     > "$logs/distributed3.log" 2>&1 || { cat "$logs/distributed3.log"; failed=1; }
 fi
-for ((i = 0; i < shards; ++i)); do
-  if ! wait "${pids[$i]}"; then cat "$logs/shard$i.log"; failed=1; fi
+fuzzed=0
+while [ "${#shardOf[@]}" -gt 0 ]; do
+  ended=""
+  if wait -n -p ended "${!shardOf[@]}"; then :; else cat "$logs/shard${shardOf[$ended]}.log"; failed=1; fi
+  unset "shardOf[$ended]"
+  if [ "$fuzzed" = 0 ]; then
+    fuzzStart=$(date +%s)
+    ASAN_OPTIONS="$ASAN_OPTIONS:max_allocation_size_mb=1024:hard_rss_limit_mb=3072" \
+      ./build-asan/snowbake_fuzz all "$fuzzSeconds" --work build-asan/fuzz --corpus tests/fuzz/corpus || { echo "fuzzing: FAILED"; failed=1; }
+    echo "fuzzing: $(( $(date +%s) - fuzzStart )) s"
+    fuzzed=1
+  fi
 done
 grep -h "tests ran\|PASSED\|SKIPPED\|FAILED" "$logs"/*.log | grep -v "^\[ *RUN" || true
 echo "slowest sanitized tests (s):"
@@ -61,10 +72,5 @@ cases = [(float(c.get("time", 0)), c.get("classname") + "." + c.get("name"))
          for f in glob.glob(sys.argv[1] + "/*.xml") for c in ET.parse(f).iter("testcase")]
 for t, name in sorted(cases, reverse=True)[:12]: print(f"  {t:7.1f}  {name}")
 PY
-echo "sanitized suite: $(( $(date +%s) - start )) s (filter $filter, $shards shards)"
+echo "sanitized suite and fuzzing: $(( $(date +%s) - start )) s (filter $filter, $shards shards)"
 if [ "${failed:-0}" != 0 ]; then echo "sanitized suite: FAILED"; exit 1; fi
-
-start=$(date +%s)
-ASAN_OPTIONS="$ASAN_OPTIONS:max_allocation_size_mb=1024:hard_rss_limit_mb=3072" \
-  ./build-asan/snowbake_fuzz all "$fuzzSeconds" --work build-asan/fuzz --corpus tests/fuzz/corpus
-echo "fuzzing: $(( $(date +%s) - start )) s"
