@@ -128,12 +128,13 @@ std::function<void(int, SnowState&)> wholeThenCutFill(std::function<void(int, Sn
 // of the precompute, `mine` (the fill makeSeasonConfig makes, dailyStaticFill: each cell's
 // temperature and wind are its own, so the bytes are the whole grid's): a part the precompute
 // made on the local grid as it is, a whole grid's cut. The whole grid's precompute is freed, but
-// on rank 0 where its layers read it.
-void fillFromOwnCells(Precomputed& pre, Precomputed& mine, dist::CellRect cells, const ModelParameters& params, bool keepWhole,
+// on rank 0 where its layers read it. Returns the precompute that holds the rank's cells: `mine`,
+// or `pre` where it is the rank's parts alone.
+Precomputed& fillFromOwnCells(Precomputed& pre, Precomputed& mine, dist::CellRect cells, const ModelParameters& params, bool keepWhole,
                       uint8_t outputNeeds, SeasonConfig& config) {
   if ((!pre.exposure || pre.exposure->cells == cells) && (!pre.wind || pre.wind->cells() == cells)) {
     config.updateStaticFields = dailyStaticFill(pre, params);  // the precompute is the rank's part alone
-    return;
+    return pre;
   }
   if (pre.exposure)
     mine.exposure = pre.exposure->cells == cells ? *pre.exposure : pre.exposure->window(cells.x0, cells.y0, cells.width(), cells.height());
@@ -141,6 +142,7 @@ void fillFromOwnCells(Precomputed& pre, Precomputed& mine, dist::CellRect cells,
   config.updateStaticFields = dailyStaticFill(mine, params);
   if (pre.exposure && !(keepWhole && (outputNeeds & kNeedsSun))) pre.exposure->release();
   if (pre.wind && !(keepWhole && (outputNeeds & kNeedsWind))) pre.wind->releaseFields();
+  return mine;
 }
 
 // Whether the season runs on the replica (dist::seasonNeedsReplica of the config makeSeasonConfig
@@ -306,13 +308,14 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   // runners on the whole state, which keeps its terrain and each day's static fields for them.
   const bool replicated = dist::seasonNeedsReplica(config);
   if (replicated && pre.partsOnRanks) throw std::logic_error("a season on the replica with a precompute made in parts");
-  Precomputed mineOfPre;  // without a replica: the rank's cells of the exposure and the wind
+  Precomputed mineOfPre;             // without a replica: the rank's cells of the exposure and the wind,
+  Precomputed* ownPre = &mineOfPre;  // or the precompute's parts where they are those cells alone
   if (replicated) {
     config.eventTerrain = &state;
     if (config.updateStaticFields) config.updateStaticFields = wholeThenCutFill(config.updateStaticFields, state, cells);
   } else {
     config.skiTracks = nullptr;  // no skiers: the texture stays as the single process leaves it
-    fillFromOwnCells(pre, mineOfPre, cells, scene.params, comm.rank() == 0, outputNeeds, config);
+    ownPre = &fillFromOwnCells(pre, mineOfPre, cells, scene.params, comm.rank() == 0, outputNeeds, config);
     if (comm.rank() != 0 || tilesOnRanks) {  // read by nothing on this rank now: the precompute's parts hold their cells of it
       terrain.terrain.heightsM = Grid<float>();
       terrain.terrain.valid = Grid<uint8_t>();
@@ -328,9 +331,9 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   const double noSnowRemovedM3 = noSnow ? removeSnowOfNoSnowCells(state) : 0.0;
   SnowState mine = alreadyLocal ? std::move(state) : dist::cutLocalState(state, cells);
   if (pre.partsOnRanks) {  // the day-0 static fields runPrecompute fills on a single process's state
-    mineOfPre.temperatureForDay(0, mine, scene.params);
-    mineOfPre.windForDay(0, mine);
-    if (!mineOfPre.wind->varies() && !(outputNeeds & kNeedsWind)) mineOfPre.wind->releaseFields();  // as runGridBake does
+    ownPre->temperatureForDay(0, mine, scene.params);
+    ownPre->windForDay(0, mine);
+    if (!ownPre->wind->varies() && !(outputNeeds & kNeedsWind)) ownPre->wind->releaseFields();  // as runGridBake does
   }
   // Every field is the ranks' now; rank 0 gathers the whole state at the frames and the end (the
   // whole wind's altitude is the terrain's, BakeTerrain). With a replica, the season's first upload

@@ -15,17 +15,20 @@
 # --tiles: the default preset's layers (its displacement maps, VDB and meshes left out) in png16,
 # EXR and PNG as Unreal tiles of 505, which each rank writes for the tiles that start in its
 # subdomain (bake/tiles_on_ranks.h); the one process writes the same.
+# --sun-wind: with --tiles, the layers sun_exposure, temperature, wind_speed and wind_shadow_mask
+# too (each rank's from its part of the precompute).
 # --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
 # prints rank 0's log lines of each stage's time, the memory and the mass balance beside the row.
-#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles] [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
+#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles [--sun-wind]] [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0 tiles=0 only=""
-while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --ranks-only ]; do
+mode=strong events=0 tiles=0 sunwind="" only=""
+while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --sun-wind ] || [ "${1:-}" = --ranks-only ]; do
   case "$1" in
     --weak) mode=weak ;;
     --events) events=1 ;;
     --tiles) tiles=1 ;;
+    --sun-wind) sunwind=', "sun_exposure", "temperature", "wind_speed", "wind_shadow_mask"' ;;
     --ranks-only) mode=only only="$2"; shift ;;
   esac
   shift
@@ -39,10 +42,10 @@ scene=preset:default
 if [ "$tiles" = 1 ]; then  # the preset with its [outputs] table replaced
   scene="$work/tiles.toml"
   awk '/^\[outputs\]$/ { skip = 1 } /^\[outputs\.ranges\]$/ { skip = 0 } !skip' presets/default.toml > "$scene"
-  cat >> "$scene" <<'TOML'
+  cat >> "$scene" <<TOML
 [outputs]
 layers = ["compacted", "stable", "unstable", "powder", "depth", "surface", "snow_coverage", "weight_snow", "weight_rock",
-          "splat_map", "snow_normal", "preview"]
+          "splat_map", "snow_normal", "preview"$sunwind]
 format = "exr"
 encodings = ["png16"]
 [outputs.tiles]

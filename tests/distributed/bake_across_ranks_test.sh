@@ -179,6 +179,17 @@ grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$wor
 [ -f "$work/avmaps/alone/out/avalanches/001_deposit_0_0.exr" ] || fail "avalanche maps in tiles: no map of the first avalanche"
 [ -f "$work/avmaps/alone/out/contact_sheet.png" ] || fail "avalanche maps in tiles: no contact sheet"
 [ -f "$work/avmaps/3/out/temperature_0_0.exr" ] || fail "avalanche maps in tiles: no temperature tile"
+# A constant wind, no events, the sun's and the wind's layers in tiles: each rank's day-0 wind and
+# the layers from its parts of the precompute, which a constant wind fills once (a rank once ran
+# its season without it and crashed in the wind transport); on 2 ranks.
+calm=("$work/avmaps.toml" --set terrain.size=96 --set season.days=30 --set 'outputs.frames_days=[20]' --set outputs.avalanche_maps=false
+      --set outputs.vdb=false --set 'outputs.meshes=[]' "${no_avalanches[@]}" --set 'outputs.layers=["depth", "wind_speed", "temperature"]'
+      --set 'outputs.tiles.convention="unity"' --set outputs.tiles.size_px=33)
+bake calm "$work/calm/alone" alone "${calm[@]}" && bake calm "$work/calm/2" 2 "${calm[@]}" &&
+  same "a constant wind's layers in tiles on 2 ranks" "$work/calm/alone" "$work/calm/2"
+grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/calm/2/log" ||
+  fail "a constant wind's layers in tiles on 2 ranks: the ranks did not write their own tiles"
+grep -q "replica" "$work/calm/2/log" && fail "a constant wind's layers on 2 ranks: a replica without events"
 
 # A no-snow mask on initial snow (rank 0 keeps the whole state until the season to take what it
 # removes in the single process's order) and weight_rock, whose slopes read the next cells, on its
