@@ -58,10 +58,13 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
             Grid<float> cut;
             if (l.tiled() && set.resized()) cut = cutTile(sized, l, col, r);
             if (l.tiled() && !set.resized()) {
-              // cutTile's pixels: the image's edge repeated past it.
-              cut = Grid<float>(l.tileWidth, l.tileHeight);
-              for (int y = 0; y < l.tileHeight; ++y)
-                for (int x = 0; x < l.tileWidth; ++x) cut(x, y) = at(std::min(col * l.step + x, width - 1), std::min(r * l.step + y, height - 1));
+              // The image's pixels under the tile, cut as from the whole image (edge pixels repeated).
+              const ImageWindow w{width, height, col * l.step, r * l.step, std::min(l.tileWidth, width - col * l.step),
+                                  std::min(l.tileHeight, height - r * l.step)};
+              Grid<float> pixels(w.windowWidth, w.windowHeight);
+              for (int y = 0; y < w.windowHeight; ++y)
+                for (int x = 0; x < w.windowWidth; ++x) pixels(x, y) = at(w.x0 + x, w.y0 + y);
+              cut = cutTile(pixels, w, l, col, r);
             }
             const Grid<float>& tile = l.tiled() ? cut : set.resized() ? sized : wholeImage();
             if (scene_.outputs.format == ImageFormat::Tiff) {
