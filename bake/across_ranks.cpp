@@ -10,6 +10,7 @@
 #include "core/cpu_backend.h"
 #include "core/errors.h"
 #include "core/format.h"
+#include "core/grid_window.h"
 #include "core/release_memory.h"
 #include "core/stop_request.h"
 #include "distributed/communicator.h"
@@ -285,6 +286,11 @@ void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSp
     local.wind = pre.wind->window(c.x0, c.y0, c.width(), c.height());
     sources.wind = &*local.wind;
   }
+}
+
+Grid<float> theRanksWindow(Grid<float> whole, const Scene& scene, const GridSpec& spec) {
+  if (whole.empty() || !ranksWriteTheirTiles(scene, spec)) return whole;
+  return gridWindow(whole, decompositionOf(scene, spec).local(dist::Communicator::world().rank()));
 }
 
 void mergeTheRanksFiles(OutputSink& files) {

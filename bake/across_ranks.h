@@ -85,6 +85,9 @@ bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec);
 // sun's and wind's layers at the rank's local grid of the precompute: `pre`, made in the rank's
 // parts, or (a season on the replica keeps the whole grid's) its window, kept in `local`.
 void shareTheRanksTiles(OutputSources& sources, const Scene& scene, const GridSpec& spec, const Precomputed& pre, Precomputed& local);
+// Where each rank writes its tiles, `whole` (a layer's grid over the whole terrain, as the skiers'
+// route map) cut to this rank's local grid, which its tiles read; else `whole` as it is.
+Grid<float> theRanksWindow(Grid<float> whole, const Scene& scene, const GridSpec& spec);
 // Every rank's files merged into rank 0's `files`, in the single process's order, where each rank
 // writes its tiles: from the season's end until this returns, the ranks exchange (each layer's
 // range, then the lists of files), so a failure on one rank ends every rank at once.

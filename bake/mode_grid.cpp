@@ -197,6 +197,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   } else {
     stage.emplace("season");
     SeasonConfig config = makeSeasonConfig(scene, terrain, art, pre, layers, seasonOutputs, log);
+    seasonOutputs.routeMap = theRanksWindow(std::move(seasonOutputs.routeMap), scene, terrain.info().spec);
     // Ranks writing their tiles exchange as they write (each layer's range), from the main thread
     // alone and all at once: every rank writes its frames in place, whatever timing its own memory
     // plan chose (the same files).

@@ -20,9 +20,10 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
     // Every layer of the snow state is: the pictures too, drawn cell by cell with their normals
     // from the next cells (in the halo), the preview's altitude range and contact-sheet thumbnails
     // put together over the ranks. So are the sun's and the wind's, each cell from its own cell of
-    // the rank's part of the precompute.
-    if ((layer->needs & ~(kNeedsSun | kNeedsWind)) != 0)
-      return "outputs.layers: \"" + name + "\" (read from the skiers or the occlusion, not the snow state or the precompute)";
+    // the rank's part of the precompute, and the skiers' (every rank's replica skis the whole grid,
+    // and each rank writes the tiles over its cells from it).
+    if ((layer->needs & kNeedsOcclusion) != 0)
+      return "outputs.layers: \"" + name + "\" (read from the occlusion, not the snow state, the precompute or the skiers)";
   }
   if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";
   if (out.vdb) return "outputs.vdb (one file of the whole snow body)";

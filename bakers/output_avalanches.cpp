@@ -53,7 +53,7 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
                                                       std::to_string(height) + " over the same extent";
         for (int r = 0; r < l.rows; ++r)
           for (int col = 0; col < l.columns; ++col) {
-            if (!writesTile(l, col, r)) continue;  // across ranks, another rank's tile
+            if (!writesTile(l, col, r, ImageWindow::whole(width, height))) continue;  // across ranks, another rank's tile
             const std::string base = (fs::path(src_.outDir) / (rel + tileSuffix(l, col, r) + tag)).string();
             Grid<float> cut;
             if (l.tiled() && set.resized()) cut = cutTile(sized, l, col, r);

@@ -24,10 +24,10 @@ ImageWindow OutputWriter::windowOf(int width, int height) const {
   return ImageWindow{src_.geo.gridWidth, src_.geo.gridHeight, c.x0, c.y0, width, height};
 }
 
-bool OutputWriter::writesTile(const TileLayout& l, int column, int row) const {
+bool OutputWriter::writesTile(const TileLayout& l, int column, int row, const ImageWindow& w) const {
   if (src_.tilesStartingIn.empty()) return true;
   if (!l.tiled()) throw std::logic_error("a whole file where each rank writes its tiles (OutputSources::tilesStartingIn)");
-  if (tileStartsIn(src_.tilesStartingIn, l, column, row)) return true;
+  if (tileStartsIn(src_.tilesStartingIn, src_.geo.gridWidth, src_.geo.gridHeight, l, column, row, w.width, w.height)) return true;
   ++listings_;  // another rank's file
   return false;
 }
@@ -75,7 +75,7 @@ void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, do
         planFile(tileBase + (out.format == ImageFormat::Tiff ? ".tif" : ".exr"), floatImageFormat_, content, 4.0 * l.tileWidth * l.tileHeight);
         continue;
       }
-      if (!writesTile(l, c, r)) continue;
+      if (!writesTile(l, c, r, w)) continue;
       // Untiled, the image itself (no copy).
       if (l.tiled()) cut = cutTile(grid, w, l, c, r), cutValid = masked ? cutTile(*valid, w, l, c, r) : Grid<uint8_t>();
       const Grid<float>& tile = l.tiled() ? cut : grid;
@@ -111,7 +111,7 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
                  (encoding == "png8" ? 1.0 : 2.0) * l.tileWidth * l.tileHeight, encoding == "r16");
         continue;
       }
-      if (!writesTile(l, c, r)) continue;
+      if (!writesTile(l, c, r, w)) continue;
       if (write && l.tiled())
         writeQuantisedPixels(path, encoding, l.tileWidth, l.tileHeight, cutTile(pixels.data(), w, 1, l, c, r).data(), out.compressionLevel);
       else if (write)
@@ -136,7 +136,7 @@ void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, doub
         planFile(path, format.empty() ? kRgbPngFormat : format, content, static_cast<double>(channels) * l.tileWidth * l.tileHeight);
         continue;
       }
-      if (!writesTile(l, c, r)) continue;
+      if (!writesTile(l, c, r, w)) continue;
       writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), w, channels, l, c, r) : pixels,
                 scene_.outputs.compressionLevel);
       listFile(path, content, unit, format.empty() ? kRgbPngFormat : format, day, 0.f, 255.f);
@@ -157,7 +157,7 @@ void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base,
         planFile(path, format, content, 4.0 * l.tileWidth * l.tileHeight, true);
         continue;
       }
-      if (!writesTile(l, c, r)) continue;
+      if (!writesTile(l, c, r, w)) continue;
       const Grid<float> cut = l.tiled() ? cutTile(grid, w, l, c, r) : Grid<float>();
       const Grid<float>& tile = l.tiled() ? cut : grid;
       writeRawFloat32(path, tile);

@@ -261,7 +261,7 @@ void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const s
         planFile(path, format, content, 4.0 * l.tileWidth * l.tileHeight * static_cast<double>(channels.size()));
         continue;
       }
-      if (!writesTile(l, c, r)) continue;
+      if (!writesTile(l, c, r, w)) continue;
       std::vector<Grid<float>> cut;
       if (l.tiled())
         for (const auto& g : channels) cut.push_back(cutTile(g, w, l, c, r));

@@ -136,9 +136,10 @@ class OutputWriter {
   ImageWindow windowOf(int width, int height) const;
   // The range of a raster's valid values: over the cells this rank owns, in a rank's window.
   SeenRange seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid) const;
-  // Whether this rank writes tile (column, row); counts a listing of the tiles it does not, so
-  // every rank numbers each file alike (ManifestFile::listing).
-  bool writesTile(const TileLayout& l, int column, int row) const;
+  // Whether this rank writes tile (column, row) of the image `w` is a window of (the tile's first
+  // pixel over its cells); counts a listing of the tiles it does not, so every rank numbers each
+  // file alike (ManifestFile::listing).
+  bool writesTile(const TileLayout& l, int column, int row, const ImageWindow& w) const;
   // Plan mode: a grid of the size `layer` is written at (values unset).
   Grid<float> planGrid(const Day& d, const LayerInfo& layer) const;
   void writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,

@@ -79,9 +79,17 @@ Grid<T> cutTile(const Grid<T>& g, const ImageWindow& w, const TileLayout& l, int
   tile.values() = cutTile(g.data(), w, 1, l, column, row);
   return tile;
 }
-// Whether the tile's first pixel lies in `cells` (the tiles a rank writes; every tile when empty).
-inline bool tileStartsIn(const CellRect& cells, const TileLayout& l, int column, int row) {
-  return cells.empty() || cells.contains(column * l.step, row * l.step);
+// Whether the tile's first pixel lies over `cells` of a grid of gridWidth x gridHeight cells (the
+// tiles a rank writes; every tile when empty). The image of imageWidth x imageHeight pixels spans
+// the grid's extent, so its pixel lies over the cell under the pixel's centre: the cell itself at
+// the grid's size, one cell of a texture's f x f texels.
+inline bool tileStartsIn(const CellRect& cells, int gridWidth, int gridHeight, const TileLayout& l, int column, int row, int imageWidth,
+                         int imageHeight) {
+  if (cells.empty()) return true;
+  auto cellUnder = [](int pixel, int pixels, int cellCount) {
+    return static_cast<int>((2 * static_cast<int64_t>(pixel) + 1) * cellCount / (2 * static_cast<int64_t>(pixels)));
+  };
+  return cells.contains(cellUnder(column * l.step, imageWidth, gridWidth), cellUnder(row * l.step, imageHeight, gridHeight));
 }
 
 }  // namespace snow

@@ -190,6 +190,37 @@ TEST(TileSets, ATileCutFromAWindowOfTheImageIsTheTileCutFromTheWholeImage) {
   EXPECT_EQ(checked, 24);
 }
 
+TEST(TileSets, EachTileOfATextureFinerThanTheGridHasOneWriterTheRankOwningTheCellUnderItsFirstTexel) {
+  // Across ranks the ski-track texture (f texels a cell each way) is cut into its own tiles: each
+  // is written by the rank whose subdomain holds the cell under the tile's first texel, so every
+  // tile has exactly one writer whatever the cuts. Here 3 x 2 subdomains of a 50 x 37 grid.
+  const int gridWidth = 50, gridHeight = 37;
+  const std::vector<int> xs = {0, 17, 33, 50}, ys = {0, 20, 37};
+  for (int f : {1, 2, 3, 8}) {
+    OutputTiles t;
+    t.convention = TileConvention::Unity, t.sizePx = 33;
+    const TileLayout l = tileLayout(t, gridWidth * f, gridHeight * f);
+    for (int r = 0; r < l.rows; ++r)
+      for (int c = 0; c < l.columns; ++c) {
+        int writers = 0;
+        for (size_t j = 0; j + 1 < ys.size(); ++j)
+          for (size_t i = 0; i + 1 < xs.size(); ++i) {
+            const CellRect owned{xs[i], ys[j], xs[i + 1], ys[j + 1]};
+            if (!tileStartsIn(owned, gridWidth, gridHeight, l, c, r, gridWidth * f, gridHeight * f)) continue;
+            ++writers;
+            EXPECT_TRUE(owned.contains(c * l.step / f, r * l.step / f)) << "f " << f << ", tile " << c << ", " << r;
+          }
+        EXPECT_EQ(writers, 1) << "f " << f << ", tile " << c << ", " << r;
+      }
+  }
+  // At the grid's size the writer is the rank whose cells hold the tile's first pixel itself.
+  OutputTiles t;
+  t.convention = TileConvention::Unity, t.sizePx = 33;
+  const TileLayout l = tileLayout(t, gridWidth, gridHeight);
+  EXPECT_TRUE(tileStartsIn(CellRect{32, 32, 50, 37}, gridWidth, gridHeight, l, 1, 1, gridWidth, gridHeight));
+  EXPECT_FALSE(tileStartsIn(CellRect{33, 0, 50, 37}, gridWidth, gridHeight, l, 1, 1, gridWidth, gridHeight));
+}
+
 TEST(TileSets, LayersExrAndAvalancheMapTilesReassembleToTheUntiledFilesBitForBit) {
   const test::Bake whole = test::bakeSceneText("tilesets_whole", avalancheScene("", ""));
   const test::Bake tiled = test::bakeSceneText("tilesets_tiled", avalancheScene("", "[outputs.tiles]\nconvention = \"grid\"\nsize_px = 40\noverlap_px = 3\n"));

@@ -165,13 +165,18 @@ done
 # Avalanche maps and their motion frames under [outputs.tiles] with the default preset's avalanches
 # and skiers (its displacement maps, VDB and meshes left out): each rank writes the maps' tiles
 # that start in its subdomain from its replica's records, rank 0 the contact sheet, counted in
-# the listing order on the others; and the sun's and the wind's layers from each rank's window of
-# the whole grid's precompute that the replica keeps; on 3 ranks.
-sed -e '/^displacement_size/d' -e 's/^layers = \[/layers = ["temperature", "wind_shadow_mask", /' "$root/presets/default.toml" > "$work/avmaps.toml"
-grep -q '^layers = \["temperature", "wind_shadow_mask", ' "$work/avmaps.toml" || fail "avalanche maps: the layers were not added"
+# the listing order on the others; the sun's and the wind's layers from each rank's window of
+# the whole grid's precompute that the replica keeps; and the skiers' layers, the route map from
+# the rank's window and the ski-track texture's tiles (2 texels a cell: 240 pixels, 8 x 8 tiles)
+# from the replica's whole texture, each tile the rank's whose cells lie under its first pixel; on
+# 3 ranks.
+sed -e '/^displacement_size/d' -e 's/^layers = \[/layers = ["temperature", "wind_shadow_mask", "ski_tracks", "ski_route_map", /' \
+  "$root/presets/default.toml" > "$work/avmaps.toml"
+grep -q '^layers = \["temperature", "wind_shadow_mask", "ski_tracks", "ski_route_map", ' "$work/avmaps.toml" ||
+  fail "avalanche maps: the layers were not added"
 avmaps=("$work/avmaps.toml" --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' --set outputs.vdb=false
         --set 'outputs.meshes=[]' --set outputs.avalanche_frame_interval_s=5 --set 'outputs.tiles.convention="unity"'
-        --set outputs.tiles.size_px=33)
+        --set outputs.tiles.size_px=33 --set outputs.ski_track_factor=2)
 bake avmaps "$work/avmaps/alone" alone "${avmaps[@]}" && bake avmaps "$work/avmaps/3" 3 "${avmaps[@]}" &&
   same "avalanche maps in tiles on 3 ranks" "$work/avmaps/alone" "$work/avmaps/3"
 grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/avmaps/3/log" ||
@@ -179,6 +184,9 @@ grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$wor
 [ -f "$work/avmaps/alone/out/avalanches/001_deposit_0_0.exr" ] || fail "avalanche maps in tiles: no map of the first avalanche"
 [ -f "$work/avmaps/alone/out/contact_sheet.png" ] || fail "avalanche maps in tiles: no contact sheet"
 [ -f "$work/avmaps/3/out/temperature_0_0.exr" ] || fail "avalanche maps in tiles: no temperature tile"
+[ -f "$work/avmaps/3/out/ski_tracks_7_7.exr" ] || fail "avalanche maps in tiles: no ski-track tile at the texture's far corner"
+[ -f "$work/avmaps/3/out/ski_route_map_3_3.exr" ] || fail "avalanche maps in tiles: no route-map tile"
+grep -qE "skiers: [0-9]+ .*, [1-9][0-9]* skied" "$work/avmaps/3/log" || fail "avalanche maps in tiles: nobody skied"
 # A constant wind, no events, the sun's and the wind's layers in tiles: each rank's day-0 wind and
 # the layers from its parts of the precompute, which a constant wind fills once (a rank once ran
 # its season without it and crashed in the wind transport); on 2 ranks.
