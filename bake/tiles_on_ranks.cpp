@@ -12,8 +12,9 @@ namespace snow {
 std::string whyRankZeroWritesEveryFile(const Scene& scene) {
   const OutputRequest& out = scene.outputs;
   if (out.tiles.convention == TileConvention::None) return "the outputs are whole files (no [outputs.tiles])";
-  if (out.tiles.resizeWidth > 0) return "outputs.tiles.resize (tiles cut from a resampled image)";
-  if (out.resizeWidth > 0) return "outputs.resize (layers resampled over the whole grid)";
+  if (out.tiles.resizeWidth > 0) return "outputs.tiles.resize (the whole files beside the tiles)";
+  // outputs.resize and the displacement maps are: each rank resamples its tiles' pixels from the
+  // cells they read, gathered from their owners (OutputSources::gatherCells).
   for (const std::string& name : out.layers) {
     const LayerInfo* layer = findLayer(name);
     if (!layer) continue;
@@ -25,7 +26,6 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
     if ((layer->needs & kNeedsOcclusion) != 0)
       return "outputs.layers: \"" + name + "\" (read from the occlusion, not the snow state, the precompute or the skiers)";
   }
-  if (out.displacementWidth > 0) return "outputs.displacement_size (resampled over the whole grid)";
   if (out.vdb) return "outputs.vdb (one file of the whole snow body)";
   if (!out.meshes.empty()) return "outputs.meshes (triangulated over the whole grid)";
   return "";
@@ -41,6 +41,43 @@ std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, cons
   return dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
 }
 
+namespace {
+
+// OutputSources::gatherCells: every rank's `want`, then each rank sends every other the cells it
+// owns of theirs and receives its own from their owners (its own copied).
+void gatherFromOwners(const dist::Communicator& comm, const dist::Decomposition& d, const void* local, size_t elementBytes,
+                      const CellRect& want, void* held) {
+  const std::vector<double> wants = comm.allGather({double(want.x0), double(want.y0), double(want.x1), double(want.y1)});
+  const int self = comm.rank();
+  const CellRect mine = d.owned(self), myLocal = d.local(self);
+  std::vector<std::vector<char>> out(comm.size()), in(comm.size());
+  std::vector<dist::Communicator::Send> sends;
+  std::vector<dist::Communicator::Receive> receives;
+  for (int peer = 0; peer < comm.size(); ++peer) {
+    const CellRect theirs{int(wants[4 * peer]), int(wants[4 * peer + 1]), int(wants[4 * peer + 2]), int(wants[4 * peer + 3])};
+    const CellRect give = mine.intersect(theirs), take = d.owned(peer).intersect(want);
+    if (peer == self) {
+      if (!give.empty()) dist::copyCells(give, myLocal, local, want, held, elementBytes);
+      continue;
+    }
+    if (!give.empty()) {
+      out[peer].resize(give.cells() * elementBytes);
+      dist::copyCells(give, myLocal, local, give, out[peer].data(), elementBytes);
+      sends.push_back({peer, out[peer].data(), out[peer].size()});
+    }
+    if (!take.empty()) {
+      in[peer].resize(take.cells() * elementBytes);
+      receives.push_back({peer, in[peer].data(), in[peer].size()});
+    }
+  }
+  comm.exchange(sends, receives);
+  for (int peer = 0; peer < comm.size(); ++peer)
+    if (const CellRect take = d.owned(peer).intersect(want); peer != self && !take.empty())
+      dist::copyCells(take, take, in[peer].data(), want, held, elementBytes);
+}
+
+}  // namespace
+
 void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const dist::Decomposition& d) {
   sources.stateCells = d.local(comm.rank());
   sources.tilesStartingIn = d.owned(comm.rank());
@@ -52,6 +89,9 @@ void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const
     SeenRange whole;
     for (size_t k = 0; k + 1 < all.size(); k += 2) whole.widen(SeenRange{all[k], all[k + 1]});
     return whole;
+  };
+  sources.gatherCells = [comm, d](const void* local, size_t elementBytes, const CellRect& want, void* held) {
+    gatherFromOwners(comm, d, local, elementBytes, want, held);
   };
   sources.wholeThumbnail = [comm](std::vector<uint8_t> mine) {
     // Each pixel is one rank's, 0 on every other: or'd together on rank 0.

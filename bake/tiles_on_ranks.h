@@ -1,7 +1,8 @@
 // Outputs across ranks written where their cells are (docs/distributed.md, Outputs): under
 // [outputs.tiles], the ranks' subdomains are cut on tile starts, so each rank's local grid holds
 // every cell of the tiles that start in its subdomain, and each rank writes those tiles from its
-// own cells. A layer's range ("own", "season") is combined over the ranks, and rank 0 merges the
+// own cells (a resampled image's tiles, whose pixels read cells further out, from those cells
+// gathered from their owners). A layer's range ("own", "season") is combined over the ranks, and rank 0 merges the
 // files every rank listed into one manifest in the single process's order. The same bytes as one
 // process, and no rank holds the whole grid for the outputs.
 #pragma once
@@ -27,7 +28,8 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene);
 std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo);
 
 // Points `sources` at this rank's tiles of decomposition `d`: its local grid's state, the tiles
-// starting in its subdomain, a layer's range combined over the ranks.
+// starting in its subdomain, a layer's range combined over the ranks, and the cells a resampled
+// image's tiles read gathered from their owners.
 void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const dist::Decomposition& d);
 
 // Every rank's files, listed into its `files`, merged on rank 0 in the order each was listed

@@ -158,22 +158,47 @@ std::string normalisedFormat(const std::string& encoding, int width, int height)
 }
 
 Grid<float> resampleBilinear(const Grid<float>& g, int width, int height) {
-  Grid<float> out(width, height, 0.f);
-  const int sw = g.width(), sh = g.height();
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      out(x, y) = static_cast<float>(
-          sampleBilinearClamped(g.data(), sw, sh, (x + 0.5) * sw / width - 0.5, (y + 0.5) * sh / height - 0.5));
-  return out;
+  return resampleBilinear(g, ResampleWindow{CellRect{0, 0, g.width(), g.height()}, g.width(), g.height(), CellRect{0, 0, width, height}, width, height});
 }
 
 Grid<float> resampleValid(const Grid<float>& g, const Grid<uint8_t>& valid, int width, int height, Grid<uint8_t>& validOut) {
-  Grid<float> out(width, height, 0.f);
-  validOut = Grid<uint8_t>(width, height, 0);
-  const int sw = g.width(), sh = g.height();
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) {
-      const double fx = (x + 0.5) * sw / width - 0.5, fy = (y + 0.5) * sh / height - 0.5;
+  return resampleValid(g, valid,
+                       ResampleWindow{CellRect{0, 0, g.width(), g.height()}, g.width(), g.height(), CellRect{0, 0, width, height}, width, height},
+                       validOut);
+}
+
+namespace {
+// Pixel x's position in the grid's cells (cell centres at integers), as both resamplers take it.
+double sourceCoordinate(int x, int cells, int pixels) { return (x + 0.5) * cells / pixels - 0.5; }
+}  // namespace
+
+Grid<float> resampleBilinear(const Grid<float>& held, const ResampleWindow& w) {
+  Grid<float> out(w.to.width(), w.to.height(), 0.f);
+  const int sw = w.fromWidth, sh = w.fromHeight;
+  auto at = [&](int i, int j) { return static_cast<double>(held(i - w.from.x0, j - w.from.y0)); };
+  for (int y = w.to.y0; y < w.to.y1; ++y)
+    for (int x = w.to.x0; x < w.to.x1; ++x) {
+      // sampleBilinearClamped's arithmetic, reading the held cells.
+      const double fx = std::clamp(sourceCoordinate(x, sw, w.width), 0.0, static_cast<double>(sw - 1));
+      const double fy = std::clamp(sourceCoordinate(y, sh, w.height), 0.0, static_cast<double>(sh - 1));
+      const int x0 = std::min(static_cast<int>(fx), sw - 1), x1 = std::min(x0 + 1, sw - 1);
+      const int y0 = std::min(static_cast<int>(fy), sh - 1), y1 = std::min(y0 + 1, sh - 1);
+      const double tx = fx - x0, ty = fy - y0;
+      const double top = at(x0, y0) * (1 - tx) + at(x1, y0) * tx, bottom = at(x0, y1) * (1 - tx) + at(x1, y1) * tx;
+      out(x - w.to.x0, y - w.to.y0) = static_cast<float>(top * (1 - ty) + bottom * ty);
+    }
+  return out;
+}
+
+Grid<float> resampleValid(const Grid<float>& held, const Grid<uint8_t>& heldValid, const ResampleWindow& w, Grid<uint8_t>& validOut) {
+  Grid<float> out(w.to.width(), w.to.height(), 0.f);
+  validOut = Grid<uint8_t>(w.to.width(), w.to.height(), 0);
+  const int sw = w.fromWidth, sh = w.fromHeight;
+  auto g = [&](int i, int j) { return held(i - w.from.x0, j - w.from.y0); };
+  auto valid = [&](int i, int j) { return heldValid(i - w.from.x0, j - w.from.y0); };
+  for (int y = w.to.y0; y < w.to.y1; ++y)
+    for (int x = w.to.x0; x < w.to.x1; ++x) {
+      const double fx = sourceCoordinate(x, sw, w.width), fy = sourceCoordinate(y, sh, w.height);
       const int nx = std::clamp(static_cast<int>(std::lround(fx)), 0, sw - 1), ny = std::clamp(static_cast<int>(std::lround(fy)), 0, sh - 1);
       if (!valid(nx, ny)) continue;
       const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
@@ -182,13 +207,29 @@ Grid<float> resampleValid(const Grid<float>& g, const Grid<uint8_t>& valid, int 
       for (int j = 0; j < 2; ++j)
         for (int i = 0; i < 2; ++i) {
           const int cx = std::clamp(x0 + i, 0, sw - 1), cy = std::clamp(y0 + j, 0, sh - 1);
-          const double w = (i ? tx : 1 - tx) * (j ? ty : 1 - ty);
-          if (valid(cx, cy)) sum += w * g(cx, cy), weight += w;
+          const double wt = (i ? tx : 1 - tx) * (j ? ty : 1 - ty);
+          if (valid(cx, cy)) sum += wt * g(cx, cy), weight += wt;
         }
-      validOut(x, y) = 1;
-      out(x, y) = static_cast<float>(weight > 0 ? sum / weight : g(nx, ny));
+      validOut(x - w.to.x0, y - w.to.y0) = 1;
+      out(x - w.to.x0, y - w.to.y0) = static_cast<float>(weight > 0 ? sum / weight : g(nx, ny));
     }
   return out;
+}
+
+std::pair<int, int> cellsReadBy(int firstPixel, int lastPixel, int pixels, int cells) {
+  if (lastPixel <= firstPixel) return {0, 0};
+  // Both read floor(c) and floor(c) + 1 (and the nearest, one of them), clamped to the grid; c
+  // grows with the pixel.
+  const int lo = std::clamp(static_cast<int>(std::floor(sourceCoordinate(firstPixel, cells, pixels))), 0, cells - 1);
+  const int hi = std::clamp(static_cast<int>(std::floor(sourceCoordinate(lastPixel - 1, cells, pixels))) + 1, 0, cells - 1);
+  return {lo, hi + 1};
+}
+
+CellRect cellsReadBy(const CellRect& pixels, int width, int height, int cellsWide, int cellsHigh) {
+  if (pixels.empty()) return CellRect{};
+  const auto [x0, x1] = cellsReadBy(pixels.x0, pixels.x1, width, cellsWide);
+  const auto [y0, y1] = cellsReadBy(pixels.y0, pixels.y1, height, cellsHigh);
+  return CellRect{x0, y0, x1, y1};
 }
 
 void writeMultiChannelExr(const std::string& path, const std::vector<std::string>& names, const std::vector<const Grid<float>*>& grids,

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/grid.h"
+#include "core/grid_window.h"
 #include "core/snow_state.h"
 
 namespace snow {
@@ -63,6 +64,25 @@ Grid<float> resampleBilinear(const Grid<float>& grid, int width, int height);
 // centre is (`validOut`); its value is the bilinear weights of the valid cells among the four,
 // renormalised, so NODATA's zeros do not pull the edge of a heightmap down. 0 at invalid pixels.
 Grid<float> resampleValid(const Grid<float>& grid, const Grid<uint8_t>& valid, int width, int height, Grid<uint8_t>& validOut);
+
+// The same pixels computed from part of the grid, as a writer across ranks holds it: `held` is
+// the cells `from` of a grid of fromWidth x fromHeight cells, which must hold every cell the
+// pixels `to` of the width x height image read (cellsReadBy); the result is those pixels alone,
+// each the whole image's bytes.
+struct ResampleWindow {
+  CellRect from;                        // the cells held, in the whole grid
+  int fromWidth = 0, fromHeight = 0;    // the whole grid
+  CellRect to;                          // the pixels made, in the whole image
+  int width = 0, height = 0;            // the whole image
+};
+Grid<float> resampleBilinear(const Grid<float>& held, const ResampleWindow& w);
+Grid<float> resampleValid(const Grid<float>& held, const Grid<uint8_t>& heldValid, const ResampleWindow& w, Grid<uint8_t>& validOut);
+// The cells [first, last) of a grid of `cells` along one axis that pixels [firstPixel, lastPixel)
+// of an image of `pixels` across the same extent read, resampled by either of the above.
+std::pair<int, int> cellsReadBy(int firstPixel, int lastPixel, int pixels, int cells);
+// The same for the block `pixels` of a width x height image over a grid of cellsWide x
+// cellsHigh: the cells it reads (empty for no pixels).
+CellRect cellsReadBy(const CellRect& pixels, int width, int height, int cellsWide, int cellsHigh);
 
 // Several grids of one size in one 32-bit float EXR (zip at `compressionLevel`), channel
 // "<name>.Y" per grid (an EXR layer per grid). Written atomically.

@@ -26,7 +26,8 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
     // A crop of the avalanche's box over a background (zero, or the depth at release for the
     // frames), in each raster set at its size (bilinear), whole or cut into its tiles (the suffix
     // before a motion frame's tag, as on the layers). An unresized tile is cut from the crop and
-    // the background directly, so a rank writing its tiles never makes the whole grid's image.
+    // the background directly, and a resized set's tiles are resampled from the cells their
+    // pixels read, so a rank writing its tiles never makes the whole grid's image.
     auto write = [&](const std::string& rel, const std::string& tag, const Grid<float>* background, const GridCrop& c, const std::string& content,
                      const std::string& unit, double day) {
       auto at = [&](int x, int y) {
@@ -34,7 +35,7 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
         if (cx >= 0 && cy >= 0 && cx < c.grid.width() && cy < c.grid.height()) return c.grid(cx, cy);
         return background ? (*background)(x, y) : 0.f;
       };
-      Grid<float> full;  // the whole grid's image, made once where a set needs it
+      Grid<float> full;  // the whole grid's image, made where an untiled file of the grid's size needs it
       auto wholeImage = [&]() -> const Grid<float>& {
         if (full.size() == 0) {
           full = Grid<float>(spec.width, spec.height);
@@ -45,8 +46,19 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
       };
       fs::create_directories((fs::path(src_.outDir) / rel).parent_path());
       for (const RasterSet& set : sets_) {
-        const Grid<float> sized = set.resized() ? resampleBilinear(wholeImage(), set.resizeWidth, set.resizeHeight) : Grid<float>();
-        const int width = set.resized() ? sized.width() : spec.width, height = set.resized() ? sized.height() : spec.height;
+        const int width = set.resized() ? set.resizeWidth : spec.width, height = set.resized() ? set.resizeHeight : spec.height;
+        // A resized set: the pixels of the tiles this writer writes (the whole image in one
+        // process), from the cells they read.
+        Grid<float> sized;
+        ImageWindow sizedWindow;
+        if (set.resized()) {
+          const CellRect to = writtenPixels(set.tiles, width, height, 0), from = cellsReadBy(to, width, height, spec.width, spec.height);
+          Grid<float> held(from.width(), from.height());
+          for (int y = from.y0; y < from.y1; ++y)
+            for (int x = from.x0; x < from.x1; ++x) held(x - from.x0, y - from.y0) = at(x, y);
+          sized = resampleBilinear(held, ResampleWindow{from, spec.width, spec.height, to, width, height});
+          sizedWindow = ImageWindow{width, height, to.x0, to.y0, to.width(), to.height()};
+        }
         const TileLayout l = tileLayout(set.tiles, width, height);
         const std::string what = !set.resized() ? content
                                                 : content + ", resampled (bilinear) to " + std::to_string(width) + " x " +
@@ -56,7 +68,7 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
             if (!writesTile(l, col, r, ImageWindow::whole(width, height))) continue;  // across ranks, another rank's tile
             const std::string base = (fs::path(src_.outDir) / (rel + tileSuffix(l, col, r) + tag)).string();
             Grid<float> cut;
-            if (l.tiled() && set.resized()) cut = cutTile(sized, l, col, r);
+            if (l.tiled() && set.resized()) cut = cutTile(sized, sizedWindow, l, col, r);
             if (l.tiled() && !set.resized()) {
               // The image's pixels under the tile, cut as from the whole image (edge pixels repeated).
               const ImageWindow w{width, height, col * l.step, r * l.step, std::min(l.tileWidth, width - col * l.step),

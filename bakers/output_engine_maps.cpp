@@ -11,15 +11,6 @@
 namespace snow {
 
 namespace {
-// A grid layer at the raster set's size: resampled over valid cells when it has one.
-Grid<float> atOutputSize(const RasterSet& set, const Grid<float>& g, const Grid<uint8_t>& valid, Grid<uint8_t>& validOut) {
-  if (!set.resized()) {
-    validOut = valid;
-    return g;
-  }
-  return resampleValid(g, valid, set.resizeWidth, set.resizeHeight, validOut);
-}
-
 // Weights (summing to 1) as bytes summing to exactly 255: each floored, the rest given one by one
 // to the largest remainders (ties to the lower channel), so no pixel is off by the rounding.
 std::array<uint8_t, 3> bytesSummingTo255(const std::array<double, 3>& w) {
@@ -42,6 +33,11 @@ std::array<uint8_t, 3> bytesSummingTo255(const std::array<double, 3>& w) {
 }
 }  // namespace
 
+OutputWriter::Resampled OutputWriter::atSetSize(const RasterSet& set, const Grid<float>& g, const Grid<uint8_t>& valid, int marginPx) const {
+  if (!set.resized()) return {g, valid, windowOf(g.width(), g.height())};
+  return resampled(set.tiles, set.resizeWidth, set.resizeHeight, g, &valid, marginPx);
+}
+
 constexpr const char* kSplatFormat = "PNG, 4 channels uint8, linear weights: R snow, G rock, B ground, A 0; R + G + B = 255";
 
 void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer) {
@@ -52,10 +48,13 @@ void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const Layer
   LayerInputs in{&d.s, &scene_.params, &out};
   std::array<Grid<float>, 3> w;
   Grid<uint8_t> valid;
+  ImageWindow window;
   const char* names[3] = {"weight_snow", "weight_rock", "weight_ground"};
-  for (int k = 0; k < 3; ++k) w[k] = atOutputSize(set, findLayer(names[k])->compute(in), d.s.validCell, valid);
-  const int width = valid.width(), height = valid.height();
-  std::vector<uint8_t> rgba(static_cast<size_t>(width) * height * 4, 0);
+  for (int k = 0; k < 3; ++k) {
+    Resampled r = atSetSize(set, findLayer(names[k])->compute(in), d.s.validCell, 0);
+    w[k] = std::move(r.pixels), valid = std::move(r.valid), window = r.window;
+  }
+  std::vector<uint8_t> rgba(valid.size() * 4, 0);
   for (size_t i = 0; i < valid.size(); ++i) {
     // NODATA: all ground, so the channels sum to 255 everywhere.
     const std::array<double, 3> weights = valid.values()[i] ? std::array<double, 3>{w[0].values()[i], w[1].values()[i], w[2].values()[i]}
@@ -63,7 +62,7 @@ void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const Layer
     const auto q = bytesSummingTo255(weights);
     std::copy(q.begin(), q.end(), &rgba[i * 4]);
   }
-  writeRgbRaster(set, baseOf(d), d.day, layer.name, width, height, rgba, layer.content, layer.unit, 4, kSplatFormat);
+  writeRgbRaster(set, baseOf(d), d.day, layer.name, window.width, window.height, rgba, layer.content, layer.unit, 4, kSplatFormat, &window);
 }
 
 void OutputWriter::writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer) {
@@ -72,10 +71,15 @@ void OutputWriter::writeNormalMap(const Day& d, const RasterSet& set, const Laye
   if (src_.plan)
     return writeRgbRaster(set, baseOf(d), d.day, layer.name, set.resized() ? set.resizeWidth : d.s.spec.width,
                           set.resized() ? set.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 3, format);
-  Grid<uint8_t> valid;
-  const Grid<float> surface = atOutputSize(set, findLayer("surface")->compute(LayerInputs{&d.s}), d.s.validCell, valid);
+  // With a pixel more around a resampled window's tiles, for their edge pixels' neighbours; a
+  // pixel of the window's own edge, clamped there, lies in no tile the rank writes unless it is
+  // the image's edge, clamped alike in the whole image.
+  const Resampled r = atSetSize(set, findLayer("surface")->compute(LayerInputs{&d.s}), d.s.validCell, 1);
+  const Grid<float>& surface = r.pixels;
+  const Grid<uint8_t>& valid = r.valid;
   const int w = surface.width(), h = surface.height();
-  const double dx = d.s.spec.cellSizeXM * d.s.spec.width / w, dy = d.s.spec.cellSizeYM * d.s.spec.height / h;
+  const ImageWindow cells = windowOf(d.s.spec.width, d.s.spec.height);  // the whole grid's size
+  const double dx = d.s.spec.cellSizeXM * cells.width / r.window.width, dy = d.s.spec.cellSizeYM * cells.height / r.window.height;
   const double green = out.normalMapConvention == "directx" ? -1.0 : 1.0;
   auto at = [&](int x, int y, int cx, int cy) {  // NODATA and the edge: the centre's height (flat)
     x = std::clamp(x, 0, w - 1), y = std::clamp(y, 0, h - 1);
@@ -91,7 +95,7 @@ void OutputWriter::writeNormalMap(const Day& d, const RasterSet& set, const Laye
       uint8_t* p = &rgb[(static_cast<size_t>(y) * w + x) * 3];
       for (int k = 0; k < 3; ++k) p[k] = static_cast<uint8_t>(std::lround(127.5 + 127.5 * v[k]));
     }
-  writeRgbRaster(set, baseOf(d), d.day, layer.name, w, h, rgb, layer.content, layer.unit, 3, format);
+  writeRgbRaster(set, baseOf(d), d.day, layer.name, r.window.width, r.window.height, rgb, layer.content, layer.unit, 3, format, &r.window);
 }
 
 }  // namespace snow

@@ -24,6 +24,43 @@ ImageWindow OutputWriter::windowOf(int width, int height) const {
   return ImageWindow{src_.geo.gridWidth, src_.geo.gridHeight, c.x0, c.y0, width, height};
 }
 
+CellRect OutputWriter::writtenPixels(const OutputTiles& tiles, int width, int height, int marginPx) const {
+  if (src_.tilesStartingIn.empty()) return CellRect{0, 0, width, height};
+  // The pixels of the tiles this rank writes (one writer a tile: tileStartsIn), and the margin.
+  const TileLayout l = tileLayout(tiles, width, height);
+  CellRect pixels;
+  for (int row = 0; row < l.rows; ++row)
+    for (int column = 0; column < l.columns; ++column) {
+      if (!tileStartsIn(src_.tilesStartingIn, src_.geo.gridWidth, src_.geo.gridHeight, l, column, row, width, height)) continue;
+      const CellRect tile{column * l.step, row * l.step, std::min(width, column * l.step + l.tileWidth), std::min(height, row * l.step + l.tileHeight)};
+      pixels = pixels.empty() ? tile : CellRect{std::min(pixels.x0, tile.x0), std::min(pixels.y0, tile.y0), std::max(pixels.x1, tile.x1), std::max(pixels.y1, tile.y1)};
+    }
+  if (pixels.empty()) return pixels;
+  return CellRect{std::max(0, pixels.x0 - marginPx), std::max(0, pixels.y0 - marginPx), std::min(width, pixels.x1 + marginPx),
+                  std::min(height, pixels.y1 + marginPx)};
+}
+
+OutputWriter::Resampled OutputWriter::resampled(const OutputTiles& tiles, int width, int height, const Grid<float>& grid,
+                                                const Grid<uint8_t>* valid, int marginPx) const {
+  Resampled r;
+  const ImageWindow cells = windowOf(grid.width(), grid.height());
+  if (!src_.gatherCells) {
+    r.window = ImageWindow::whole(width, height);
+    r.pixels = valid ? resampleValid(grid, *valid, width, height, r.valid) : resampleBilinear(grid, width, height);
+    return r;
+  }
+  const CellRect pixels = writtenPixels(tiles, width, height, marginPx);
+  const CellRect from = cellsReadBy(pixels, width, height, cells.width, cells.height);
+  Grid<float> held(from.width(), from.height());
+  src_.gatherCells(grid.data(), sizeof(float), from, held.data());
+  Grid<uint8_t> heldValid(valid ? from.width() : 0, valid ? from.height() : 0);
+  if (valid) src_.gatherCells(valid->data(), sizeof(uint8_t), from, heldValid.data());
+  const ResampleWindow w{from, cells.width, cells.height, pixels, width, height};
+  r.pixels = valid ? resampleValid(held, heldValid, w, r.valid) : resampleBilinear(held, w);
+  r.window = ImageWindow{width, height, pixels.x0, pixels.y0, pixels.width(), pixels.height()};
+  return r;
+}
+
 bool OutputWriter::writesTile(const TileLayout& l, int column, int row, const ImageWindow& w) const {
   if (src_.tilesStartingIn.empty()) return true;
   if (!l.tiled()) throw std::logic_error("a whole file where each rank writes its tiles (OutputSources::tilesStartingIn)");
@@ -32,10 +69,10 @@ bool OutputWriter::writesTile(const TileLayout& l, int column, int row, const Im
   return false;
 }
 
-SeenRange OutputWriter::seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid) const {
+SeenRange OutputWriter::seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid, const ImageWindow* held) const {
   SeenRange seen;
-  const ImageWindow w = windowOf(grid.width(), grid.height());
-  if (src_.tilesStartingIn.empty() || (w.windowWidth == w.width && w.windowHeight == w.height)) {
+  const ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
+  if (held || src_.tilesStartingIn.empty() || (w.windowWidth == w.width && w.windowHeight == w.height)) {
     seen.widen(grid, valid);
     return seen;
   }
@@ -61,9 +98,9 @@ void OutputWriter::noteTile(const TileLayout& l, int column, int row, int imageW
 
 void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
                                     const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content,
-                                    const std::string& unit) {
+                                    const std::string& unit, const ImageWindow* held) {
   const auto& out = scene_.outputs;
-  const ImageWindow w = windowOf(grid.width(), grid.height());
+  const ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   Grid<float> cut;
@@ -94,9 +131,9 @@ void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, do
 
 void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const std::string& encoding,
                                       const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& m,
-                                      const std::string& content, const std::string& unit, bool write) {
+                                      const std::string& content, const std::string& unit, bool write, const ImageWindow* held) {
   const auto& out = scene_.outputs;
-  const ImageWindow w = windowOf(grid.width(), grid.height());
+  const ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   // Quantised once for every tile: a pixel depends on its cell alone, so cutting the pixels
@@ -126,8 +163,8 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
 
 void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height,
                                   const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels,
-                                  const std::string& format) {
-  const ImageWindow w = windowOf(width, height);
+                                  const std::string& format, const ImageWindow* held) {
+  const ImageWindow w = held ? *held : windowOf(width, height);
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
@@ -145,8 +182,8 @@ void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, doub
 }
 
 void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
-                                       const std::string& content, const std::string& unit) {
-  const ImageWindow w = windowOf(grid.width(), grid.height());
+                                       const std::string& content, const std::string& unit, const ImageWindow* held) {
+  const ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
@@ -169,13 +206,13 @@ void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base,
 }
 
 void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid,
-                                  const std::string& content) {
+                                  const std::string& content, const ImageWindow* held) {
   const auto& out = scene_.outputs;
   if (out.encodings.empty()) return;
   const LayerRange range = rangeOf(out, layer);
   ValueMapping m{range.mode, range.lo, range.hi};
   if (range.mode != RangeMode::Fixed && !src_.plan) {
-    SeenRange seen = seenOnOwnCells(grid, valid);
+    SeenRange seen = seenOnOwnCells(grid, valid, held);
     if (src_.wholeRange) seen = src_.wholeRange(seen);  // across ranks: every rank's cells
     m = seen.mapping(range.mode);
     if (range.mode == RangeMode::Season) {
@@ -187,10 +224,10 @@ void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const Laye
   SpillFile::Extent values, mask;  // the layer and its mask on disk, once for all its encodings
   for (const std::string& encoding : out.encodings) {
     if (encoding == "r32") {  // floats as they are: no range
-      writeRawFloatRaster(set, baseOf(d), d.day, layer.name, grid, content, layer.unit);
+      writeRawFloatRaster(set, baseOf(d), d.day, layer.name, grid, content, layer.unit, held);
       continue;
     }
-    writeEncodedRaster(set, baseOf(d), d.day, layer.name, encoding, grid, valid, m, content, layer.unit, now);
+    writeEncodedRaster(set, baseOf(d), d.day, layer.name, encoding, grid, valid, m, content, layer.unit, now, held);
     if (now) continue;
     const std::lock_guard lock(seasonMutex_);
     const bool masked = valid->width() == grid.width() && valid->height() == grid.height();
@@ -199,7 +236,8 @@ void OutputWriter::writeEncodings(const Day& d, const RasterSet& set, const Laye
       values = spill_->put(grid.values());
       if (masked) mask = spill_->put(valid->values());
     }
-    seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid.width(), grid.height(), values, mask, set});
+    seasonEncodings_.push_back({d.frame, d.dayTag, layer.name, encoding, content, layer.unit, d.day, grid.width(), grid.height(), values, mask, set,
+                                held ? std::optional<ImageWindow>(*held) : std::nullopt});
   }
 }
 
@@ -217,7 +255,8 @@ void OutputWriter::writeSeasonEncodings() {
       grid.adopt(e.width, e.height, spill_->get<float>(e.grid));
       Grid<uint8_t> valid;
       if (e.valid.bytes > 0) valid.adopt(e.width, e.height, spill_->get<uint8_t>(e.valid));
-      writeEncodedRaster(e.set, base, e.day, e.layer, e.encoding, grid, e.valid.bytes > 0 ? &valid : nullptr, m, e.content, e.unit, true);
+      writeEncodedRaster(e.set, base, e.day, e.layer, e.encoding, grid, e.valid.bytes > 0 ? &valid : nullptr, m, e.content, e.unit, true,
+                         e.held ? &*e.held : nullptr);
     }
   }
   // The entries listed on the day, in the manifest's order, take the season's mapping.

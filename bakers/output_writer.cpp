@@ -126,6 +126,7 @@ void OutputWriter::writeLayers(const Day& d) {
   // Each raster set's channels of layers.exr (one set, or the whole files and the tiles at their size).
   std::vector<std::vector<std::string>> channelNames(sets_.size());
   std::vector<std::vector<Grid<float>>> channels(sets_.size());
+  std::vector<std::optional<ImageWindow>> channelsWindow(sets_.size());  // a resized set's window of its image
   for (const auto& name : src_.layers) {
     throwIfStopRequested();  // Ctrl-C between two layers' files, never within one
     if (d.frame && name == "valid_mask") continue;
@@ -137,10 +138,12 @@ void OutputWriter::writeLayers(const Day& d) {
     // Plan: a grid of the layer's size, its values never read.
     Grid<float> grid = src_.plan ? planGrid(d, layer) : layer.compute(in);
     for (size_t k = 0; k < sets_.size(); ++k)  // the last set takes the grid itself
-      writeFloatLayer(d, sets_[k], layer, k + 1 == sets_.size() ? std::move(grid) : Grid<float>(grid), channelNames[k], channels[k]);
+      writeFloatLayer(d, sets_[k], layer, k + 1 == sets_.size() ? std::move(grid) : Grid<float>(grid), channelNames[k], channels[k],
+                      channelsWindow[k]);
   }
   writeDisplacement(d);
-  for (size_t k = 0; k < sets_.size(); ++k) writeMultiChannel(d, sets_[k], channelNames[k], channels[k]);
+  for (size_t k = 0; k < sets_.size(); ++k)
+    writeMultiChannel(d, sets_[k], channelNames[k], channels[k], channelsWindow[k] ? &*channelsWindow[k] : nullptr);
 }
 
 Grid<float> OutputWriter::planGrid(const Day& d, const LayerInfo& layer) const {
@@ -150,7 +153,8 @@ Grid<float> OutputWriter::planGrid(const Day& d, const LayerInfo& layer) const {
 }
 
 void OutputWriter::writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid,
-                                   std::vector<std::string>& channelNames, std::vector<Grid<float>>& channels) {
+                                   std::vector<std::string>& channelNames, std::vector<Grid<float>>& channels,
+                                   std::optional<ImageWindow>& channelsWindow) {
   std::string content = layer.content;
   const bool ownSize = grid.width() != d.s.spec.width || grid.height() != d.s.spec.height;
   // The ski-track texture is finer than the grid: its texels per cell, listed with each file.
@@ -160,17 +164,25 @@ void OutputWriter::writeFloatLayer(const Day& d, const RasterSet& set, const Lay
   // valid cells (finer textures keep theirs).
   Grid<uint8_t> resizedValid;
   const Grid<uint8_t>* valid = &d.s.validCell;
+  std::optional<ImageWindow> held;  // across ranks, the rank's window of the resampled image
   if (set.resized() && !ownSize) {
-    grid = src_.plan ? Grid<float>(set.resizeWidth, set.resizeHeight)
-                     : resampleValid(grid, d.s.validCell, set.resizeWidth, set.resizeHeight, resizedValid);
+    if (src_.plan) {
+      grid = Grid<float>(set.resizeWidth, set.resizeHeight);
+    } else {
+      Resampled r = resampled(set.tiles, set.resizeWidth, set.resizeHeight, grid, &d.s.validCell);
+      grid = std::move(r.pixels), resizedValid = std::move(r.valid), held = r.window;
+    }
     valid = &resizedValid;
-    content += ", resampled (bilinear over valid cells) to " + std::to_string(grid.width()) + " x " + std::to_string(grid.height()) + " over the same extent";
+    content += ", resampled (bilinear over valid cells) to " + std::to_string(set.resizeWidth) + " x " + std::to_string(set.resizeHeight) +
+               " over the same extent";
   }
-  writeFloatRaster(set, baseOf(d), d.day, layer.name, grid, valid, layer.name, content, layer.unit);
-  writeEncodings(d, set, layer, grid, valid, content);
+  const ImageWindow* window = held ? &*held : nullptr;
+  writeFloatRaster(set, baseOf(d), d.day, layer.name, grid, valid, layer.name, content, layer.unit, window);
+  writeEncodings(d, set, layer, grid, valid, content, window);
   if (scene_.outputs.multichannelExr && !ownSize) {
     channelNames.push_back(layer.name);
     channels.push_back(std::move(grid));
+    channelsWindow = held;
   }
 }
 
@@ -233,24 +245,27 @@ void OutputWriter::writeDisplacement(const Day& d) {
   if (out.displacementWidth <= 0) return;
   for (const std::string what : {"depth", "surface"}) {
     const LayerInfo& layer = *findLayer(what);
-    const Grid<float> g = src_.plan ? Grid<float>(out.displacementWidth, out.displacementHeight) : resampleBilinear(layer.compute(LayerInputs{&d.s}), out.displacementWidth, out.displacementHeight);
-    for (const RasterSet& set : sets_)  // their own size in every set, cut as its tiles
-      writeFloatRaster(set, baseOf(d), d.day, "displacement_" + std::string(what), g, nullptr, what,
-                       std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                           " over the same extent",
-                       "m");
+    const Grid<float> cells = src_.plan ? Grid<float>() : layer.compute(LayerInputs{&d.s});
+    for (const RasterSet& set : sets_) {  // their own size in every set, cut as its tiles (across ranks, the rank's window of them)
+      const Resampled r = src_.plan ? Resampled{Grid<float>(out.displacementWidth, out.displacementHeight), {}, {}}
+                                    : resampled(set.tiles, out.displacementWidth, out.displacementHeight, cells, nullptr);
+      writeFloatRaster(set, baseOf(d), d.day, "displacement_" + std::string(what), r.pixels, nullptr, what,
+                       std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(out.displacementWidth) + " x " +
+                           std::to_string(out.displacementHeight) + " over the same extent",
+                       "m", src_.plan ? nullptr : &r.window);
+    }
   }
 }
 
 void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names,
-                                     const std::vector<Grid<float>>& channels) {
+                                     const std::vector<Grid<float>>& channels, const ImageWindow* held) {
   if (channels.empty()) return;
   std::string list;
   for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
   const std::string content = "all layers as named channels: " + list;
   const std::string format = "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression_ + "), linear";
   // Tiled like the single-layer files: every channel cut at the same pixels.
-  const ImageWindow w = windowOf(channels[0].width(), channels[0].height());
+  const ImageWindow w = held ? *held : windowOf(channels[0].width(), channels[0].height());
   const int width = w.width, height = w.height;
   const TileLayout l = tileLayout(set.tiles, width, height);
   const BaseOf base = baseOf(d);

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -60,8 +61,12 @@ struct OutputSources {
   // together on rank 0 (the contact sheet's).
   // There, the files that are never tiled (the contact sheet) are rank 0's: `wholeFilesElsewhere`
   // on the others, which count them in the listing order only.
+  // `gatherCells` fills `held` with the cells `want` of a grid of `elementBytes` values a cell laid
+  // out on `stateCells` (`local`), each from the rank that owns it, every rank calling at once with
+  // its own `want`: the cells a rank's tiles of a resampled image read.
   CellRect stateCells{}, tilesStartingIn{};
   bool wholeFilesElsewhere = false;
+  std::function<void(const void* local, size_t elementBytes, const CellRect& want, void* held)> gatherCells{};
   std::function<SeenRange(const SeenRange&)> wholeRange{};
   std::function<std::vector<uint8_t>(std::vector<uint8_t>)> wholeThumbnail{};
 };
@@ -114,28 +119,49 @@ class OutputWriter {
   using BaseOf = std::function<std::string(const std::string& stem)>;
   BaseOf baseOf(const Day& d) const;
   // One raster output of raster set `set`, whole or as tiles; each file listed (output_rasters.cpp).
+  // `held`: where the raster's pixels lie in its image (a resampled image's window, Resampled);
+  // null: windowOf the raster's size.
   void writeFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
-                        const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content, const std::string& unit);
+                        const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content, const std::string& unit,
+                        const ImageWindow* held = nullptr);
   void writeEncodedRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const std::string& encoding,
                           const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& mapping, const std::string& content,
-                          const std::string& unit, bool write);
+                          const std::string& unit, bool write, const ImageWindow* held = nullptr);
   void writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height,
                       const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels = 3,
-                      const std::string& format = {});
+                      const std::string& format = {}, const ImageWindow* held = nullptr);
   void writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
-                           const std::string& content, const std::string& unit);
+                           const std::string& content, const std::string& unit, const ImageWindow* held = nullptr);
+  // A layer on the state's grid resampled to width x height pixels over the same extent (over
+  // valid cells where `valid` is given): the whole image, or across ranks the window of it that
+  // holds this rank's tiles of `tiles` and `marginPx` pixels around them (clamped to the image),
+  // from the cells those pixels read, gathered from their ranks (every rank calls at once).
+  struct Resampled {
+    Grid<float> pixels;
+    Grid<uint8_t> valid;  // empty without `valid`
+    ImageWindow window;
+  };
+  Resampled resampled(const OutputTiles& tiles, int width, int height, const Grid<float>& grid, const Grid<uint8_t>* valid, int marginPx = 0) const;
+  // The pixels of an image of width x height this writer holds of its tiles of `tiles`, with
+  // `marginPx` more around them (clamped to the image): the whole image, or across ranks the
+  // smallest rectangle holding the tiles this rank writes (empty where it writes none).
+  CellRect writtenPixels(const OutputTiles& tiles, int width, int height, int marginPx) const;
+  // A layer on the state's grid at `set`'s size over valid cells: itself, or resampled().
+  Resampled atSetSize(const RasterSet& set, const Grid<float>& g, const Grid<uint8_t>& valid, int marginPx) const;
   // The splat map and the snow surface's normal map (output_engine_maps.cpp).
   void writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
   void writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
   // The tile fields of the file just listed.
   void noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const;
-  void writeEncodings(const Day& d, const RasterSet& set, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content);
+  void writeEncodings(const Day& d, const RasterSet& set, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content,
+                      const ImageWindow* held = nullptr);
   void writeLayers(const Day& d);
   // Where a raster's pixels lie in its image: the rank's window of the grid's image for a grid of
   // the state's size across ranks, else the raster is the whole image.
   ImageWindow windowOf(int width, int height) const;
-  // The range of a raster's valid values: over the cells this rank owns, in a rank's window.
-  SeenRange seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid) const;
+  // The range of a raster's valid values: over the cells this rank owns, in a rank's window (a
+  // resampled window, `held`, holds the whole image's pixels alone: over all of them).
+  SeenRange seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid, const ImageWindow* held = nullptr) const;
   // Whether this rank writes tile (column, row) of the image `w` is a window of (the tile's first
   // pixel over its cells); counts a listing of the tiles it does not, so every rank numbers each
   // file alike (ManifestFile::listing).
@@ -143,11 +169,11 @@ class OutputWriter {
   // Plan mode: a grid of the size `layer` is written at (values unset).
   Grid<float> planGrid(const Day& d, const LayerInfo& layer) const;
   void writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,
-                       std::vector<Grid<float>>& channels);
+                       std::vector<Grid<float>>& channels, std::optional<ImageWindow>& channelsWindow);
   void writePreview(const Day& d, const LayerInfo& layer);
   void writeDisplacement(const Day& d);
   void writeMultiChannel(const Day& d, const RasterSet& set, const std::vector<std::string>& names,
-                         const std::vector<Grid<float>>& channels);
+                         const std::vector<Grid<float>>& channels, const ImageWindow* held);
   void writeVdb(const Day& d);
   void writeMeshes(const Day& d);
   void planMeshes(const Day& d);
@@ -171,6 +197,7 @@ class OutputWriter {
     int width, height;
     SpillFile::Extent grid, valid;  // valid: empty where the layer has no mask
     RasterSet set;
+    std::optional<ImageWindow> held;  // a resampled image's window
   };
   std::unique_ptr<SpillFile> spill_;
   std::mutex seasonMutex_;

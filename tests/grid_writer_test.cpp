@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +16,7 @@
 #include "bake_support.h"
 #include "core/atomic_file.h"
 #include "bakers/grid_writer.h"
+#include "core/grid_window.h"
 #include "temp_dir.h"
 
 using namespace snow;
@@ -235,6 +237,52 @@ TEST(GridWriter, DisplacementMapsAtTheRequestedResolution) {
 
 // Previews per frame day and the season's contact sheet, read back by OpenImageIO: sizes, and
 // snow-covered cells brighter than bare ones (the preview shows the snow).
+TEST(GridWriter, PixelsResampledFromTheCellsTheyReadAreTheWholeImagesBitForBit) {
+  // What a rank writes of a resampled image (outputs.resize, the displacement maps): any block of
+  // pixels computed from the cells cellsReadBy names, finer and coarser than the grid, over valid
+  // cells too, has the bits of the whole image's.
+  const int sw = 37, sh = 29;
+  Grid<float> g(sw, sh);
+  Grid<uint8_t> valid(sw, sh, 1);
+  for (int y = 0; y < sh; ++y)
+    for (int x = 0; x < sw; ++x) {
+      g(x, y) = static_cast<float>(std::sin(0.37 * x) * 100.0 + std::cos(0.23 * y * x) * 7.0 + 0.1 * y);
+      if ((x * 7 + y * 3) % 11 == 0) valid(x, y) = 0;  // NODATA scattered, at the edges too
+    }
+  int blocks = 0;
+  for (const auto& [W, H] : {std::pair{129, 65}, std::pair{17, 13}, std::pair{37, 29}}) {
+    Grid<uint8_t> wholeValid;
+    const Grid<float> wholeBilinear = resampleBilinear(g, W, H), wholeOverValid = resampleValid(g, valid, W, H, wholeValid);
+    for (const CellRect to : {CellRect{0, 0, W, H}, CellRect{0, 0, 1, 1}, CellRect{W / 3, H / 4, W / 2 + 1, H - 1}, CellRect{W - 5, H - 3, W, H}}) {
+      const auto [x0, x1] = cellsReadBy(to.x0, to.x1, W, sw);
+      const auto [y0, y1] = cellsReadBy(to.y0, to.y1, H, sh);
+      const CellRect from{x0, y0, x1, y1};
+      ASSERT_FALSE(from.empty());
+      const ResampleWindow w{from, sw, sh, to, W, H};
+      const Grid<float> heldG = gridWindow(g, from);
+      const Grid<uint8_t> heldValid = gridWindow(valid, from);
+      Grid<uint8_t> validOut;
+      const Grid<float> bilinear = resampleBilinear(heldG, w), overValid = resampleValid(heldG, heldValid, w, validOut);
+      ASSERT_EQ(bilinear.width(), to.width());
+      ASSERT_EQ(overValid.height(), to.height());
+      for (int y = to.y0; y < to.y1; ++y)
+        for (int x = to.x0; x < to.x1; ++x) {
+          const int i = x - to.x0, j = y - to.y0;
+          EXPECT_EQ(std::bit_cast<uint32_t>(bilinear(i, j)), std::bit_cast<uint32_t>(wholeBilinear(x, y))) << W << " x " << H << " at " << x << ", " << y;
+          EXPECT_EQ(std::bit_cast<uint32_t>(overValid(i, j)), std::bit_cast<uint32_t>(wholeOverValid(x, y))) << W << " x " << H << " at " << x << ", " << y;
+          EXPECT_EQ(validOut(i, j), wholeValid(x, y));
+        }
+      ++blocks;
+    }
+  }
+  EXPECT_EQ(blocks, 12);
+  // The cells read: none past the grid, and a block's first pixel's below-left cell.
+  EXPECT_EQ(cellsReadBy(0, 129, 129, 37), std::make_pair(0, 37));
+  EXPECT_EQ(cellsReadBy(64, 65, 129, 37), std::make_pair(18, 20));  // at 64.5 * 37 / 129 - 0.5 = 18.0: cells 18 and 19
+  EXPECT_EQ(cellsReadBy(0, 1, 17, 37), std::make_pair(0, 2));       // at 0.588: cells 0 and 1
+  EXPECT_EQ(cellsReadBy(5, 5, 129, 37), std::make_pair(0, 0));
+}
+
 TEST(GridWriter, PreviewsAndContactSheet) {
   const test::Bake bake = test::bakeSceneText("preview_test",
                                               "[terrain]\nbuiltin = \"ridged\"\nsize = 80\n[season]\ndays = 30\n"

@@ -17,18 +17,22 @@
 # subdomain (bake/tiles_on_ranks.h); the one process writes the same.
 # --sun-wind: with --tiles, the layers sun_exposure, temperature, wind_speed and wind_shadow_mask
 # too (each rank's from its part of the precompute).
+# --displacement PX: with --tiles, displacement maps of PX x PX pixels too (each rank resamples the
+# cells its tiles read, gathered from their owners).
 # --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
 # prints rank 0's log lines of each stage's time, the memory and the mass balance beside the row.
-#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles [--sun-wind]] [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
+#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles [--sun-wind] [--displacement PX]] [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0 tiles=0 sunwind="" only=""
-while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --sun-wind ] || [ "${1:-}" = --ranks-only ]; do
+mode=strong events=0 tiles=0 sunwind="" only="" displacement=""
+while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --sun-wind ] ||
+  [ "${1:-}" = --displacement ] || [ "${1:-}" = --ranks-only ]; do
   case "$1" in
     --weak) mode=weak ;;
     --events) events=1 ;;
     --tiles) tiles=1 ;;
     --sun-wind) sunwind=', "sun_exposure", "temperature", "wind_speed", "wind_shadow_mask"' ;;
+    --displacement) displacement="displacement_size = [$2, $2]"; shift ;;
     --ranks-only) mode=only only="$2"; shift ;;
   esac
   shift
@@ -48,6 +52,7 @@ layers = ["compacted", "stable", "unstable", "powder", "depth", "surface", "snow
           "splat_map", "snow_normal", "preview"$sunwind]
 format = "exr"
 encodings = ["png16"]
+$displacement
 [outputs.tiles]
 convention = "unreal"
 size_px = 505
@@ -85,7 +90,7 @@ same() {
   done
 }
 
-echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as Unreal tiles of 505 (no displacement maps, VDB or meshes)"), 10 m cells, $days days;" \
+echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as Unreal tiles of 505 ($([ -n "$displacement" ] && echo "${displacement#displacement_size = }" displacement maps, no || echo no displacement maps,) VDB or meshes)"), 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
 printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" \
   "largest rank / one process" "season's peak MiB per rank" "largest / one process" "replica gathers"

@@ -5,8 +5,8 @@
 # art-direction preset whole (painted masks, initial snow, multipliers, no-snow road, timeline
 # edits, a masked avalanche event and a skier group); the bedform window; and a real DEM with NODATA
 # from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
-# subdomain, with art direction placed on each rank's local grid, and the avalanche maps' tiles
-# from each rank's replica; the ranks' parts of the
+# subdomain, with art direction placed on each rank's local grid, resampled images (outputs.resize,
+# displacement maps) and the avalanche maps' and skiers' tiles from each rank's replica; the ranks' parts of the
 # precompute read from the cache by a second bake. Their manifests differ in the "memory" line alone (the measured peak varies from run
 # to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
 # the ranks), each exit 2 with one message and nothing written, a failure on rank 0 alone, and one
@@ -162,21 +162,32 @@ for ranks in 2 3 4; do
   grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tiles/$ranks/log" ||
     fail "tiles on $ranks ranks: the ranks did not write their own tiles"
 done
+# Resampled images under [outputs.tiles]: the layers at outputs.resize (finer than the grid) and
+# the displacement maps (coarser), each tile written by the rank owning the cell under its first
+# pixel from the cells its pixels read, gathered from their owners (OutputSources::gatherCells);
+# the normal map's slopes one pixel past the tiles; on 1-4 ranks.
+resized=("${tiles[@]}" --set 'outputs.resize=[129,129]' --set 'outputs.displacement_size=[65,65]')
+check_scene resized "${resized[@]}"
+for ranks in 2 3 4; do
+  grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/resized/$ranks/log" ||
+    fail "resized tiles on $ranks ranks: the ranks did not write their own tiles"
+done
+[ -f "$work/resized/4/out/displacement_depth_1_1.exr" ] || fail "resized tiles: no displacement tile"
 # Avalanche maps and their motion frames under [outputs.tiles] with the default preset's avalanches
-# and skiers (its displacement maps, VDB and meshes left out): each rank writes the maps' tiles
+# and skiers (its displacement maps at 129 pixels, its VDB and meshes left out): each rank writes the maps' tiles
 # that start in its subdomain from its replica's records, rank 0 the contact sheet, counted in
 # the listing order on the others; the sun's and the wind's layers from each rank's window of
 # the whole grid's precompute that the replica keeps; and the skiers' layers, the route map from
 # the rank's window and the ski-track texture's tiles (2 texels a cell: 240 pixels, 8 x 8 tiles)
 # from the replica's whole texture, each tile the rank's whose cells lie under its first pixel; on
 # 3 ranks.
-sed -e '/^displacement_size/d' -e 's/^layers = \[/layers = ["temperature", "wind_shadow_mask", "ski_tracks", "ski_route_map", /' \
+sed -e 's/^layers = \[/layers = ["temperature", "wind_shadow_mask", "ski_tracks", "ski_route_map", /' \
   "$root/presets/default.toml" > "$work/avmaps.toml"
 grep -q '^layers = \["temperature", "wind_shadow_mask", "ski_tracks", "ski_route_map", ' "$work/avmaps.toml" ||
   fail "avalanche maps: the layers were not added"
 avmaps=("$work/avmaps.toml" --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' --set outputs.vdb=false
         --set 'outputs.meshes=[]' --set outputs.avalanche_frame_interval_s=5 --set 'outputs.tiles.convention="unity"'
-        --set outputs.tiles.size_px=33 --set outputs.ski_track_factor=2)
+        --set outputs.tiles.size_px=33 --set outputs.ski_track_factor=2 --set 'outputs.displacement_size=[129,129]')
 bake avmaps "$work/avmaps/alone" alone "${avmaps[@]}" && bake avmaps "$work/avmaps/3" 3 "${avmaps[@]}" &&
   same "avalanche maps in tiles on 3 ranks" "$work/avmaps/alone" "$work/avmaps/3"
 grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/avmaps/3/log" ||
@@ -186,7 +197,16 @@ grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$wor
 [ -f "$work/avmaps/3/out/temperature_0_0.exr" ] || fail "avalanche maps in tiles: no temperature tile"
 [ -f "$work/avmaps/3/out/ski_tracks_7_7.exr" ] || fail "avalanche maps in tiles: no ski-track tile at the texture's far corner"
 [ -f "$work/avmaps/3/out/ski_route_map_3_3.exr" ] || fail "avalanche maps in tiles: no route-map tile"
+[ -f "$work/avmaps/3/out/displacement_surface_3_3.exr" ] || fail "avalanche maps in tiles: no displacement tile"
 grep -qE "skiers: [0-9]+ .*, [1-9][0-9]* skied" "$work/avmaps/3/log" || fail "avalanche maps in tiles: nobody skied"
+# The same resampled (outputs.resize): each rank's tiles of every map and motion frame from the
+# cells their pixels read, out of its replica's records; on 2 ranks.
+avresized=("${avmaps[@]}" --set 'outputs.resize=[129,129]')
+bake avresized "$work/avresized/alone" alone "${avresized[@]}" && bake avresized "$work/avresized/2" 2 "${avresized[@]}" &&
+  same "resampled avalanche maps in tiles on 2 ranks" "$work/avresized/alone" "$work/avresized/2"
+grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/avresized/2/log" ||
+  fail "resampled avalanche maps in tiles on 2 ranks: the ranks did not write their own tiles"
+[ -f "$work/avresized/2/out/avalanches/001_deposit_3_3.exr" ] || fail "resampled avalanche maps in tiles: no map tile"
 # A constant wind, no events, the sun's and the wind's layers in tiles: each rank's day-0 wind and
 # the layers from its parts of the precompute, which a constant wind fills once (a rank once ran
 # its season without it and crashed in the wind transport); on 2 ranks.
