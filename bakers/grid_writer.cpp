@@ -218,11 +218,12 @@ Grid<float> resampleValid(const Grid<float>& held, const Grid<uint8_t>& heldVali
 
 std::pair<int, int> cellsReadBy(int firstPixel, int lastPixel, int pixels, int cells) {
   if (lastPixel <= firstPixel) return {0, 0};
-  // Both read floor(c) and floor(c) + 1 (and the nearest, one of them), clamped to the grid; c
-  // grows with the pixel.
+  // c grows with the pixel. resampleValid reads floor(c) and floor(c) + 1 (and the nearest, one of
+  // them), each clamped to the grid; resampleBilinear clamps c first, then reads its floor and the
+  // next cell, even at a weight of 0 (a pixel before the first cell's centre reads cells 0 and 1).
   const int lo = std::clamp(static_cast<int>(std::floor(sourceCoordinate(firstPixel, cells, pixels))), 0, cells - 1);
-  const int hi = std::clamp(static_cast<int>(std::floor(sourceCoordinate(lastPixel - 1, cells, pixels))) + 1, 0, cells - 1);
-  return {lo, hi + 1};
+  const int last = std::clamp(static_cast<int>(std::floor(sourceCoordinate(lastPixel - 1, cells, pixels))), 0, cells - 1);
+  return {lo, std::min(last + 1, cells - 1) + 1};
 }
 
 CellRect cellsReadBy(const CellRect& pixels, int width, int height, int cellsWide, int cellsHigh) {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -259,6 +260,18 @@ TEST(GridWriter, PixelsResampledFromTheCellsTheyReadAreTheWholeImagesBitForBit) 
       const CellRect from{x0, y0, x1, y1};
       ASSERT_FALSE(from.empty());
       const ResampleWindow w{from, sw, sh, to, W, H};
+      // The cells named are all the whole-grid resamplers read for these pixels: with NaN in
+      // every other cell (a read at weight 0 too gives NaN), the pixels keep their values.
+      Grid<float> outside(sw, sh, std::numeric_limits<float>::quiet_NaN());
+      for (int y = from.y0; y < from.y1; ++y)
+        for (int x = from.x0; x < from.x1; ++x) outside(x, y) = g(x, y);
+      Grid<uint8_t> outsideValid;
+      const Grid<float> bilinearOutside = resampleBilinear(outside, W, H), overValidOutside = resampleValid(outside, valid, W, H, outsideValid);
+      for (int y = to.y0; y < to.y1; ++y)
+        for (int x = to.x0; x < to.x1; ++x) {
+          EXPECT_EQ(std::bit_cast<uint32_t>(bilinearOutside(x, y)), std::bit_cast<uint32_t>(wholeBilinear(x, y))) << W << " x " << H << " at " << x << ", " << y;
+          EXPECT_EQ(std::bit_cast<uint32_t>(overValidOutside(x, y)), std::bit_cast<uint32_t>(wholeOverValid(x, y))) << W << " x " << H << " at " << x << ", " << y;
+        }
       const Grid<float> heldG = gridWindow(g, from);
       const Grid<uint8_t> heldValid = gridWindow(valid, from);
       Grid<uint8_t> validOut;
@@ -280,6 +293,7 @@ TEST(GridWriter, PixelsResampledFromTheCellsTheyReadAreTheWholeImagesBitForBit) 
   EXPECT_EQ(cellsReadBy(0, 129, 129, 37), std::make_pair(0, 37));
   EXPECT_EQ(cellsReadBy(64, 65, 129, 37), std::make_pair(18, 20));  // at 64.5 * 37 / 129 - 0.5 = 18.0: cells 18 and 19
   EXPECT_EQ(cellsReadBy(0, 1, 17, 37), std::make_pair(0, 2));       // at 0.588: cells 0 and 1
+  EXPECT_EQ(cellsReadBy(0, 1, 129, 37), std::make_pair(0, 2));      // at -0.36: clamped to cell 0, and cell 1 at a weight of 0
   EXPECT_EQ(cellsReadBy(5, 5, 129, 37), std::make_pair(0, 0));
 }
 

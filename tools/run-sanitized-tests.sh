@@ -37,11 +37,14 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 start=$(date +%s)
 logs=build-asan/sanitized-logs
 rm -rf "$logs" && mkdir -p "$logs"
-declare -A shardOf
+# Each shard's exit status lands in shardN.rc (a shard killed by a signal, as ASan's abort, too:
+# bash's `wait -n` loses a job it has reported as killed, so the ends are polled).
 for ((i = 0; i < shards; ++i)); do
-  GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i ./build-asan/snowbake_tests --gtest_filter="$filter" --gtest_brief=1 \
-    --gtest_output="xml:$logs/shard$i.xml" > "$logs/shard$i.log" 2>&1 &
-  shardOf[$!]=$i
+  (
+    GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i ./build-asan/snowbake_tests --gtest_filter="$filter" --gtest_brief=1 \
+      --gtest_output="xml:$logs/shard$i.xml" > "$logs/shard$i.log" 2>&1
+    echo $? > "$logs/shard$i.rc"
+  ) &
 done
 ./build-asan/bench_tests --gtest_filter="$filter" --gtest_brief=1 --gtest_output="xml:$logs/bench.xml" > "$logs/bench.log" 2>&1 || { cat "$logs/bench.log"; failed=1; }
 # The decomposition alone and on 3 ranks (a 3 x 1 process grid: every halo path but corners, which
@@ -51,12 +54,16 @@ if command -v mpiexec > /dev/null; then
   OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 mpiexec --oversubscribe -n 3 ./build-asan/distributed_tests --gtest_brief=1 \
     > "$logs/distributed3.log" 2>&1 || { cat "$logs/distributed3.log"; failed=1; }
 fi
-fuzzed=0
-while [ "${#shardOf[@]}" -gt 0 ]; do
-  ended=""
-  if wait -n -p ended "${!shardOf[@]}"; then :; else cat "$logs/shard${shardOf[$ended]}.log"; failed=1; fi
-  unset "shardOf[$ended]"
-  if [ "$fuzzed" = 0 ]; then
+fuzzed=0 ended=0
+declare -A seen
+while [ "$ended" -lt "$shards" ]; do
+  sleep 1
+  for ((i = 0; i < shards; ++i)); do
+    [ -f "$logs/shard$i.rc" ] && [ -z "${seen[$i]:-}" ] || continue
+    seen[$i]=1 ended=$((ended + 1))
+    [ "$(cat "$logs/shard$i.rc")" = 0 ] || { cat "$logs/shard$i.log"; failed=1; }
+  done
+  if [ "$fuzzed" = 0 ] && [ "$ended" -gt 0 ]; then
     fuzzStart=$(date +%s)
     ASAN_OPTIONS="$ASAN_OPTIONS:max_allocation_size_mb=1024:hard_rss_limit_mb=3072" \
       ./build-asan/snowbake_fuzz all "$fuzzSeconds" --work build-asan/fuzz --corpus tests/fuzz/corpus || { echo "fuzzing: FAILED"; failed=1; }
@@ -64,6 +71,7 @@ while [ "${#shardOf[@]}" -gt 0 ]; do
     fuzzed=1
   fi
 done
+wait
 grep -h "tests ran\|PASSED\|SKIPPED\|FAILED" "$logs"/*.log | grep -v "^\[ *RUN" || true
 echo "slowest sanitized tests (s):"
 python3 - "$logs" <<'PY' || true
