@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "bakers/raster_tiles.h"
+#include "distributed/window_gather.h"
 #include "scene/layers.h"
 
 namespace snow {
@@ -41,43 +42,6 @@ std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, cons
   return dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
 }
 
-namespace {
-
-// OutputSources::gatherCells: every rank's `want`, then each rank sends every other the cells it
-// owns of theirs and receives its own from their owners (its own copied).
-void gatherFromOwners(const dist::Communicator& comm, const dist::Decomposition& d, const void* local, size_t elementBytes,
-                      const CellRect& want, void* held) {
-  const std::vector<double> wants = comm.allGather({double(want.x0), double(want.y0), double(want.x1), double(want.y1)});
-  const int self = comm.rank();
-  const CellRect mine = d.owned(self), myLocal = d.local(self);
-  std::vector<std::vector<char>> out(comm.size()), in(comm.size());
-  std::vector<dist::Communicator::Send> sends;
-  std::vector<dist::Communicator::Receive> receives;
-  for (int peer = 0; peer < comm.size(); ++peer) {
-    const CellRect theirs{int(wants[4 * peer]), int(wants[4 * peer + 1]), int(wants[4 * peer + 2]), int(wants[4 * peer + 3])};
-    const CellRect give = mine.intersect(theirs), take = d.owned(peer).intersect(want);
-    if (peer == self) {
-      if (!give.empty()) dist::copyCells(give, myLocal, local, want, held, elementBytes);
-      continue;
-    }
-    if (!give.empty()) {
-      out[peer].resize(give.cells() * elementBytes);
-      dist::copyCells(give, myLocal, local, give, out[peer].data(), elementBytes);
-      sends.push_back({peer, out[peer].data(), out[peer].size()});
-    }
-    if (!take.empty()) {
-      in[peer].resize(take.cells() * elementBytes);
-      receives.push_back({peer, in[peer].data(), in[peer].size()});
-    }
-  }
-  comm.exchange(sends, receives);
-  for (int peer = 0; peer < comm.size(); ++peer)
-    if (const CellRect take = d.owned(peer).intersect(want); peer != self && !take.empty())
-      dist::copyCells(take, take, in[peer].data(), want, held, elementBytes);
-}
-
-}  // namespace
-
 void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const dist::Decomposition& d) {
   sources.stateCells = d.local(comm.rank());
   sources.tilesStartingIn = d.owned(comm.rank());
@@ -91,7 +55,7 @@ void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const
     return whole;
   };
   sources.gatherCells = [comm, d](const void* local, size_t elementBytes, const CellRect& want, void* held) {
-    gatherFromOwners(comm, d, local, elementBytes, want, held);
+    dist::gatherWindow(comm, d, local, elementBytes, want, held);
   };
   sources.wholeThumbnail = [comm](std::vector<uint8_t> mine) {
     // Each pixel is one rank's, 0 on every other: or'd together on rank 0.

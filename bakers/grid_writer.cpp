@@ -177,16 +177,8 @@ Grid<float> resampleBilinear(const Grid<float>& held, const ResampleWindow& w) {
   const int sw = w.fromWidth, sh = w.fromHeight;
   auto at = [&](int i, int j) { return static_cast<double>(held(i - w.from.x0, j - w.from.y0)); };
   for (int y = w.to.y0; y < w.to.y1; ++y)
-    for (int x = w.to.x0; x < w.to.x1; ++x) {
-      // sampleBilinearClamped's arithmetic, reading the held cells.
-      const double fx = std::clamp(sourceCoordinate(x, sw, w.width), 0.0, static_cast<double>(sw - 1));
-      const double fy = std::clamp(sourceCoordinate(y, sh, w.height), 0.0, static_cast<double>(sh - 1));
-      const int x0 = std::min(static_cast<int>(fx), sw - 1), x1 = std::min(x0 + 1, sw - 1);
-      const int y0 = std::min(static_cast<int>(fy), sh - 1), y1 = std::min(y0 + 1, sh - 1);
-      const double tx = fx - x0, ty = fy - y0;
-      const double top = at(x0, y0) * (1 - tx) + at(x1, y0) * tx, bottom = at(x0, y1) * (1 - tx) + at(x1, y1) * tx;
-      out(x - w.to.x0, y - w.to.y0) = static_cast<float>(top * (1 - ty) + bottom * ty);
-    }
+    for (int x = w.to.x0; x < w.to.x1; ++x)
+      out(x - w.to.x0, y - w.to.y0) = static_cast<float>(sampleBilinearClamped(sw, sh, sourceCoordinate(x, sw, w.width), sourceCoordinate(y, sh, w.height), at));
   return out;
 }
 

@@ -38,6 +38,13 @@ OutputWriter::Resampled OutputWriter::atSetSize(const RasterSet& set, const Grid
   return resampled(set.tiles, set.resizeWidth, set.resizeHeight, g, &valid, marginPx);
 }
 
+OutputWriter::ResampledLayers OutputWriter::atSetSize(const RasterSet& set, const std::vector<const Grid<float>*>& grids, const Grid<uint8_t>& valid) const {
+  if (set.resized()) return resampled(set.tiles, set.resizeWidth, set.resizeHeight, grids, &valid);
+  ResampledLayers r{{}, valid, windowOf(valid.width(), valid.height())};
+  for (const Grid<float>* g : grids) r.pixels.push_back(*g);
+  return r;
+}
+
 constexpr const char* kSplatFormat = "PNG, 4 channels uint8, linear weights: R snow, G rock, B ground, A 0; R + G + B = 255";
 
 void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer) {
@@ -46,14 +53,13 @@ void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const Layer
     return writeRgbRaster(set, baseOf(d), d.day, layer.name, set.resized() ? set.resizeWidth : d.s.spec.width,
                           set.resized() ? set.resizeHeight : d.s.spec.height, {}, layer.content, layer.unit, 4, kSplatFormat);
   LayerInputs in{&d.s, &scene_.params, &out};
-  std::array<Grid<float>, 3> w;
-  Grid<uint8_t> valid;
-  ImageWindow window;
+  std::array<Grid<float>, 3> cells;
   const char* names[3] = {"weight_snow", "weight_rock", "weight_ground"};
-  for (int k = 0; k < 3; ++k) {
-    Resampled r = atSetSize(set, findLayer(names[k])->compute(in), d.s.validCell, 0);
-    w[k] = std::move(r.pixels), valid = std::move(r.valid), window = r.window;
-  }
+  for (int k = 0; k < 3; ++k) cells[k] = findLayer(names[k])->compute(in);
+  const ResampledLayers r = atSetSize(set, {&cells[0], &cells[1], &cells[2]}, d.s.validCell);
+  const std::vector<Grid<float>>& w = r.pixels;
+  const Grid<uint8_t>& valid = r.valid;
+  const ImageWindow& window = r.window;
   std::vector<uint8_t> rgba(valid.size() * 4, 0);
   for (size_t i = 0; i < valid.size(); ++i) {
     // NODATA: all ground, so the channels sum to 255 everywhere.

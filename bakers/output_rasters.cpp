@@ -42,21 +42,30 @@ CellRect OutputWriter::writtenPixels(const OutputTiles& tiles, int width, int he
 
 OutputWriter::Resampled OutputWriter::resampled(const OutputTiles& tiles, int width, int height, const Grid<float>& grid,
                                                 const Grid<uint8_t>* valid, int marginPx) const {
-  Resampled r;
-  const ImageWindow cells = windowOf(grid.width(), grid.height());
+  ResampledLayers r = resampled(tiles, width, height, {&grid}, valid, marginPx);
+  return Resampled{std::move(r.pixels[0]), std::move(r.valid), r.window};
+}
+
+OutputWriter::ResampledLayers OutputWriter::resampled(const OutputTiles& tiles, int width, int height, const std::vector<const Grid<float>*>& grids,
+                                                      const Grid<uint8_t>* valid, int marginPx) const {
+  ResampledLayers r;
+  if (grids.empty()) return r;
+  const ImageWindow cells = windowOf(grids[0]->width(), grids[0]->height());
   if (!src_.gatherCells) {
     r.window = ImageWindow::whole(width, height);
-    r.pixels = valid ? resampleValid(grid, *valid, width, height, r.valid) : resampleBilinear(grid, width, height);
+    for (const Grid<float>* g : grids) r.pixels.push_back(valid ? resampleValid(*g, *valid, width, height, r.valid) : resampleBilinear(*g, width, height));
     return r;
   }
   const CellRect pixels = writtenPixels(tiles, width, height, marginPx);
   const CellRect from = cellsReadBy(pixels, width, height, cells.width, cells.height);
-  Grid<float> held(from.width(), from.height());
-  src_.gatherCells(grid.data(), sizeof(float), from, held.data());
+  const ResampleWindow w{from, cells.width, cells.height, pixels, width, height};
   Grid<uint8_t> heldValid(valid ? from.width() : 0, valid ? from.height() : 0);
   if (valid) src_.gatherCells(valid->data(), sizeof(uint8_t), from, heldValid.data());
-  const ResampleWindow w{from, cells.width, cells.height, pixels, width, height};
-  r.pixels = valid ? resampleValid(held, heldValid, w, r.valid) : resampleBilinear(held, w);
+  for (const Grid<float>* g : grids) {
+    Grid<float> held(from.width(), from.height());
+    src_.gatherCells(g->data(), sizeof(float), from, held.data());
+    r.pixels.push_back(valid ? resampleValid(held, heldValid, w, r.valid) : resampleBilinear(held, w));
+  }
   r.window = ImageWindow{width, height, pixels.x0, pixels.y0, pixels.width(), pixels.height()};
   return r;
 }

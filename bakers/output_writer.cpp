@@ -246,9 +246,13 @@ void OutputWriter::writeDisplacement(const Day& d) {
   for (const std::string what : {"depth", "surface"}) {
     const LayerInfo& layer = *findLayer(what);
     const Grid<float> cells = src_.plan ? Grid<float>() : layer.compute(LayerInputs{&d.s});
+    std::optional<Resampled> whole;  // one process: the same whole image for every set
     for (const RasterSet& set : sets_) {  // their own size in every set, cut as its tiles (across ranks, the rank's window of them)
-      const Resampled r = src_.plan ? Resampled{Grid<float>(out.displacementWidth, out.displacementHeight), {}, {}}
-                                    : resampled(set.tiles, out.displacementWidth, out.displacementHeight, cells, nullptr);
+      Resampled mine;
+      if (src_.plan) mine.pixels = Grid<float>(out.displacementWidth, out.displacementHeight);
+      else if (src_.gatherCells) mine = resampled(set.tiles, out.displacementWidth, out.displacementHeight, cells, nullptr);
+      else if (!whole) whole = resampled(set.tiles, out.displacementWidth, out.displacementHeight, cells, nullptr);
+      const Resampled& r = whole ? *whole : mine;
       writeFloatRaster(set, baseOf(d), d.day, "displacement_" + std::string(what), r.pixels, nullptr, what,
                        std::string(layer.content) + ", resampled (bilinear) to " + std::to_string(out.displacementWidth) + " x " +
                            std::to_string(out.displacementHeight) + " over the same extent",

@@ -142,12 +142,21 @@ class OutputWriter {
     ImageWindow window;
   };
   Resampled resampled(const OutputTiles& tiles, int width, int height, const Grid<float>& grid, const Grid<uint8_t>* valid, int marginPx = 0) const;
+  // The same of several layers over one mask (gathered and resampled once).
+  struct ResampledLayers {
+    std::vector<Grid<float>> pixels;  // one a layer, in order
+    Grid<uint8_t> valid;
+    ImageWindow window;
+  };
+  ResampledLayers resampled(const OutputTiles& tiles, int width, int height, const std::vector<const Grid<float>*>& grids,
+                            const Grid<uint8_t>* valid, int marginPx = 0) const;
   // The pixels of an image of width x height this writer holds of its tiles of `tiles`, with
   // `marginPx` more around them (clamped to the image): the whole image, or across ranks the
   // smallest rectangle holding the tiles this rank writes (empty where it writes none).
   CellRect writtenPixels(const OutputTiles& tiles, int width, int height, int marginPx) const;
   // A layer on the state's grid at `set`'s size over valid cells: itself, or resampled().
   Resampled atSetSize(const RasterSet& set, const Grid<float>& g, const Grid<uint8_t>& valid, int marginPx) const;
+  ResampledLayers atSetSize(const RasterSet& set, const std::vector<const Grid<float>*>& grids, const Grid<uint8_t>& valid) const;
   // The splat map and the snow surface's normal map (output_engine_maps.cpp).
   void writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
   void writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer);

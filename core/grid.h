@@ -100,16 +100,23 @@ class Grid {
   std::vector<T> values_;
 };
 
-// Bilinear value of row-major samples (w x h, sample (i, j) at continuous coordinates (i, j)) at
-// (x, y), the coordinates clamped to the samples' extent (edges repeat outward). Host only.
-inline double sampleBilinearClamped(const float* values, int w, int h, double x, double y) {
+// Bilinear value at (x, y) of w x h samples read through `at(i, j)` (sample (i, j) at continuous
+// coordinates (i, j)), the coordinates clamped to the samples' extent (edges repeat outward). It
+// reads samples (x0, y0) to (x0 + 1, y0 + 1) clamped to the extent, even at a weight of 0: a
+// caller holding only part of the samples holds those (bakers' cellsReadBy). Host only.
+template <class At>
+double sampleBilinearClamped(int w, int h, double x, double y, const At& at) {
   const double fx = std::clamp(x, 0.0, static_cast<double>(w - 1)), fy = std::clamp(y, 0.0, static_cast<double>(h - 1));
   const int x0 = std::min(static_cast<int>(fx), w - 1), x1 = std::min(x0 + 1, w - 1);
   const int y0 = std::min(static_cast<int>(fy), h - 1), y1 = std::min(y0 + 1, h - 1);
   const double tx = fx - x0, ty = fy - y0;
-  auto at = [&](int i, int j) { return static_cast<double>(values[static_cast<size_t>(j) * w + i]); };
   const double top = at(x0, y0) * (1 - tx) + at(x1, y0) * tx, bottom = at(x0, y1) * (1 - tx) + at(x1, y1) * tx;
   return top * (1 - ty) + bottom * ty;
+}
+
+// The same of row-major samples.
+inline double sampleBilinearClamped(const float* values, int w, int h, double x, double y) {
+  return sampleBilinearClamped(w, h, x, y, [&](int i, int j) { return static_cast<double>(values[static_cast<size_t>(j) * w + i]); });
 }
 
 }  // namespace snow

@@ -27,6 +27,7 @@
 #include "distributed/halo_exchange.h"
 #include "distributed/local_state.h"
 #include "distributed/wind_across_ranks.h"
+#include "distributed/window_gather.h"
 #include "precompute/wind_timeline.h"
 
 namespace snow::dist {
@@ -213,6 +214,38 @@ TEST(Ranks, HaloExchangeFillsEveryHaloCellWithItsOwnersValue) {
       const size_t i = l.offsetOf(x, y);
       EXPECT_EQ(std::bit_cast<uint32_t>(f[i]), std::bit_cast<uint32_t>(unit(x, y, 9))) << x << ", " << y;
       EXPECT_EQ(g[i], 1.0 + unit(x, y, 10)) << x << ", " << y;
+    }
+}
+
+// Each rank's rectangle, reaching across other ranks' subdomains (one empty, one the whole grid),
+// holds every cell's owner's value; the halo cells are not read (they start as NaN), so a cell
+// taken from a rank that does not own it fails. Floats and bytes.
+TEST(Ranks, WindowGatherGivesEveryRankItsRectangleFromTheCellsOwners) {
+  const Communicator comm = Communicator::world();
+  const Decomposition d = Decomposition::choose(comm.size(), 97, 61, 6);
+  const CellRect l = d.local(comm.rank()), o = d.owned(comm.rank());
+  std::vector<float> f(l.cells());
+  std::vector<uint8_t> b(l.cells());
+  for (int y = l.y0; y < l.y1; ++y)
+    for (int x = l.x0; x < l.x1; ++x) {
+      f[l.offsetOf(x, y)] = o.contains(x, y) ? unit(x, y, 11) : NAN;
+      b[l.offsetOf(x, y)] = o.contains(x, y) ? static_cast<uint8_t>(mix(x * 31 + y) & 0xfe) : 0xff;
+    }
+  const int r = comm.rank();
+  const CellRect wants[4] = {CellRect{3, 50, 90, 58}, CellRect{0, 0, 97, 61}, CellRect{}, CellRect{40, 1, 41, 60}};
+  const CellRect want = wants[r % 4];
+  std::vector<float> heldF(want.cells(), -1.f);
+  std::vector<uint8_t> heldB(want.cells(), 0xff);
+  const size_t sent = gatherWindow(comm, d, f.data(), sizeof(float), want, heldF.data());
+  gatherWindow(comm, d, b.data(), sizeof(uint8_t), want, heldB.data());
+  if (comm.size() > 1 && r != 1) {
+    EXPECT_GT(sent, 0u);  // rank 1 wants the whole grid: every other rank sends it its cells
+  }
+  for (int y = want.y0; y < want.y1; ++y)
+    for (int x = want.x0; x < want.x1; ++x) {
+      const size_t i = static_cast<size_t>(y - want.y0) * want.width() + (x - want.x0);
+      EXPECT_EQ(std::bit_cast<uint32_t>(heldF[i]), std::bit_cast<uint32_t>(unit(x, y, 11))) << x << ", " << y;
+      EXPECT_EQ(heldB[i], static_cast<uint8_t>(mix(x * 31 + y) & 0xfe)) << x << ", " << y;
     }
 }
 
