@@ -13,6 +13,7 @@
 
 #include "bakers/grid_writer.h"
 #include "bake/bake.h"
+#include "cli_support.h"
 #include "temp_dir.h"
 
 using namespace std::string_literals;
@@ -20,27 +21,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct ProcessResult {
-  int status;
-  std::string err;
-  std::string out;
-};
+using snow::test::ProcessResult;
+using snow::test::snowbake;
 
 fs::path workDir() {
   return snow::test::uniqueTestDir("cli");
-}
-
-ProcessResult snowbake(const fs::path& dir, const std::string& args) {
-  const std::string out = (dir / "stdout.txt").string(), err = (dir / "stderr.txt").string();
-  const std::string cmd = "'"s + SNOWBAKE_BINARY + "' " + args + " >'" + out + "' 2>'" + err + "' </dev/null";
-  const int raw = std::system(cmd.c_str());
-  auto slurp = [](const std::string& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  };
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(err), slurp(out)};
 }
 
 // Every file's bytes; a manifest's without its command_line, which names each run's --out.

@@ -15,6 +15,7 @@
 #include <ogr_spatialref.h>
 
 #include "bake_support.h"
+#include "cli_support.h"
 #include "geotiff_support.h"
 #include "bakers/grid_writer.h"
 #include "core/errors.h"
@@ -24,6 +25,8 @@ using namespace snow;
 namespace fs = std::filesystem;
 
 namespace {
+
+using snow::test::manifestOf;
 
 // One channel of an image's pixels as stored (uint16 or uint8 PNG, raw r16 of a known size).
 struct Pixels {
@@ -65,11 +68,6 @@ Pixels readAny(const fs::path& path, int w, int h) {
     return p;
   }
   return readPixels(path, w, h);
-}
-
-nlohmann::json manifestOf(const fs::path& out) {
-  std::ifstream in(out / "manifest.json");
-  return nlohmann::json::parse(in);
 }
 
 std::string terrainOf(const std::string& which) {

@@ -17,6 +17,7 @@
 #include <atomic>
 
 #include "bake/scene_list.h"
+#include "cli_support.h"
 #include "core/errors.h"
 #include "precompute/cache.h"
 #include "precompute/cache_folder.h"
@@ -26,19 +27,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using snow::test::slurp;
+
 fs::path workDir() {
   const fs::path p = fs::temp_directory_path() /
                      ("snowbake_farm_" + std::to_string(::getpid()) + "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 // Runs a shell command line; its exit status.

@@ -13,17 +13,14 @@
 #include <string>
 #include <thread>
 
+#include "cli_support.h"
+
 namespace snow {
 namespace {
 
-namespace fs = std::filesystem;
+using snow::test::slurp;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+namespace fs = std::filesystem;
 
 TEST(Interrupt, SigintStopsABakeWithExit130NoManifestAndNoPartialFile) {
   const fs::path dir = fs::temp_directory_path() / ("snowbake_interrupt_" + std::to_string(::getpid()));

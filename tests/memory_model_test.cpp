@@ -17,6 +17,7 @@
 
 #include "bake/memory_model.h"
 #include "bake/memory_trace.h"
+#include "cli_support.h"
 #include "core/release_memory.h"
 #include "core/errors.h"
 #include "temp_dir.h"
@@ -25,6 +26,8 @@ using namespace std::string_literals;
 namespace fs = std::filesystem;
 
 namespace {
+
+using snow::test::slurp;
 
 #if defined(__SANITIZE_ADDRESS__)
 constexpr bool kSanitized = true;  // ASan's shadow memory makes resident sets and address limits meaningless
@@ -39,13 +42,6 @@ struct Outcome {
 
 fs::path workDir() {
   return snow::test::uniqueTestDir("memory");
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 Outcome shell(const fs::path& dir, const std::string& cmd) {

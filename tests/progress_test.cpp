@@ -8,6 +8,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include "cli_support.h"
 #include "temp_dir.h"
 
 using namespace std::string_literals;
@@ -16,12 +17,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using snow::test::slurp;
 
 struct JsonBake {
   int status;

@@ -9,6 +9,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include "cli_support.h"
 #include "temp_dir.h"
 
 using namespace std::string_literals;
@@ -17,12 +18,7 @@ using nlohmann::json;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using snow::test::slurp;
 
 fs::path workDir() {
   return snow::test::uniqueTestDir("resolved");

@@ -19,12 +19,17 @@
 #include "bake_support.h"
 #include "bake/tiles_on_ranks.h"
 #include "bakers/raster_tiles.h"
+#include "cli_support.h"
 #include "distributed/continuous_step.h"
 
 using namespace snow;
 namespace fs = std::filesystem;
 
 namespace {
+
+using snow::test::manifestOf;
+using snow::test::ProcessResult;
+using snow::test::snowbake;
 
 // Every channel of an image as float bits, channel-interleaved.
 struct Image {
@@ -45,11 +50,6 @@ Image readImage(const fs::path& path) {
   im.bits.resize(v.size());
   std::memcpy(im.bits.data(), v.data(), v.size() * 4);
   return im;
-}
-
-nlohmann::json manifestOf(const fs::path& out) {
-  std::ifstream in(out / "manifest.json");
-  return nlohmann::json::parse(in);
 }
 
 // 96 x 96 cells of 20 m, six days of snow on 1.5 m of unstable snow, one user avalanche on day 5
@@ -105,19 +105,6 @@ void expectTilesAreCutFrom(const fs::path& whole, const fs::path& tiled, const s
   }
 }
 
-struct ProcessResult {
-  int status;
-  std::string err;
-};
-ProcessResult snowbake(const fs::path& dir, const std::string& args) {
-  const std::string err = (dir / "stderr.txt").string();
-  const std::string cmd = std::string("'") + SNOWBAKE_BINARY + "' " + args + " >/dev/null 2>'" + err + "' </dev/null";
-  const int raw = std::system(cmd.c_str());
-  std::ifstream in(err);
-  std::stringstream s;
-  s << in.rdbuf();
-  return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, s.str()};
-}
 
 }  // namespace
 
