@@ -32,22 +32,24 @@ inline SeasonConfig referenceWinter(double days = 120.0) {
   return c;
 }
 
-// The avalanche benchmark: 5 m cells, a flat top, a slope of 0.8 over 800 m (rows c - 100 to
-// c + 60) and a flat runout, a 200 m square of 2 m of unstable snow released at the centre. The
-// same avalanche on any grid size: its cost per step should not depend on the size.
-inline SnowState referenceAvalancheState(int size) {
+// The avalanche benchmark: a flat top, a slope of 0.8 over 800 m (from 500 m before the grid's
+// centre row to 300 m after it) and a flat runout, a 200 m square of 2 m of unstable snow released
+// at the centre; 5 m cells, or `cellM` (a divisor of 100 m) for the same avalanche on a coarser or
+// finer grid. The same avalanche on any grid size: its cost per step should not depend on the size.
+inline SnowState referenceAvalancheState(int size, double cellM = 5.0) {
   SnowState s;
   GridSpec spec;
   spec.width = spec.height = size;
-  spec.cellSizeXM = spec.cellSizeYM = 5.0;
+  spec.cellSizeXM = spec.cellSizeYM = cellM;
   s.allocate(spec);
   const int c = size / 2;
+  const int top = static_cast<int>(500.0 / cellM), foot = static_cast<int>(300.0 / cellM), half = static_cast<int>(100.0 / cellM);
   for (int y = 0; y < size; ++y) {
-    const int t = y - c < -100 ? -100 : (y - c > 60 ? 60 : y - c);
-    for (int x = 0; x < size; ++x) s.bedrockM(x, y) = 2000.f - 0.8f * 5.f * static_cast<float>(t);
+    const int t = y - c < -top ? -top : (y - c > foot ? foot : y - c);
+    for (int x = 0; x < size; ++x) s.bedrockM(x, y) = 2000.f - 0.8f * static_cast<float>(cellM) * static_cast<float>(t);
   }
-  for (int y = c - 20; y < c + 20; ++y)
-    for (int x = c - 20; x < c + 20; ++x) s.unstableM(x, y) = 2.f;
+  for (int y = c - half; y < c + half; ++y)
+    for (int x = c - half; x < c + half; ++x) s.unstableM(x, y) = 2.f;
   s.temperatureBaseC.fill(-15.f);
   return s;
 }
