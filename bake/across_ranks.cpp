@@ -200,7 +200,7 @@ void endSeasonPeak() {
 }  // namespace
 
 std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole, const MemoryPrediction& onWhole,
-                                       const std::function<MemoryPrediction(const GridSpec&)>& predictOn) {
+                                       const std::function<MemoryPrediction(const Scene&, const GridSpec&)>& predictOn) {
   if (!acrossRanks) return std::nullopt;
   const dist::Communicator comm = dist::Communicator::world();
   dist::Decomposition d;
@@ -209,10 +209,14 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   } catch (const std::invalid_argument&) {
     return std::nullopt;  // checkRanksSuitTheGrid says why
   }
-  GridSpec local = whole;  // the largest of the ranks' local grids
+  GridSpec local = whole;  // the largest of the ranks' local grids, and its subdomain
+  dist::CellRect owned = d.owned(0);
   for (int r = 0; r < d.ranks(); ++r)
-    if (d.local(r).cells() > local.cellCount() || r == 0) local.width = d.local(r).width(), local.height = d.local(r).height();
-  const MemoryPrediction onLocal = predictOn(local);
+    if (d.local(r).cells() > local.cellCount() || r == 0)
+      local.width = d.local(r).width(), local.height = d.local(r).height(), owned = d.owned(r);
+  // Where each rank writes its tiles, its resampled images are its tiles' window of the image.
+  const MemoryPrediction onLocal =
+      predictOn(ranksWriteTheirTiles(scene, whole) ? sceneOfTheRanksTiles(scene, whole, owned.width(), owned.height()) : scene, local);
   const double libraries = onWhole.libraryBytes, localAbove = onLocal.peakBytes() - onLocal.libraryBytes;
   const double cells = static_cast<double>(whole.cellCount());
   const double terrain = (sizeof(float) + sizeof(uint8_t)) * cells;  // the whole terrain's heights and validity, every rank

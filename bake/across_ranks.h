@@ -63,11 +63,13 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
 // each other rank the whole terrain and art direction's whole-grid rasters and edit weights beside
 // one process's peak on the largest local grid (`predictOn`: an upper bound, since it writes no
 // outputs); where each rank writes its tiles, rank 0 as the others (with a no-snow mask, its whole
-// initial state besides); with the replica, every rank one process's peak on the whole grid and
-// on its local grid. nullopt when not across ranks, or where the grid cannot be
-// split (checkRanksSuitTheGrid says why).
+// initial state besides), their resampled images their tiles' window of the whole image
+// (sceneOfTheRanksTiles); with the replica, every rank one process's peak on the whole grid and on its local
+// grid. nullopt when not across ranks, or where the grid cannot be split (checkRanksSuitTheGrid
+// says why).
 std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole, const MemoryPrediction& onWhole,
-                                       const std::function<MemoryPrediction(const GridSpec&)>& predictOn);
+                                       const std::function<MemoryPrediction(const Scene&, const GridSpec&)>& predictOn);
+
 
 // The cells of the whole grid this rank's initial state is made on (initialState; art direction
 // fills it there): its local grid where it keeps that alone from the precompute on, the precompute

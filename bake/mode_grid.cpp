@@ -47,7 +47,7 @@ namespace {
 // One process's prediction against the budget; across ranks, this machine's ranks' together
 // (`predictOn`: one process's prediction on another grid, a rank's local one).
 void refuseAboveTheBudget(const Scene& scene, const GridSpec& spec, const MemoryPrediction& prediction, double budget,
-                          const std::function<MemoryPrediction(const GridSpec&)>& predictOn, std::ostream* log) {
+                          const std::function<MemoryPrediction(const Scene&, const GridSpec&)>& predictOn, std::ostream* log) {
   const std::optional<RanksMemory> ranks = ranksMemory(scene, spec, prediction, predictOn);
   if (!ranks) return refuseAboveBudget(scene, prediction, budget);
   refuseRanksAboveBudget(scene, prediction, *ranks, budget);
@@ -65,7 +65,8 @@ GridMemoryPlan checkGridMemory(const Scene& scene, const BakeTerrain& terrain, F
   const SnowReach reach = terrainSnowReach(scene, terrain);
   const GridMemoryPlan plan = planGridMemory(scene, spec, triangles, reach, budget, timing);
   refuseAboveTheBudget(scene, spec, plan.prediction, budget,
-                       [&](const GridSpec& local) { return planGridMemory(scene, local, triangles, reach, budget, timing).prediction; }, &log);
+                       [&](const Scene& onRank, const GridSpec& local) { return planGridMemory(onRank, local, triangles, reach, budget, timing).prediction; },
+                       &log);
   log << "memory: " << plan.prediction.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
   if (plan.askedBytes > 0)
     log << "frames: written " << (plan.timing == FrameTiming::Paused ? "while the season waits" : "after the season, from copies held through it")
@@ -85,7 +86,8 @@ void checkBuiltinMemory(const Scene& scene, FrameTiming timing, double budget) {
   refuseBeyondTheModel(scene, spec);
   const SnowReach reach = builtinSnowReach(b, scene.params.rainSnowLimitM);
   refuseAboveTheBudget(scene, spec, planGridMemory(scene, spec, 0, reach, budget, timing).prediction, budget,
-                       [&](const GridSpec& local) { return planGridMemory(scene, local, 0, reach, budget, timing).prediction; }, nullptr);
+                       [&](const Scene& onRank, const GridSpec& local) { return planGridMemory(onRank, local, 0, reach, budget, timing).prediction; },
+                       nullptr);
 }
 
 size_t triangleCount(const std::vector<TriangleMesh>& meshes) {

@@ -1,6 +1,7 @@
 #include "tiles_on_ranks.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -40,6 +41,21 @@ std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, cons
   // runs on any halo of at least its own).
   const int halo = std::max(minHalo, std::max(l.tileWidth, l.tileHeight) - l.step + 1);
   return dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
+}
+
+Scene sceneOfTheRanksTiles(const Scene& scene, const GridSpec& whole, int ownedWidth, int ownedHeight) {
+  Scene mine = scene;
+  const int tile = std::max(1, scene.outputs.tiles.sizePx);
+  auto share = [&](int pixels, int cells, int owned) {
+    if (pixels <= 0) return pixels;
+    const double part = std::ceil(static_cast<double>(pixels) * owned / cells);
+    return static_cast<int>(std::min<double>(pixels, part + tile + 2.0));
+  };
+  OutputRequest& o = mine.outputs;
+  o.resizeWidth = share(o.resizeWidth, whole.width, ownedWidth), o.resizeHeight = share(o.resizeHeight, whole.height, ownedHeight);
+  o.displacementWidth = share(o.displacementWidth, whole.width, ownedWidth);
+  o.displacementHeight = share(o.displacementHeight, whole.height, ownedHeight);
+  return mine;
 }
 
 void shareTheTiles(OutputSources& sources, const dist::Communicator& comm, const dist::Decomposition& d) {

@@ -27,6 +27,12 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene);
 // `minHalo`, or wider where the tiles' overlap and the next cell need it.
 std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo);
 
+// The scene a rank writing its tiles is predicted from (the memory guard, memory_model.h): its
+// resampled images (outputs.resize, the displacement maps) are the window of pixels of the tiles
+// starting in its subdomain of ownedWidth x ownedHeight cells (OutputWriter::writtenPixels): at
+// most the subdomain's share of the image, a tile past it and the normal map's pixel each way.
+Scene sceneOfTheRanksTiles(const Scene& scene, const GridSpec& whole, int ownedWidth, int ownedHeight);
+
 // Points `sources` at this rank's tiles of decomposition `d`: its local grid's state, the tiles
 // starting in its subdomain, a layer's range combined over the ranks, and the cells a resampled
 // image's tiles read gathered from their owners.

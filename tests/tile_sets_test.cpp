@@ -146,6 +146,53 @@ TEST(TileSets, TilesSharingMoreThanTheSeasonsHaloWidenItSoTheRankATileStartsInHo
   EXPECT_EQ(d->halo, dist::kContinuousHalo);
 }
 
+// The memory guard predicts a rank that writes its tiles from sceneOfTheRanksTiles: each of its
+// resampled images at least as wide and high as the window of pixels its tiles cover with the
+// normal map's pixel around them (what OutputWriter::writtenPixels gives it), and, where the image
+// is many tiles wide, well under the whole image (before, the whole image on every rank).
+TEST(TileSets, ARanksPredictedResampledImagesHoldItsTilesWindowAndAreItsShareOfTheImage) {
+  Scene scene;
+  scene.outputs.layers = {"depth", "snow_normal"};
+  scene.outputs.tiles.convention = TileConvention::Unity;
+  scene.outputs.tiles.sizePx = 33;
+  GridSpec spec;
+  spec.width = 300, spec.height = 233;
+  int checked = 0;
+  for (const int pixels : {97, 289, 641, 1025})
+    for (const int ranks : {2, 3, 4}) {
+      scene.outputs.resizeWidth = scene.outputs.resizeHeight = pixels;
+      scene.outputs.displacementWidth = pixels, scene.outputs.displacementHeight = 129;
+      const std::optional<dist::Decomposition> d = decompositionOnTiles(scene, spec, ranks, dist::kContinuousHalo);
+      ASSERT_TRUE(d) << ranks << " ranks";
+      for (int r = 0; r < ranks; ++r) {
+        const CellRect own = d->owned(r);
+        const OutputRequest& o = sceneOfTheRanksTiles(scene, spec, own.width(), own.height()).outputs;
+        auto window = [&](int width, int height) {  // the rank's tiles' pixels, a pixel more around (clamped)
+          const TileLayout l = tileLayout(scene.outputs.tiles, width, height);
+          CellRect px;
+          for (int row = 0; row < l.rows; ++row)
+            for (int column = 0; column < l.columns; ++column) {
+              if (!tileStartsIn(own, spec.width, spec.height, l, column, row, width, height)) continue;
+              const CellRect t{column * l.step, row * l.step, std::min(width, column * l.step + l.tileWidth), std::min(height, row * l.step + l.tileHeight)};
+              px = px.empty() ? t : CellRect{std::min(px.x0, t.x0), std::min(px.y0, t.y0), std::max(px.x1, t.x1), std::max(px.y1, t.y1)};
+            }
+          return px.empty() ? px : CellRect{std::max(0, px.x0 - 1), std::max(0, px.y0 - 1), std::min(width, px.x1 + 1), std::min(height, px.y1 + 1)};
+        };
+        const CellRect resized = window(pixels, pixels), displaced = window(pixels, 129);
+        EXPECT_LE(resized.width(), o.resizeWidth) << pixels << " px, rank " << r << " of " << ranks;
+        EXPECT_LE(resized.height(), o.resizeHeight) << pixels << " px, rank " << r << " of " << ranks;
+        EXPECT_LE(displaced.width(), o.displacementWidth) << pixels << " px, rank " << r << " of " << ranks;
+        EXPECT_LE(displaced.height(), o.displacementHeight) << pixels << " px, rank " << r << " of " << ranks;
+        EXPECT_LE(o.resizeWidth, pixels);
+        EXPECT_LE(o.displacementHeight, 129);
+        if (pixels >= 641)  // 20 tiles or more across: the share of one of 2 or more ranks and a tile
+          EXPECT_LT(static_cast<double>(o.resizeWidth) * o.resizeHeight, 0.6 * pixels * pixels) << pixels << " px, rank " << r << " of " << ranks;
+        ++checked;
+      }
+    }
+  EXPECT_EQ(checked, 4 * (2 + 3 + 4));
+}
+
 TEST(TileSets, ATileCutFromAWindowOfTheImageIsTheTileCutFromTheWholeImage) {
   // What a rank writes from its local grid (bakers across ranks): any window holding the tile's
   // pixels, those past the image's edge repeated from it as the whole image's tiles have them.
