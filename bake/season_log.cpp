@@ -64,7 +64,8 @@ void logSeasonReport(const SeasonReport& report, const Scene& scene, const Seaso
       << fixed(report.seconds, 2) << " s)\n";
   for (const auto& p : report.phenomena)
     log << "  " << std::left << std::setw(24) << p.name << std::right << std::setw(6) << p.steps << " steps"
-        << (p.skippedSteps ? " (" + std::to_string(p.skippedSteps) + " skipped)" : std::string()) << "  " << fixed(p.seconds, 3) << " s\n";
+        << (p.skippedSteps ? " (" + std::to_string(p.skippedSteps) + " skipped: " + p.skippedWhy + ")" : std::string()) << "  "
+        << fixed(p.seconds, 3) << " s\n";
   logAvalanches(report, scene, log);
   for (const EditRecord& e : report.edits)
     log << "  " << e.label << ": " << std::scientific << std::setprecision(4) << e.volumeM3 << std::defaultfloat << " m^3\n";

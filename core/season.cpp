@@ -169,25 +169,30 @@ void SeasonRun::addContinuous(const char* name, double stepsPerDay, ContinuousBo
 }
 
 // State changes (§5.2): melt, skipped on days when even the warmest cell is below T_0melt, and
-// stability changes, skipped when it is below T_freeze and there is no wind loading.
+// stability changes, skipped when it is below T_freeze and there is no wind loading. A rate of
+// zero changes nothing: its steps are skipped too (the kernels would leave every byte as it is).
 void SeasonRun::addStateChanges() {
-  addContinuous("melt", p_.stateChangeStepsPerDay, [this](int slot, double day, double dt) {
+  const bool melts = p_.meltRateMPerDayPerC > 0.0;
+  addContinuous("melt", p_.stateChangeStepsPerDay, [this, melts](int slot, double day, double dt) {
     const WeatherState w = cfg_.weather.at(day);
-    if (w.seaLevelTemperatureC + maxTemperatureBase_ <= p_.meltThresholdC) {
-      ++reports_[slot].skippedSteps;
-      return;
-    }
+    if (!melts) return skipStep(slot, "melt_rate_m_per_day_per_c = 0");
+    if (w.seaLevelTemperatureC + maxTemperatureBase_ <= p_.meltThresholdC) return skipStep(slot, "colder than T_0melt everywhere");
     timed(slot, [&] { report_.meltRemovedM3 -= backend_.melt(makeMeltArgs(p_, dt, w)); });
   });
-  addContinuous("stability", p_.stateChangeStepsPerDay, [this](int slot, double day, double dt) {
+  const bool windLoads = cfg_.windTransport && p_.windInstabilityPerMps2 > 0;
+  const bool changes = p_.instabilityByWarmthMPerDay > 0.0 || p_.stabilityByColdMPerDay > 0.0 || windLoads;
+  addContinuous("stability", p_.stateChangeStepsPerDay, [this, changes, windLoads](int slot, double day, double dt) {
     const WeatherState w = cfg_.weather.at(day);
-    if (w.seaLevelTemperatureC + maxTemperatureBase_ <= p_.freezeTemperatureC &&
-        !(cfg_.windTransport && p_.windInstabilityPerMps2 > 0)) {
-      ++reports_[slot].skippedSteps;
-      return;
-    }
+    if (!changes) return skipStep(slot, "instability_by_warmth_m_per_day = stability_by_cold_m_per_day = 0, no wind loading");
+    if (w.seaLevelTemperatureC + maxTemperatureBase_ <= p_.freezeTemperatureC && !windLoads)
+      return skipStep(slot, "colder than T_freeze everywhere, no wind loading");
     timed(slot, [&] { backend_.stabilityChange(makeStabilityArgs(p_, dt, w)); });
   });
+}
+
+void SeasonRun::skipStep(int slot, const char* why) {
+  ++reports_[slot].skippedSteps;
+  reports_[slot].skippedWhy = why;
 }
 
 // One hourly bedform step: its polling rounds while some domain cell has wind above the
@@ -211,7 +216,7 @@ void SeasonRun::bedformStep(int slot, double day, double dt) {
     rounds = static_cast<int>(std::floor(want));
     bedformRoundCarry_ = want - rounds;
   } else {
-    ++reports_[slot].skippedSteps;
+    skipStep(slot, "no wind above the bedforms' threshold");
     ++report_.bedforms.calmSteps;
   }
   const BedformStepReport r = backend_.bedformStep(
@@ -235,13 +240,17 @@ void SeasonRun::addBedforms() {
 }
 
 // Wind transport (§5.4), only while the season has wind (the kernel leaves the bedforms' cells),
-// and powder diffusion (§5.3).
+// and powder diffusion (§5.3); each skipped where its rate is zero (no share is ever given).
 void SeasonRun::addTransport() {
+  const bool erodes = p_.windErosionRateMPerSPerDay > 0.0;
   if (cfg_.windTransport)
-    addContinuous("wind transport", p_.windTransportStepsPerDay, [this](int slot, double, double dt) {
+    addContinuous("wind transport", p_.windTransportStepsPerDay, [this, erodes](int slot, double, double dt) {
+      if (!erodes) return skipStep(slot, "wind_erosion_rate_m_per_s_per_day = 0");
       if (dt > 0.0) timed(slot, [&] { backend_.windTransport(makeWindTransportArgs(p_, dt)); });
     });
-  addContinuous("powder diffusion", p_.diffusionStepsPerDay, [this](int slot, double, double dt) {
+  const bool creeps = p_.diffusionRatePerDay > 0.0;
+  addContinuous("powder diffusion", p_.diffusionStepsPerDay, [this, creeps](int slot, double, double dt) {
+    if (!creeps) return skipStep(slot, "diffusion_rate_per_day = 0");
     if (dt > 0.0) timed(slot, [&] { backend_.powderDiffusion(makePowderDiffusionArgs(p_, dt)); });
   });
 }

@@ -93,6 +93,7 @@ struct PhenomenonReport {
   std::string name;
   uint64_t starts = 0, steps = 0, stops = 0;
   uint64_t skippedSteps = 0;  // steps whose kernels were not needed (e.g. melt below freezing)
+  std::string skippedWhy;     // for the log: why (the last reason given)
   double seconds = 0.0;
 };
 

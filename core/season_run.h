@@ -51,6 +51,8 @@ class SeasonRun {
   void addSnowfall();
   void addContinuous(const char* name, double stepsPerDay, ContinuousBody body);
   void addStateChanges();
+  // Counts a step whose kernel would change nothing, with why (for the log).
+  void skipStep(int slot, const char* why);
   void bedformStep(int slot, double day, double dt);
   void addBedforms();
   void addTransport();

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
+#include <string>
 
 #include "core/cpu_backend.h"
 #include "core/default_terrain.h"
@@ -75,6 +77,55 @@ TEST(Season, MeltKernelsSkippedWhenTheWarmestCellIsBelowFreezing) {
   EXPECT_GT(melt.steps, 40u);
   EXPECT_EQ(melt.skippedSteps, melt.steps + 1);  // every step, and the catch-up at the season's end
   EXPECT_EQ(r.meltRemovedM3, 0.0);
+}
+
+// A phenomenon whose rate is zero is not run: each of its steps counted skipped, the log's reason
+// naming the key. Skipping keeps the bytes: each kernel at a rate of zero, run on a rough state
+// with snow in every layer, wind and wind loading, leaves every field as it was.
+TEST(Season, PhenomenaOfZeroRateAreSkippedNamingTheKeyAndTheirKernelsWouldChangeNothing) {
+  ModelParameters p;
+  p.meltRateMPerDayPerC = 0.0;
+  p.instabilityByWarmthMPerDay = p.stabilityByColdMPerDay = 0.0;
+  p.windInstabilityPerMps2 = 0.0;
+  p.diffusionRatePerDay = 0.0;
+  p.windErosionRateMPerSPerDay = 0.0;
+  SnowState rough = test::makeRoughState(64, 48, 7);
+  auto backend = createCpuBackend();
+  backend->upload(rough);
+  WeatherState warm;
+  warm.seaLevelTemperatureC = 25.0;  // above T_0melt and T_warm on every cell
+  backend->melt(makeMeltArgs(p, 0.5, warm));
+  backend->stabilityChange(makeStabilityArgs(p, 0.5, warm));
+  backend->powderDiffusion(makePowderDiffusionArgs(p, 0.5));
+  backend->windTransport(makeWindTransportArgs(p, 0.5));
+  SnowState after = rough;
+  backend->download(after);
+  test::expectSameBytes(rough, after);
+
+  SnowState s = terrainState(48, 20.0);
+  SeasonConfig c = winter(20, 8.0);
+  c.params.meltRateMPerDayPerC = c.params.diffusionRatePerDay = c.params.windErosionRateMPerSPerDay = 0.0;
+  c.params.instabilityByWarmthMPerDay = c.params.stabilityByColdMPerDay = c.params.windInstabilityPerMps2 = 0.0;
+  c.windTransport = true;
+  computeTemperatureBase(s, c.params);
+  const SeasonReport r = runSeason(*backend, s, c);
+  const std::map<std::string, std::string> keys = {{"melt", "melt_rate_m_per_day_per_c = 0"},
+                                                   {"stability", "instability_by_warmth_m_per_day = stability_by_cold_m_per_day = 0"},
+                                                   {"powder diffusion", "diffusion_rate_per_day = 0"},
+                                                   {"wind transport", "wind_erosion_rate_m_per_s_per_day = 0"}};
+  size_t seen = 0;
+  for (const PhenomenonReport& ph : r.phenomena) {
+    const auto k = keys.find(ph.name);
+    if (k == keys.end()) continue;
+    ++seen;
+    EXPECT_GT(ph.steps, 20u) << ph.name;
+    EXPECT_EQ(ph.skippedSteps, ph.steps + 1) << ph.name;  // every step, and the catch-up at the season's end
+    EXPECT_NE(ph.skippedWhy.find(k->second), std::string::npos) << ph.name << ": " << ph.skippedWhy;
+    EXPECT_EQ(ph.seconds, 0.0) << ph.name;
+  }
+  EXPECT_EQ(seen, keys.size());
+  EXPECT_EQ(r.meltRemovedM3, 0.0);
+  EXPECT_GT(r.snowfallAddedM3, 0.0);
 }
 
 TEST(Season, SameSeedSameStateOtherSeedOtherState) {
