@@ -116,8 +116,12 @@ double SeasonRun::sinceLast(int slot, double day) {
 
 void SeasonRun::snowfallOver(int slot, double day) {
   const double dt = sinceLast(slot, day);
-  if (dt > 0.0)
-    timed(slot, [&] { report_.snowfallAddedM3 += backend_.snowfall(makeSnowfallArgs(p_, dt, cfg_.weather.at(day))); });
+  if (!(dt > 0.0)) return;
+  const WeatherState w = cfg_.weather.at(day);
+  // No snow falls anywhere (the kernel would add nothing): the step is skipped.
+  if (!(p_.snowfallRatePerDay > 0.0)) return skipStep(slot, "snowfall_rate_per_day = 0");
+  if (!(w.snowfallIntensity > 0.0)) return skipStep(slot, "weather.keyframe.snowfall_intensity = 0");
+  timed(slot, [&] { report_.snowfallAddedM3 += backend_.snowfall(makeSnowfallArgs(p_, dt, w)); });
 }
 
 // A snowfall phenomenon: snow over the time since its start or previous step, and the rest at

@@ -80,7 +80,7 @@ TEST(Season, MeltKernelsSkippedWhenTheWarmestCellIsBelowFreezing) {
 }
 
 // A phenomenon whose rate is zero is not run: each of its steps counted skipped, the log's reason
-// naming the key. Skipping keeps the bytes: each kernel at a rate of zero, run on a rough state
+// naming the key (snowfall's too where the weather's intensity is zero). Skipping keeps the bytes: each kernel at a rate of zero, run on a rough state
 // with snow in every layer, wind and wind loading, leaves every field as it was.
 TEST(Season, PhenomenaOfZeroRateAreSkippedNamingTheKeyAndTheirKernelsWouldChangeNothing) {
   ModelParameters p;
@@ -94,6 +94,8 @@ TEST(Season, PhenomenaOfZeroRateAreSkippedNamingTheKeyAndTheirKernelsWouldChange
   backend->upload(rough);
   WeatherState warm;
   warm.seaLevelTemperatureC = 25.0;  // above T_0melt and T_warm on every cell
+  p.snowfallRatePerDay = 0.0;
+  backend->snowfall(makeSnowfallArgs(p, 0.5, warm));
   backend->melt(makeMeltArgs(p, 0.5, warm));
   backend->stabilityChange(makeStabilityArgs(p, 0.5, warm));
   backend->powderDiffusion(makePowderDiffusionArgs(p, 0.5));
@@ -126,6 +128,24 @@ TEST(Season, PhenomenaOfZeroRateAreSkippedNamingTheKeyAndTheirKernelsWouldChange
   EXPECT_EQ(seen, keys.size());
   EXPECT_EQ(r.meltRemovedM3, 0.0);
   EXPECT_GT(r.snowfallAddedM3, 0.0);
+
+  // No snowfall: its steps skipped, by the rate or by the weather's intensity.
+  for (const bool byWeather : {false, true}) {
+    SeasonConfig dry = winter(20, 8.0);
+    if (byWeather) dry.weather.keyframes[0].state.snowfallIntensity = 0.0;
+    else dry.params.snowfallRatePerDay = 0.0;
+    SnowState bare = terrainState(48, 20.0);
+    computeTemperatureBase(bare, dry.params);
+    const SeasonReport d = runSeason(*backend, bare, dry);
+    ASSERT_EQ(d.phenomena[0].name, "snowfall");
+    EXPECT_GT(d.phenomena[0].steps, 0u);
+    // Every step and stop skipped, and the catch-up of a storm still falling at the season's end.
+    const uint64_t steps = d.phenomena[0].steps + d.phenomena[0].stops;
+    EXPECT_GE(d.phenomena[0].skippedSteps, steps) << byWeather;
+    EXPECT_LE(d.phenomena[0].skippedSteps, steps + 1) << byWeather;
+    EXPECT_NE(d.phenomena[0].skippedWhy.find(byWeather ? "snowfall_intensity = 0" : "snowfall_rate_per_day = 0"), std::string::npos);
+    EXPECT_EQ(d.snowfallAddedM3, 0.0);
+  }
 }
 
 TEST(Season, SameSeedSameStateOtherSeedOtherState) {
