@@ -209,14 +209,15 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   } catch (const std::invalid_argument&) {
     return std::nullopt;  // checkRanksSuitTheGrid says why
   }
-  GridSpec local = whole;  // the largest of the ranks' local grids, and its subdomain
-  dist::CellRect owned = d.owned(0);
-  for (int r = 0; r < d.ranks(); ++r)
-    if (d.local(r).cells() > local.cellCount() || r == 0)
-      local.width = d.local(r).width(), local.height = d.local(r).height(), owned = d.owned(r);
+  GridSpec local = whole;  // the largest of the ranks' local grids; the widest and highest subdomain
+  int ownedWidth = 0, ownedHeight = 0;
+  for (int r = 0; r < d.ranks(); ++r) {
+    if (d.local(r).cells() > local.cellCount() || r == 0) local.width = d.local(r).width(), local.height = d.local(r).height();
+    ownedWidth = std::max(ownedWidth, d.owned(r).width()), ownedHeight = std::max(ownedHeight, d.owned(r).height());
+  }
   // Where each rank writes its tiles, its resampled images are its tiles' window of the image.
   const MemoryPrediction onLocal =
-      predictOn(ranksWriteTheirTiles(scene, whole) ? sceneOfTheRanksTiles(scene, whole, owned.width(), owned.height()) : scene, local);
+      predictOn(ranksWriteTheirTiles(scene, whole) ? sceneOfTheRanksTiles(scene, whole, ownedWidth, ownedHeight) : scene, local);
   const double libraries = onWhole.libraryBytes, localAbove = onLocal.peakBytes() - onLocal.libraryBytes;
   const double cells = static_cast<double>(whole.cellCount());
   const double terrain = (sizeof(float) + sizeof(uint8_t)) * cells;  // the whole terrain's heights and validity, every rank

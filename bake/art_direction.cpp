@@ -110,6 +110,9 @@ double placeInitialLayer(int l, const InitialSnowLayer& spec, RasterCache& raste
           case InitialSnowLayer::Kind::Mask: depth = static_cast<float>((*raster)(x, y) * spec.depthM); break;
           case InitialSnowLayer::Kind::None: break;  // not placed (placeInitialSnow skips it)
         }
+        // -0 as +0: every kernel would drop the sign, and a step skipped as changing nothing
+        // (a zero rate, SeasonRun::skipStep) must leave the bytes it would have left.
+        if (depth == 0.f) depth = 0.f;
         volume += static_cast<double>(depth) * area;
       }
       if (cells.contains(x, y)) layer(x - cells.x0, y - cells.y0) = depth;

@@ -38,12 +38,6 @@ OutputWriter::Resampled OutputWriter::atSetSize(const RasterSet& set, const Grid
   return resampled(set.tiles, set.resizeWidth, set.resizeHeight, g, &valid, marginPx);
 }
 
-OutputWriter::ResampledLayers OutputWriter::atSetSize(const RasterSet& set, const std::vector<const Grid<float>*>& grids, const Grid<uint8_t>& valid) const {
-  if (set.resized()) return resampled(set.tiles, set.resizeWidth, set.resizeHeight, grids, &valid);
-  ResampledLayers r{{}, valid, windowOf(valid.width(), valid.height())};
-  for (const Grid<float>* g : grids) r.pixels.push_back(*g);
-  return r;
-}
 
 constexpr const char* kSplatFormat = "PNG, 4 channels uint8, linear weights: R snow, G rock, B ground, A 0; R + G + B = 255";
 
@@ -56,7 +50,14 @@ void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const Layer
   std::array<Grid<float>, 3> cells;
   const char* names[3] = {"weight_snow", "weight_rock", "weight_ground"};
   for (int k = 0; k < 3; ++k) cells[k] = findLayer(names[k])->compute(in);
-  const ResampledLayers r = atSetSize(set, {&cells[0], &cells[1], &cells[2]}, d.s.validCell);
+  // At the set's size: resampled over one mask, or the weights themselves (moved, not copied).
+  ResampledLayers r;
+  if (set.resized()) {
+    r = resampled(set.tiles, set.resizeWidth, set.resizeHeight, {&cells[0], &cells[1], &cells[2]}, &d.s.validCell);
+  } else {
+    for (Grid<float>& c : cells) r.pixels.push_back(std::move(c));
+    r.valid = d.s.validCell, r.window = windowOf(d.s.spec.width, d.s.spec.height);
+  }
   const std::vector<Grid<float>>& w = r.pixels;
   const Grid<uint8_t>& valid = r.valid;
   const ImageWindow& window = r.window;

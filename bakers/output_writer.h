@@ -156,7 +156,6 @@ class OutputWriter {
   CellRect writtenPixels(const OutputTiles& tiles, int width, int height, int marginPx) const;
   // A layer on the state's grid at `set`'s size over valid cells: itself, or resampled().
   Resampled atSetSize(const RasterSet& set, const Grid<float>& g, const Grid<uint8_t>& valid, int marginPx) const;
-  ResampledLayers atSetSize(const RasterSet& set, const std::vector<const Grid<float>*>& grids, const Grid<uint8_t>& valid) const;
   // The splat map and the snow surface's normal map (output_engine_maps.cpp).
   void writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
   void writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer);

@@ -3,9 +3,13 @@
 // bake across ranks makes each rank's so (initialStateCells).
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cstdint>
 #include <cstring>
+#include <sstream>
 #include <string>
 
+#include "bake/art_direction.h"
 #include "bake/stages.h"
 #include "distributed/local_state.h"
 
@@ -58,6 +62,27 @@ TEST(InitialState, MadeOnALocalGridIsTheWholeInitialStateCutToItFieldForField) {
 #undef SNOW_EXPECT_SAME_FIELD
     EXPECT_EQ(local.bedrockM(0, 0), t.terrain.heightsM(cells.x0, cells.y0)) << where;  // not a copy of the whole grid's corner
   }
+}
+
+// An initial depth of -0 (a scene's `-0.0`, or a raster's) is placed as +0: every kernel would
+// drop the sign, so a step skipped as changing nothing (a zero rate) leaves the bytes it would.
+TEST(InitialState, ADepthOfMinusZeroIsPlacedAsPlusZero) {
+  const BakeTerrain t = someTerrain();
+  const GridSpec& spec = t.info().spec;
+  SnowState s = initialState(t, CellRect::whole(spec));
+  Scene scene;
+  scene.initialSnow[static_cast<size_t>(SnowLayer::Powder)] = InitialSnowLayer{InitialSnowLayer::Kind::Constant, -0.0, {}};
+  scene.initialSnow[static_cast<size_t>(SnowLayer::Stable)] = InitialSnowLayer{InitialSnowLayer::Kind::Constant, 0.5, {}};
+  std::ostringstream log;
+  prepareArtDirection(scene, t.terrain, CellRect::whole(spec), s, log);
+  size_t valid = 0;
+  for (size_t i = 0; i < s.powderM.size(); ++i) {
+    EXPECT_EQ(std::bit_cast<uint32_t>(s.powderM.values()[i]), 0u) << i;
+    if (!s.validCell.values()[i]) continue;
+    ++valid;
+    EXPECT_EQ(s.stableM.values()[i], 0.5f) << i;
+  }
+  EXPECT_GT(valid, 0u);
 }
 
 }  // namespace
