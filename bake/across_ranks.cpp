@@ -227,13 +227,28 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
   m.rankZeroHere = dist::Communicator::node().holdsRankZero;
   if (seasonOnReplica(scene)) {  // every rank: the whole grid's bake beside its local grid's backend
     m.rankZeroBytes = m.otherBytes = onWhole.peakBytes() + localAbove;
+    m.rankZeroHolds = "writes the whole grid's outputs";
   } else {  // the others: the whole terrain until the season and art direction's whole grids beside their local grid's bake
     m.otherBytes = libraries + terrain + artDirectionBytesPerCell(scene) * cells + localAbove;
     // Rank 0 writes the whole grid's outputs; or, where each rank writes its tiles, it is one of the
-    // others (its local grid's outputs in localAbove), a no-snow mask's whole initial state beside.
+    // others (its local grid's outputs in localAbove) with, beside, a no-snow mask's whole initial
+    // state and the whole files it writes one at a time (no [outputs.tiles], or those beside the
+    // tiles of outputs.tiles.resize).
     m.rankZeroGathers = !ranksWriteTheirTiles(scene, whole);
-    m.rankZeroBytes = m.rankZeroGathers ? onWhole.peakBytes()
-                                        : m.otherBytes + (scene.multipliers.noSnow ? initialStateBytesPerCell(scene) * cells : 0.0);
+    m.rankZeroBytes = m.rankZeroGathers ? onWhole.peakBytes() : m.otherBytes;
+    std::vector<std::string> holds;
+    if (m.rankZeroGathers) holds.push_back("writes the whole grid's outputs");
+    if (!m.rankZeroGathers && scene.multipliers.noSnow) {
+      m.rankZeroBytes += initialStateBytesPerCell(scene) * cells;
+      holds.push_back("keeps the whole initial state for the no-snow mask");
+    }
+    const OutputTiles& tiles = scene.outputs.tiles;
+    if (!m.rankZeroGathers && (tiles.convention == TileConvention::None || tiles.resizeWidth > 0)) {
+      m.rankZeroBytes += wholeFilesOnRankZeroBytes(scene, cells);
+      holds.push_back(tiles.convention == TileConvention::None ? "writes the whole files, one at a time"
+                                                                : "writes the whole files beside the tiles (outputs.tiles.resize)");
+    }
+    for (const std::string& h : holds) m.rankZeroHolds += (m.rankZeroHolds.empty() ? "" : " and ") + h;
   }
   return m;
 }
@@ -358,10 +373,13 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   agreeBeforeExchanges(comm, true);
   inExchanges = true;
   startSeasonPeak();
+  const bool untiled = scene.outputs.tiles.convention == TileConvention::None;
   log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid"
-      << (tilesOnRanks ? " cut on the tiles' starts" : "") << "; rank 0's subdomain " << d.owned(0).width() << " x "
+      << (tilesOnRanks && !untiled ? " cut on the tiles' starts" : "") << "; rank 0's subdomain " << d.owned(0).width() << " x "
       << d.owned(0).height() << " cells, halo " << d.halo << "\n";
-  if (tilesOnRanks)
+  if (tilesOnRanks && untiled)
+    log << "outputs: rank 0 writes every file, each gathered from the ranks one at a time\n";
+  else if (tilesOnRanks)
     log << "outputs: each rank writes the tiles that start in its subdomain\n";
   else if (const std::string why = whyRankZeroWritesEveryFile(scene); !why.empty())
     log << "outputs: rank 0 gathers the whole grid and writes every file: " << why << "\n";

@@ -4,8 +4,9 @@
 // runs decomposed (each rank its subdomain, halos exchanged, every sum in the single process's
 // order; avalanches, skiers and bedforms on every rank's replica of the whole grid); rank 0
 // gathers the state at the frames and the season's end and writes every output and the manifest,
-// or, under [outputs.tiles] where they can, each rank writes the tiles that start in its
-// subdomain and rank 0 the manifest (tiles_on_ranks.h): the single process's bytes.
+// or, where every output is one the ranks can make from their cells, each rank writes the tiles
+// that start in its subdomain and rank 0 the whole files, one at a time from the ranks' cells,
+// and the manifest (tiles_on_ranks.h): the single process's bytes.
 //
 // Failures: the ranks work alone but for the wind's solve and the season, and they agree on the
 // exit status before each wind state's cache read and solve, at the season's start and at the
@@ -79,9 +80,9 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
 CellRect initialStateCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts);
 
 // Whether each rank writes the tiles that start in its subdomain (tiles_on_ranks.h): across
-// ranks, under [outputs.tiles] with outputs each rank can write from its local grid, on a grid
-// that splits into bands of whole tiles. Then every rank keeps its local grid alone and none
-// gathers the whole grid's state.
+// ranks, with outputs each rank can make from its local grid, on a grid that splits into bands of
+// whole tiles (any grid without [outputs.tiles]; rank 0 then writes every file, each gathered from
+// the ranks). Then every rank keeps its local grid alone and none gathers the whole grid's state.
 bool ranksWriteTheirTiles(const Scene& scene, const GridSpec& spec);
 // Where they do, points `sources` at this rank's tiles (else leaves them as they are), and the
 // sun's and wind's layers at the rank's local grid of the precompute: `pre`, made in the rank's

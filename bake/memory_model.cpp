@@ -177,6 +177,14 @@ std::vector<MemoryOwner> dayWriters(const Scene& s, const GridSpec& spec, double
 
 }  // namespace
 
+double wholeFilesOnRankZeroBytes(const Scene& s, double cells) {
+  Scene whole = s;
+  whole.outputs.tiles = OutputTiles{};
+  double bytes = cells * 5.0;
+  for (const MemoryOwner& o : writerOwners(whole, cells)) bytes += o.bytes;
+  return bytes;
+}
+
 double MemoryPhase::bytes() const {
   double b = 0;
   for (const auto& o : owners) b += o.bytes;
@@ -536,9 +544,7 @@ void refuseRanksAboveBudget(const Scene& s, const MemoryPrediction& zero, const 
   o << std::fixed << std::setprecision(2) << keyWhere(s, big.key) << ": across " << m.ranks << " ranks, the " << m.ranksHere
     << " on this machine need about " << m.hereBytes() / kGiB << " GiB at once (";
   const bool rankZeroApart = m.rankZeroHere && (m.rankZeroGathers || m.rankZeroBytes != m.otherBytes);
-  if (rankZeroApart)
-    o << "rank 0 about " << m.rankZeroBytes / kGiB << " GiB, which "
-      << (m.rankZeroGathers ? "writes the whole grid's outputs; " : "keeps the whole initial state for the no-snow mask; ");
+  if (rankZeroApart) o << "rank 0 about " << m.rankZeroBytes / kGiB << " GiB, which " << m.rankZeroHolds << "; ";
   o << (rankZeroApart ? "each other " : m.rankZeroGathers ? "each " : "each, writing its tiles, ") << "about " << m.otherBytes / kGiB << " GiB) and the budget is " << budget / kGiB
     << " GiB (" << (s.maxMemoryGb ? "run.max_memory_gb" : "80 % of the memory available")
     << "): run fewer ranks on each machine, bake a smaller grid (terrain.resample_cell_size_m, terrain.crop_m, terrain.size), or raise "

@@ -104,12 +104,18 @@ struct RanksMemory {
   int ranksHere = 1;         // on this machine
   bool rankZeroHere = true;  // rank 0 is one of them
   bool rankZeroGathers = true;  // rank 0 writes the whole grid's outputs (not each rank its tiles)
+  std::string rankZeroHolds;    // what rank 0 holds beyond the others, for the refusal (empty: nothing)
   double rankZeroBytes = 0, otherBytes = 0;
   double hereBytes() const { return rankZeroHere ? rankZeroBytes + (ranksHere - 1) * otherBytes : ranksHere * otherBytes; }
 };
 // Throws InputError when this machine's ranks together pass the budget: their count, each one's
 // peak, the key that sizes rank 0's largest owner, and what to change (fewer ranks a machine).
 void refuseRanksAboveBudget(const Scene& scene, const MemoryPrediction& rankZero, const RanksMemory& ranks, double budgetBytes);
+// Where each rank writes its tiles and the outputs have whole files (no [outputs.tiles], or those
+// of outputs.tiles.resize beside the tiles): what rank 0 holds beside its local grid to write them,
+// one at a time, each gathered from the ranks (the one-process writers' owners of those files on
+// the whole grid's `cells`, and a layer's cells with their mask gathered).
+double wholeFilesOnRankZeroBytes(const Scene& scene, double cells);
 
 // Sizes the model cannot hold whatever the memory (coordinates past OpenVDB's 32-bit range, a
 // displacement map or ski-track texture of more than 2^31 pixels): InputError naming the key.

@@ -13,10 +13,10 @@ namespace snow {
 
 std::string whyRankZeroWritesEveryFile(const Scene& scene) {
   const OutputRequest& out = scene.outputs;
-  if (out.tiles.convention == TileConvention::None) return "the outputs are whole files (no [outputs.tiles])";
-  if (out.tiles.resizeWidth > 0) return "outputs.tiles.resize (the whole files beside the tiles)";
   // outputs.resize and the displacement maps are: each rank resamples its tiles' pixels from the
-  // cells they read, gathered from their owners (OutputSources::gatherCells).
+  // cells they read, gathered from their owners (OutputSources::gatherCells). So is
+  // outputs.tiles.resize, whose whole files beside the tiles rank 0 writes one at a time, each
+  // gathered from the ranks (OutputWriter::untiledWindow).
   for (const std::string& name : out.layers) {
     const LayerInfo* layer = findLayer(name);
     if (!layer) continue;
@@ -35,6 +35,10 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
 
 std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo) {
   if (!whyRankZeroWritesEveryFile(scene).empty()) return std::nullopt;
+  // Whole files alone: rank 0 writes each, gathered from the ranks one at a time, and any split
+  // will do (the normals and slopes read the next cell, which the season's halo holds).
+  if (scene.outputs.tiles.convention == TileConvention::None)
+    return dist::Decomposition::choose(ranks, spec.width, spec.height, std::max(minHalo, 1));
   const TileLayout l = tileLayout(scene.outputs.tiles, spec.width, spec.height);
   // A tile reaches its overlap past the next tile's start, into the next rank's subdomain, and its
   // normals and slopes read the cell after that: the halo is widened to hold both (the season
@@ -55,6 +59,8 @@ Scene sceneOfTheRanksTiles(const Scene& scene, const GridSpec& whole, int ownedW
   o.resizeWidth = share(o.resizeWidth, whole.width, ownedWidth), o.resizeHeight = share(o.resizeHeight, whole.height, ownedHeight);
   o.displacementWidth = share(o.displacementWidth, whole.width, ownedWidth);
   o.displacementHeight = share(o.displacementHeight, whole.height, ownedHeight);
+  o.tiles.resizeWidth = share(o.tiles.resizeWidth, whole.width, ownedWidth);
+  o.tiles.resizeHeight = share(o.tiles.resizeHeight, whole.height, ownedHeight);
   return mine;
 }
 

@@ -2,7 +2,8 @@
 // [outputs.tiles], the ranks' subdomains are cut on tile starts, so each rank's local grid holds
 // every cell of the tiles that start in its subdomain, and each rank writes those tiles from its
 // own cells (a resampled image's tiles, whose pixels read cells further out, from those cells
-// gathered from their owners). A layer's range ("own", "season") is combined over the ranks, and rank 0 merges the
+// gathered from their owners). A whole file is rank 0's, each gathered from the ranks one at a
+// time (OutputWriter::untiledWindow). A layer's range ("own", "season") is combined over the ranks, and rank 0 merges the
 // files every rank listed into one manifest in the single process's order. The same bytes as one
 // process, and no rank holds the whole grid for the outputs.
 #pragma once
@@ -17,14 +18,16 @@
 
 namespace snow {
 
-// Why the ranks cannot write their own tiles of the scene's outputs (rank 0 then gathers the
-// whole grid and writes every file), naming the key; empty when they can, as far as the scene
-// says (the grid must also split into bands of whole tiles: decompositionOnTiles).
+// Why the ranks cannot write their own tiles and rank 0 the whole files of the scene's outputs
+// (rank 0 then gathers the whole grid and writes every file), naming the key; empty when they
+// can, as far as the scene says (the grid must also split into bands of whole tiles:
+// decompositionOnTiles).
 std::string whyRankZeroWritesEveryFile(const Scene& scene);
 
-// The ranks' subdomains cut on the starts of the scene's tiles of a grid of `spec`'s size, where
-// whyRankZeroWritesEveryFile is empty and the tiles can be shared; else nullopt. The halo is
-// `minHalo`, or wider where the tiles' overlap and the next cell need it.
+// The ranks' subdomains cut on the starts of the scene's tiles of a grid of `spec`'s size (the
+// balanced splits without [outputs.tiles]), where whyRankZeroWritesEveryFile is empty and the
+// tiles can be shared; else nullopt. The halo is `minHalo`, or wider where the tiles' overlap and
+// the next cell need it.
 std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo);
 
 // The scene a rank writing its tiles is predicted from (the memory guard, memory_model.h): its

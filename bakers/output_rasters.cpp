@@ -72,10 +72,27 @@ OutputWriter::ResampledLayers OutputWriter::resampled(const OutputTiles& tiles, 
 
 bool OutputWriter::writesTile(const TileLayout& l, int column, int row, const ImageWindow& w) const {
   if (src_.tilesStartingIn.empty()) return true;
-  if (!l.tiled()) throw std::logic_error("a whole file where each rank writes its tiles (OutputSources::tilesStartingIn)");
-  if (tileStartsIn(src_.tilesStartingIn, src_.geo.gridWidth, src_.geo.gridHeight, l, column, row, w.width, w.height)) return true;
+  if (tileStartsIn(src_.tilesStartingIn, src_.geo.gridWidth, src_.geo.gridHeight, l, column, row, w.width, w.height)) {
+    if (!l.tiled() && (w.windowWidth != w.width || w.windowHeight != w.height))
+      throw std::logic_error("a whole file whose writer holds part of it (OutputWriter::untiledWindow)");
+    return true;
+  }
   ++listings_;  // another rank's file
   return false;
+}
+
+std::optional<ImageWindow> OutputWriter::untiledWindow(const TileLayout& l, const ImageWindow& w) const {
+  const CellRect& c = src_.stateCells;
+  if (!src_.gatherCells || l.tiled() || c.empty() || (w.windowWidth == w.width && w.windowHeight == w.height)) return std::nullopt;
+  if (w.width != src_.geo.gridWidth || w.height != src_.geo.gridHeight || w.x0 != c.x0 || w.y0 != c.y0 || w.windowWidth != c.width() ||
+      w.windowHeight != c.height())
+    return std::nullopt;  // a resampled image's window
+  if (tileStartsIn(src_.tilesStartingIn, w.width, w.height, l, 0, 0, w.width, w.height)) return ImageWindow::whole(w.width, w.height);
+  return ImageWindow{w.width, w.height, 0, 0, 0, 0};
+}
+
+void OutputWriter::gatherTo(const ImageWindow& to, const void* local, size_t elementBytes, void* held) const {
+  src_.gatherCells(local, elementBytes, CellRect{to.x0, to.y0, to.x0 + to.windowWidth, to.y0 + to.windowHeight}, held);
 }
 
 SeenRange OutputWriter::seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid, const ImageWindow* held) const {
@@ -109,9 +126,19 @@ void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, do
                                     const Grid<uint8_t>* valid, const std::string& layerName, const std::string& content,
                                     const std::string& unit, const ImageWindow* held) {
   const auto& out = scene_.outputs;
-  const ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
+  ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
+  Grid<float> whole;  // across ranks, an untiled file's pixels on the rank that writes it
+  Grid<uint8_t> wholeValid;
+  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  if (to) {
+    whole.adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, grid.data()));
+    if (masked) wholeValid.adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, valid->data()));
+    w = *to;
+  }
+  const Grid<float>& image = to ? whole : grid;
+  const Grid<uint8_t>* imageValid = !masked ? nullptr : to ? &wholeValid : valid;
   Grid<float> cut;
   Grid<uint8_t> cutValid;
   for (int r = 0; r < l.rows; ++r)
@@ -123,9 +150,9 @@ void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, do
       }
       if (!writesTile(l, c, r, w)) continue;
       // Untiled, the image itself (no copy).
-      if (l.tiled()) cut = cutTile(grid, w, l, c, r), cutValid = masked ? cutTile(*valid, w, l, c, r) : Grid<uint8_t>();
-      const Grid<float>& tile = l.tiled() ? cut : grid;
-      const Grid<uint8_t>* tileValid = !masked ? nullptr : l.tiled() ? &cutValid : valid;
+      if (l.tiled()) cut = cutTile(image, w, l, c, r), cutValid = masked ? cutTile(*imageValid, w, l, c, r) : Grid<uint8_t>();
+      const Grid<float>& tile = l.tiled() ? cut : image;
+      const Grid<uint8_t>* tileValid = !masked ? nullptr : l.tiled() ? &cutValid : imageValid;
       // TIFF through GDAL with the terrain's CRS and this tile's geotransform; EXR through OpenImageIO.
       const std::string path = out.format == ImageFormat::Tiff ? tileBase + ".tif" : writeFloatImage(tileBase, "exr", tile, layerName, out.compressionLevel).path;
       if (out.format == ImageFormat::Tiff)
@@ -142,13 +169,17 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
                                       const Grid<float>& grid, const Grid<uint8_t>* valid, const ValueMapping& m,
                                       const std::string& content, const std::string& unit, bool write, const ImageWindow* held) {
   const auto& out = scene_.outputs;
-  const ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
+  ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   // Quantised once for every tile: a pixel depends on its cell alone, so cutting the pixels
-  // gives each tile's bytes.
-  const std::vector<uint16_t> pixels = write && !src_.plan ? quantisedPixels(encoding, grid, masked ? valid : nullptr, m.lo, m.hi, kNodataPixel)
-                                             : std::vector<uint16_t>();
+  // gives each tile's bytes (and gathering them, an untiled file's across ranks).
+  std::vector<uint16_t> pixels = write && !src_.plan ? quantisedPixels(encoding, grid, masked ? valid : nullptr, m.lo, m.hi, kNodataPixel)
+                                                     : std::vector<uint16_t>();
+  if (const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w)) {
+    if (write) pixels = gatheredTo(*to, pixels.data());
+    w = *to;
+  }
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + encodingExtension(encoding);
@@ -161,7 +192,7 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
       if (write && l.tiled())
         writeQuantisedPixels(path, encoding, l.tileWidth, l.tileHeight, cutTile(pixels.data(), w, 1, l, c, r).data(), out.compressionLevel);
       else if (write)
-        writeQuantisedPixels(path, encoding, grid.width(), grid.height(), pixels.data(), out.compressionLevel);
+        writeQuantisedPixels(path, encoding, w.width, w.height, pixels.data(), out.compressionLevel);
       listFile(path, content, unit, normalisedFormat(encoding, l.tileWidth, l.tileHeight), day, static_cast<float>(m.lo), static_cast<float>(m.hi),
                write);
       ManifestFile& f = currentSink().files.back();
@@ -173,8 +204,12 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
 void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, int width, int height,
                                   const std::vector<uint8_t>& pixels, const std::string& content, const std::string& unit, int channels,
                                   const std::string& format, const ImageWindow* held) {
-  const ImageWindow w = held ? *held : windowOf(width, height);
+  ImageWindow w = held ? *held : windowOf(width, height);
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
+  std::vector<uint8_t> whole;  // across ranks, an untiled file's pixels on the rank that writes it
+  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  if (to) whole = gatheredTo(*to, pixels.data(), channels), w = *to;
+  const std::vector<uint8_t>& image = to ? whole : pixels;
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".png";
@@ -183,7 +218,7 @@ void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, doub
         continue;
       }
       if (!writesTile(l, c, r, w)) continue;
-      writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(pixels.data(), w, channels, l, c, r) : pixels,
+      writePng8(path, l.tileWidth, l.tileHeight, channels, l.tiled() ? cutTile(image.data(), w, channels, l, c, r) : image,
                 scene_.outputs.compressionLevel);
       listFile(path, content, unit, format.empty() ? kRgbPngFormat : format, day, 0.f, 255.f);
       noteTile(l, c, r, w.width, w.height);
@@ -192,8 +227,12 @@ void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, doub
 
 void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base, double day, const std::string& stem, const Grid<float>& grid,
                                        const std::string& content, const std::string& unit, const ImageWindow* held) {
-  const ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
+  ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
+  Grid<float> whole;  // across ranks, an untiled file's pixels on the rank that writes it
+  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  if (to) whole.adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, grid.data())), w = *to;
+  const Grid<float>& image = to ? whole : grid;
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
       const std::string path = base(stem + tileSuffix(l, c, r)) + ".r32";
@@ -204,8 +243,8 @@ void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base,
         continue;
       }
       if (!writesTile(l, c, r, w)) continue;
-      const Grid<float> cut = l.tiled() ? cutTile(grid, w, l, c, r) : Grid<float>();
-      const Grid<float>& tile = l.tiled() ? cut : grid;
+      const Grid<float> cut = l.tiled() ? cutTile(image, w, l, c, r) : Grid<float>();
+      const Grid<float>& tile = l.tiled() ? cut : image;
       writeRawFloat32(path, tile);
       SeenRange seen;
       seen.widen(tile, nullptr);

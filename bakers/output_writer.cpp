@@ -269,9 +269,16 @@ void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const s
   const std::string content = "all layers as named channels: " + list;
   const std::string format = "OpenEXR, " + std::to_string(channels.size()) + " channels float32 (" + exrCompression_ + "), linear";
   // Tiled like the single-layer files: every channel cut at the same pixels.
-  const ImageWindow w = held ? *held : windowOf(channels[0].width(), channels[0].height());
+  ImageWindow w = held ? *held : windowOf(channels[0].width(), channels[0].height());
   const int width = w.width, height = w.height;
   const TileLayout l = tileLayout(set.tiles, width, height);
+  std::vector<Grid<float>> whole;  // across ranks, an untiled file's channels on the rank that writes it
+  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  if (to) {
+    for (const Grid<float>& g : channels) whole.emplace_back().adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, g.data()));
+    w = *to;
+  }
+  const std::vector<Grid<float>>& image = to ? whole : channels;
   const BaseOf base = baseOf(d);
   for (int r = 0; r < l.rows; ++r)
     for (int c = 0; c < l.columns; ++c) {
@@ -283,9 +290,9 @@ void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const s
       if (!writesTile(l, c, r, w)) continue;
       std::vector<Grid<float>> cut;
       if (l.tiled())
-        for (const auto& g : channels) cut.push_back(cutTile(g, w, l, c, r));
+        for (const auto& g : image) cut.push_back(cutTile(g, w, l, c, r));
       std::vector<const Grid<float>*> grids;
-      for (const auto& g : l.tiled() ? cut : channels) grids.push_back(&g);
+      for (const auto& g : l.tiled() ? cut : image) grids.push_back(&g);
       writeMultiChannelExr(path, names, grids, scene_.outputs.compressionLevel);
       listFile(path, content, "per channel, as the single-layer files", format, d.day, 0.f, 0.f);
       if (l.tiled()) noteTile(l, c, r, width, height);

@@ -55,8 +55,10 @@ struct OutputSources {
   // Across ranks, where each rank writes the tiles that start in its subdomain (docs/distributed.md):
   // the states given to writeDay are this rank's local grid, which lies at `stateCells` of the
   // whole grid (empty: the state is the whole grid); the writer writes the tiles whose first
-  // pixel lies in `tilesStartingIn` (empty: every file); `wholeRange` combines a layer's range
-  // seen on this rank's cells with every other rank's (on every rank alike, in the same order).
+  // pixel lies in `tilesStartingIn` (empty: every file; a whole file is the tile of the rank
+  // owning its first cell, rank 0's, gathered for it: untiledWindow); `wholeRange` combines a
+  // layer's range seen on this rank's cells with every other rank's (on every rank alike, in the
+  // same order).
   // `wholeThumbnail` puts each rank's pixels of a preview's thumbnail (0 on the others' cells)
   // together on rank 0 (the contact sheet's).
   // There, the files that are never tiled (the contact sheet) are rank 0's: `wholeFilesElsewhere`
@@ -174,6 +176,20 @@ class OutputWriter {
   // pixel over its cells); counts a listing of the tiles it does not, so every rank numbers each
   // file alike (ManifestFile::listing).
   bool writesTile(const TileLayout& l, int column, int row, const ImageWindow& w) const;
+  // Across ranks, an untiled file held as this rank's local window of the grid's cells: the window
+  // its writer holds instead (the whole image on the rank that writes it, writesTile's owner of
+  // its first cell; none on the others), whose pixels gatherTo brings, one file at a time. None
+  // in one process, for tiles, and for a resampled image's window (already whole or empty).
+  std::optional<ImageWindow> untiledWindow(const TileLayout& l, const ImageWindow& w) const;
+  // `to`'s pixels of an image of `elementBytes` a pixel laid out on the rank's local grid (`local`),
+  // from their owners into `held`; every rank calls it at once.
+  void gatherTo(const ImageWindow& to, const void* local, size_t elementBytes, void* held) const;
+  template <class T>
+  std::vector<T> gatheredTo(const ImageWindow& to, const T* local, int channels = 1) const {
+    std::vector<T> held(static_cast<size_t>(to.windowWidth) * to.windowHeight * channels);
+    gatherTo(to, local, sizeof(T) * channels, held.data());
+    return held;
+  }
   // Plan mode: a grid of the size `layer` is written at (values unset).
   Grid<float> planGrid(const Day& d, const LayerInfo& layer) const;
   void writeFloatLayer(const Day& d, const RasterSet& set, const LayerInfo& layer, Grid<float> grid, std::vector<std::string>& channelNames,

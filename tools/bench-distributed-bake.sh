@@ -15,24 +15,35 @@
 # --tiles: the default preset's layers (its displacement maps, VDB and meshes left out) in png16,
 # EXR and PNG as Unreal tiles of 505, which each rank writes for the tiles that start in its
 # subdomain (bake/tiles_on_ranks.h); the one process writes the same.
+# --whole: the same layers as --tiles as whole files (no [outputs.tiles]), which rank 0 writes one
+# at a time, each gathered from the ranks; --sun-wind, --displacement and --resize apply alike.
 # --sun-wind: with --tiles, the layers sun_exposure, temperature, wind_speed and wind_shadow_mask
 # too (each rank's from its part of the precompute).
 # --displacement PX: with --tiles, displacement maps of PX x PX pixels too (each rank resamples the
 # cells its tiles read, gathered from their owners).
+# --resize PX: with --tiles, the layers resampled to PX x PX pixels (outputs.resize) before they
+# are cut (each rank resamples the cells its tiles read).
+# --tiles-resize PX: with --tiles, the tiles cut from the layers resampled to PX x PX pixels
+# (outputs.tiles.resize, PX = n 504 + 1) and the whole files beside them at the grid's size or
+# --resize's, which rank 0 writes one at a time, each gathered from the ranks.
 # --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
 # prints rank 0's log lines of each stage's time, the memory and the mass balance beside the row.
-#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles [--sun-wind] [--displacement PX]] [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
+#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles|--whole [--sun-wind] [--displacement PX] [--resize PX] [--tiles-resize PX]]
+#                                   [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0 tiles=0 sunwind="" only="" displacement=""
-while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --sun-wind ] ||
-  [ "${1:-}" = --displacement ] || [ "${1:-}" = --ranks-only ]; do
+mode=strong events=0 tiles=0 whole=0 sunwind="" only="" displacement="" resize="" tilesresize=""
+while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --whole ] || [ "${1:-}" = --sun-wind ] ||
+  [ "${1:-}" = --displacement ] || [ "${1:-}" = --resize ] || [ "${1:-}" = --tiles-resize ] || [ "${1:-}" = --ranks-only ]; do
   case "$1" in
     --weak) mode=weak ;;
     --events) events=1 ;;
     --tiles) tiles=1 ;;
+    --whole) tiles=1 whole=1 ;;
     --sun-wind) sunwind=', "sun_exposure", "temperature", "wind_speed", "wind_shadow_mask"' ;;
     --displacement) displacement="displacement_size = [$2, $2]"; shift ;;
+    --resize) resize="resize = [$2, $2]"; shift ;;
+    --tiles-resize) tilesresize="resize = [$2, $2]"; shift ;;
     --ranks-only) mode=only only="$2"; shift ;;
   esac
   shift
@@ -53,10 +64,9 @@ layers = ["compacted", "stable", "unstable", "powder", "depth", "surface", "snow
 format = "exr"
 encodings = ["png16"]
 $displacement
-[outputs.tiles]
-convention = "unreal"
-size_px = 505
+$resize
 TOML
+  [ "$whole" = 1 ] || printf '[outputs.tiles]\nconvention = "unreal"\nsize_px = 505\n%s\n' "$tilesresize" >> "$scene"
 fi
 args=(bake "$scene" --set "season.days=$days" --set 'outputs.frames_days=[]' --no-cache --quiet --out out)
 [ "$events" = 1 ] || args+=(--set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0)
@@ -90,7 +100,7 @@ same() {
   done
 }
 
-echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as Unreal tiles of 505 ($([ -n "$displacement" ] && echo "${displacement#displacement_size = }" displacement maps, no || echo no displacement maps,) VDB or meshes)"), 10 m cells, $days days;" \
+echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as $([ "$whole" = 1 ] && echo "whole files" || echo "Unreal tiles of 505") ($([ -n "$displacement" ] && echo "${displacement#displacement_size = }" displacement maps, no || echo no displacement maps,) VDB or meshes)")$([ -n "$resize" ] && echo ", outputs.$resize")$([ -n "$tilesresize" ] && echo ", outputs.tiles.$tilesresize"), 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
 printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" \
   "largest rank / one process" "season's peak MiB per rank" "largest / one process" "replica gathers"

@@ -6,7 +6,8 @@
 # edits, a masked avalanche event and a skier group); the bedform window; and a real DEM with NODATA
 # from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
 # subdomain, with art direction placed on each rank's local grid, resampled images (outputs.resize,
-# displacement maps) and the avalanche maps' and skiers' tiles from each rank's replica; the ranks' parts of the
+# displacement maps) and the avalanche maps' and skiers' tiles from each rank's replica; whole
+# files rank 0 writes one at a time from the ranks' cells, and beside a tile set; the ranks' parts of the
 # precompute read from the cache by a second bake. Their manifests differ in the "memory" line alone (the measured peak varies from run
 # to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
 # the ranks), each exit 2 with one message and nothing written, a failure on rank 0 alone, and one
@@ -152,11 +153,11 @@ fi
 # read the next cells, the preview's altitude range and the contact sheet's thumbnails put
 # together; the sun's and the wind's layers from each rank's part of the precompute); one manifest
 # in the single process's order.
-tiles=("$work/winds.toml" --set 'outputs.layers=["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour",
-       "melt", "splat_map", "snow_normal", "avalanche_preview", "preview", "sun_exposure", "temperature", "wind_speed",
-       "wind_direction", "wind_shadow_depth", "wind_shadow_mask"]' --set 'outputs.encodings=["png16", "png8", "r32"]'
-       --set 'outputs.ranges.surface="own"' --set outputs.multichannel_exr=true --set 'outputs.tiles.convention="unity"'
-       --set outputs.tiles.size_px=33)
+rich=("$work/winds.toml" --set 'outputs.layers=["depth", "powder", "surface", "snow_coverage", "weight_rock", "wind_scour",
+      "melt", "splat_map", "snow_normal", "avalanche_preview", "preview", "sun_exposure", "temperature", "wind_speed",
+      "wind_direction", "wind_shadow_depth", "wind_shadow_mask"]' --set 'outputs.encodings=["png16", "png8", "r32"]'
+      --set 'outputs.ranges.surface="own"' --set outputs.multichannel_exr=true)
+tiles=("${rich[@]}" --set 'outputs.tiles.convention="unity"' --set outputs.tiles.size_px=33)
 check_scene tiles "${tiles[@]}"
 for ranks in 2 3 4; do
   grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tiles/$ranks/log" ||
@@ -173,6 +174,27 @@ for ranks in 2 3 4; do
     fail "resized tiles on $ranks ranks: the ranks did not write their own tiles"
 done
 [ -f "$work/resized/4/out/displacement_depth_1_1.exr" ] || fail "resized tiles: no displacement tile"
+# Whole files, each written by rank 0 from the cells every rank sends it, one file at a time
+# (OutputWriter::untiledWindow): the tiles case's layers, encodings, ranges and layers.exr without
+# [outputs.tiles], resampled (outputs.resize, displacement maps), as GeoTIFF, frames beside the
+# season; on 2 and 4 ranks.
+whole=("${rich[@]}" --set 'outputs.resize=[160,150]' --set 'outputs.displacement_size=[65,65]' --set 'outputs.format="tiff"'
+       --set 'run.frame_writing="beside"')
+bake whole "$work/whole/alone" alone "${whole[@]}"
+for ranks in 2 4; do
+  bake whole "$work/whole/$ranks" "$ranks" "${whole[@]}" && same "whole files on $ranks ranks" "$work/whole/alone" "$work/whole/$ranks"
+  grep -q "^outputs: rank 0 writes every file, each gathered from the ranks one at a time" "$work/whole/$ranks/log" ||
+    fail "whole files on $ranks ranks: rank 0 did not write them one at a time"
+done
+[ -f "$work/whole/4/out/layers.exr" ] && [ -f "$work/whole/4/out/frames/splat_map.0020.png" ] || fail "whole files: no layers.exr or frame"
+# A tile set beside the whole files (outputs.tiles.resize): each rank its tiles of the layers
+# resampled to 97², rank 0 the whole files at outputs.resize, one at a time; on 3 ranks.
+tileset=("${tiles[@]}" --set 'outputs.tiles.resize=[97,97]' --set 'outputs.resize=[129,129]')
+bake tileset "$work/tileset/alone" alone "${tileset[@]}" && bake tileset "$work/tileset/3" 3 "${tileset[@]}" &&
+  same "a tile set beside the whole files on 3 ranks" "$work/tileset/alone" "$work/tileset/3"
+grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/tileset/3/log" ||
+  fail "a tile set beside the whole files on 3 ranks: the ranks did not write their own tiles"
+[ -f "$work/tileset/3/out/depth.16.png" ] && [ -f "$work/tileset/3/out/depth_2_2.16.png" ] || fail "a tile set: no whole file or no tile"
 # Avalanche maps and their motion frames under [outputs.tiles] with the default preset's avalanches
 # and skiers (its displacement maps at 129 pixels, its VDB and meshes left out): each rank writes the maps' tiles
 # that start in its subdomain from its replica's records, rank 0 the contact sheet, counted in
@@ -318,6 +340,13 @@ frames_days = [10, 30]
 TOML
   check_scene dem "$work/dem.toml"
   grep -q "NODATA cells" "$work/dem/alone/log" || fail "dem: the DEM's NODATA cells are not in its log"
+  # Its layers as whole files rank 0 writes one at a time (no VDB or meshes), NODATA in the masks
+  # the ranks send; on 3 ranks.
+  demwhole=("$work/dem.toml" --set outputs.vdb=false --set 'outputs.meshes=[]')
+  bake dem-whole "$work/dem-whole/alone" alone "${demwhole[@]}" && bake dem-whole "$work/dem-whole/3" 3 "${demwhole[@]}" &&
+    same "the dem as whole files on 3 ranks" "$work/dem-whole/alone" "$work/dem-whole/3"
+  grep -q "^outputs: rank 0 writes every file, each gathered from the ranks one at a time" "$work/dem-whole/3/log" ||
+    fail "the dem as whole files on 3 ranks: rank 0 did not write them one at a time"
 else
   echo "bake_across_ranks_test: $dem absent: the real-DEM bakes are skipped" >&2
 fi
