@@ -229,7 +229,8 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
     m.rankZeroBytes = m.otherBytes = onWhole.peakBytes() + localAbove;
     m.rankZeroHolds = "writes the whole grid's outputs";
   } else {  // the others: the whole terrain until the season and art direction's whole grids beside their local grid's bake
-    m.otherBytes = libraries + terrain + artDirectionBytesPerCell(scene) * cells + localAbove;
+    m.otherBytes = libraries + terrain + artDirectionBytesPerCell(scene) * cells + localAbove +
+                   wholeSkiLayersBeyondLocalBytes(scene, cells, static_cast<double>(local.cellCount()));
     // Rank 0 writes the whole grid's outputs; or, where each rank writes its tiles, it is one of the
     // others (its local grid's outputs in localAbove) with, beside, a no-snow mask's whole initial
     // state and the whole files it writes one at a time (no [outputs.tiles], or those beside the
@@ -383,8 +384,11 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
     log << "outputs: each rank writes the tiles that start in its subdomain\n";
   else if (const std::string why = whyRankZeroWritesEveryFile(scene); !why.empty())
     log << "outputs: rank 0 gathers the whole grid and writes every file: " << why << "\n";
+  else if (untiled)
+    log << "outputs: rank 0 gathers the whole grid and writes every file: a rank's local grid is the whole grid\n";
   else
-    log << "outputs: rank 0 gathers the whole grid and writes every file: the grid does not split into bands of whole tiles, one a rank\n";
+    log << "outputs: rank 0 gathers the whole grid and writes every file: the grid does not split into bands of whole tiles, one a rank,"
+           " each rank's local grid less than the whole grid\n";
   SeasonReport report;
   {  // the backend and its scratch live for the season alone
     dist::DistributedBackend backend(std::move(local), comm, d);

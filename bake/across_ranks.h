@@ -76,7 +76,8 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
 // fills it there): its local grid where it keeps that alone from the precompute on, the precompute
 // made in parts (the ranks but 0, and rank 0 where every rank writes its tiles and no no-snow mask
 // asks it to sum the snow the mask removes over the whole grid); else the whole grid. From there
-// on nothing but the season reads the state, and rank 0 gathers the season's into its whole state.
+// on nothing but the season reads the state, and rank 0 gathers the season's into its whole state
+// where it gathers the whole grid for the outputs.
 CellRect initialStateCells(const Scene& scene, const GridSpec& whole, const PrecomputeParts& parts);
 
 // Whether each rank writes the tiles that start in its subdomain (tiles_on_ranks.h): across

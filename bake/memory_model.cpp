@@ -185,6 +185,14 @@ double wholeFilesOnRankZeroBytes(const Scene& s, double cells) {
   return bytes;
 }
 
+double wholeSkiLayersBeyondLocalBytes(const Scene& s, double wholeCells, double localCells) {
+  const double texels = static_cast<double>(s.outputs.skiTrackFactor) * s.outputs.skiTrackFactor;
+  double bytes = 0;
+  if (hasLayer(s, "ski_tracks")) bytes += 3.0 * (wholeCells - localCells) * texels * 4.0;
+  if (hasLayer(s, "ski_route_map")) bytes += wholeCells * 4.0;
+  return bytes;
+}
+
 double MemoryPhase::bytes() const {
   double b = 0;
   for (const auto& o : owners) b += o.bytes;

@@ -116,6 +116,11 @@ void refuseRanksAboveBudget(const Scene& scene, const MemoryPrediction& rankZero
 // one at a time, each gathered from the ranks (the one-process writers' owners of those files on
 // the whole grid's `cells`, and a layer's cells with their mask gathered).
 double wholeFilesOnRankZeroBytes(const Scene& scene, double cells);
+// Across ranks: what each rank holds of the skiers' layers beyond its local grid's share of them
+// (a rank's bake is predicted on its local grid): every rank keeps the whole grid's ski-track
+// texture (with its layer and a frame's copy at once) and makes the whole route map before it
+// cuts its window.
+double wholeSkiLayersBeyondLocalBytes(const Scene& scene, double wholeCells, double localCells);
 
 // Sizes the model cannot hold whatever the memory (coordinates past OpenVDB's 32-bit range, a
 // displacement map or ski-track texture of more than 2^31 pixels): InputError naming the key.

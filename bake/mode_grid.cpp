@@ -163,7 +163,8 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : bakingAcrossRanks() ? createCpuBackend() : chooseBackend(scene.backend, log);
   const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
   if (bakingAcrossRanks()) log << "backend: " << backendName << " on each rank\n";
-  // Across ranks, rank 0 writes every file, or each rank the tiles that start in its subdomain.
+  // Across ranks, rank 0 gathers the whole grid and writes every file, or each rank writes the tiles
+  // that start in its subdomain and rank 0 the whole files, one at a time.
   const bool tilesOnRanks = ranksWriteTheirTiles(scene, terrain.info().spec);
   if (writesOutputs() || tilesOnRanks) createOutputFolder(options.outDir);
   // Where every rank writes its tiles, rank 0 too frees the terrain's heights for the season.

@@ -35,16 +35,26 @@ std::string whyRankZeroWritesEveryFile(const Scene& scene) {
 
 std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo) {
   if (!whyRankZeroWritesEveryFile(scene).empty()) return std::nullopt;
-  // Whole files alone: rank 0 writes each, gathered from the ranks one at a time, and any split
-  // will do (the normals and slopes read the next cell, which the season's halo holds).
-  if (scene.outputs.tiles.convention == TileConvention::None)
-    return dist::Decomposition::choose(ranks, spec.width, spec.height, std::max(minHalo, 1));
-  const TileLayout l = tileLayout(scene.outputs.tiles, spec.width, spec.height);
-  // A tile reaches its overlap past the next tile's start, into the next rank's subdomain, and its
-  // normals and slopes read the cell after that: the halo is widened to hold both (the season
-  // runs on any halo of at least its own).
-  const int halo = std::max(minHalo, std::max(l.tileWidth, l.tileHeight) - l.step + 1);
-  return dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
+  std::optional<dist::Decomposition> d;
+  if (scene.outputs.tiles.convention == TileConvention::None) {
+    // Whole files alone: rank 0 writes each, gathered from the ranks one at a time, and any split
+    // will do (the normals and slopes read the next cell, which the season's halo holds).
+    d = dist::Decomposition::choose(ranks, spec.width, spec.height, std::max(minHalo, 1));
+  } else {
+    const TileLayout l = tileLayout(scene.outputs.tiles, spec.width, spec.height);
+    // A tile reaches its overlap past the next tile's start, into the next rank's subdomain, and
+    // its normals and slopes read the cell after that: the halo is widened to hold both (the
+    // season runs on any halo of at least its own).
+    const int halo = std::max(minHalo, std::max(l.tileWidth, l.tileHeight) - l.step + 1);
+    d = dist::Decomposition::chooseOnTiles(ranks, spec.width, spec.height, halo, l.step, l.columns, l.rows);
+  }
+  // The writers tell a rank's window of the grid's cells from an image of the whole grid (the
+  // avalanche maps, the ski-track texture at one texel a cell) by its size, on every rank alike
+  // (OutputWriter::windowOf, untiledWindow): no rank's local grid may be the whole grid.
+  if (d && ranks > 1)
+    for (int r = 0; r < ranks; ++r)
+      if (d->local(r).width() == spec.width && d->local(r).height() == spec.height) return std::nullopt;
+  return d;
 }
 
 Scene sceneOfTheRanksTiles(const Scene& scene, const GridSpec& whole, int ownedWidth, int ownedHeight) {

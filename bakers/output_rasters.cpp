@@ -83,10 +83,11 @@ bool OutputWriter::writesTile(const TileLayout& l, int column, int row, const Im
 
 std::optional<ImageWindow> OutputWriter::untiledWindow(const TileLayout& l, const ImageWindow& w) const {
   const CellRect& c = src_.stateCells;
-  if (!src_.gatherCells || l.tiled() || c.empty() || (w.windowWidth == w.width && w.windowHeight == w.height)) return std::nullopt;
+  // Every rank decides alike (no rank's local grid is the whole grid: decompositionOnTiles).
+  if (!src_.gatherCells || l.tiled() || c.empty()) return std::nullopt;
   if (w.width != src_.geo.gridWidth || w.height != src_.geo.gridHeight || w.x0 != c.x0 || w.y0 != c.y0 || w.windowWidth != c.width() ||
       w.windowHeight != c.height())
-    return std::nullopt;  // a resampled image's window
+    return std::nullopt;  // a resampled image's window, or an image every rank holds whole
   if (tileStartsIn(src_.tilesStartingIn, w.width, w.height, l, 0, 0, w.width, w.height)) return ImageWindow::whole(w.width, w.height);
   return ImageWindow{w.width, w.height, 0, 0, 0, 0};
 }

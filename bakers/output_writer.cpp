@@ -137,6 +137,13 @@ void OutputWriter::writeLayers(const Day& d) {
     }
     // Plan: a grid of the layer's size, its values never read.
     Grid<float> grid = src_.plan ? planGrid(d, layer) : layer.compute(in);
+    // Across ranks every rank holds the whole ski-track texture: at one texel a cell it is a layer
+    // of the grid's cells like the others, cut to the rank's window (resized with them and a
+    // channel of layers.exr, as in one process).
+    const CellRect& mine = src_.stateCells;
+    if (!src_.plan && (layer.needs & kNeedsSkiTracks) && !mine.empty() && grid.width() == src_.geo.gridWidth &&
+        grid.height() == src_.geo.gridHeight && (mine.width() != grid.width() || mine.height() != grid.height()))
+      grid = gridWindow(grid, mine);
     for (size_t k = 0; k < sets_.size(); ++k)  // the last set takes the grid itself
       writeFloatLayer(d, sets_[k], layer, k + 1 == sets_.size() ? std::move(grid) : Grid<float>(grid), channelNames[k], channels[k],
                       channelsWindow[k]);

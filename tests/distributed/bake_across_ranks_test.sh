@@ -229,6 +229,22 @@ bake avresized "$work/avresized/alone" alone "${avresized[@]}" && bake avresized
 grep -q "^outputs: each rank writes the tiles that start in its subdomain" "$work/avresized/2/log" ||
   fail "resampled avalanche maps in tiles on 2 ranks: the ranks did not write their own tiles"
 [ -f "$work/avresized/2/out/avalanches/001_deposit_3_3.exr" ] || fail "resampled avalanche maps in tiles: no map tile"
+# The ski-track texture at one texel a cell is a layer of the grid's cells: resampled with the
+# others and a channel of layers.exr on the ranks as in one process (each rank cuts its window of
+# the replica's whole texture); in tiles on 2 ranks, and as whole files, with the avalanche maps,
+# which rank 0 writes from its replica, on 3.
+onetexel=("${avmaps[@]}" --set outputs.ski_track_factor=1 --set 'outputs.resize=[97,97]' --set outputs.multichannel_exr=true)
+bake onetexel "$work/onetexel/alone" alone "${onetexel[@]}" && bake onetexel "$work/onetexel/2" 2 "${onetexel[@]}" &&
+  same "a one-texel ski-track texture in tiles on 2 ranks" "$work/onetexel/alone" "$work/onetexel/2"
+onetexelwhole=("$work/avmaps.toml" --set terrain.size=120 --set season.days=45 --set 'outputs.frames_days=[20,40]' --set outputs.vdb=false
+               --set 'outputs.meshes=[]' --set outputs.avalanche_frame_interval_s=5 --set outputs.ski_track_factor=1
+               --set 'outputs.resize=[97,97]' --set outputs.multichannel_exr=true --set 'outputs.displacement_size=[129,129]')
+bake onetexel-whole "$work/onetexel-whole/alone" alone "${onetexelwhole[@]}" &&
+  bake onetexel-whole "$work/onetexel-whole/3" 3 "${onetexelwhole[@]}" &&
+  same "a one-texel ski-track texture and avalanche maps as whole files on 3 ranks" "$work/onetexel-whole/alone" "$work/onetexel-whole/3"
+grep -q "^outputs: rank 0 writes every file, each gathered from the ranks one at a time" "$work/onetexel-whole/3/log" ||
+  fail "a one-texel ski-track texture as whole files on 3 ranks: rank 0 did not write them one at a time"
+[ -f "$work/onetexel-whole/3/out/avalanches/001_deposit.exr" ] || fail "avalanche maps as whole files: no map of the first avalanche"
 # A constant wind, no events, the sun's and the wind's layers in tiles: each rank's day-0 wind and
 # the layers from its parts of the precompute, which a constant wind fills once (a rank once ran
 # its season without it and crashed in the wind transport); on 2 ranks.
