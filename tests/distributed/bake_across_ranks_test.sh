@@ -187,6 +187,20 @@ for ranks in 2 4; do
     fail "whole files on $ranks ranks: rank 0 did not write them one at a time"
 done
 [ -f "$work/whole/4/out/layers.exr" ] && [ -f "$work/whole/4/out/frames/splat_map.0020.png" ] || fail "whole files: no layers.exr or frame"
+# A grid so small that a rank's local grid is all of it (5 x 5 cells on 2 ranks, halo 2): the
+# writers cannot tell that rank's window of the cells from an image every rank holds whole by its
+# size, so rank 0 gathers the grid (a rank that skipped a gather the others made failed the launch
+# with MPI_ERR_TRUNCATE); the single process's files, within two minutes.
+printf 'ncols 5\nnrows 5\nxllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n' > "$work/five.asc"
+for y in 0 1 2 3 4; do echo "$((2000 + 15 * y)) $((2010 + 15 * y)) $((2020 + 15 * y)) $((2030 + 15 * y)) $((2040 + 15 * y))"; done >> "$work/five.asc"
+five=("$work/winds.toml" --terrain "$work/five.asc")
+bake five "$work/five/alone" alone "${five[@]}"
+whole_launch=("${launch[@]}")
+launch=(timeout 120 "${launch[@]}")
+bake five "$work/five/2" 2 "${five[@]}" && same "a 5 x 5 grid on 2 ranks" "$work/five/alone" "$work/five/2"
+launch=("${whole_launch[@]}")
+grep -q "^outputs: rank 0 gathers the whole grid and writes every file: a rank's local grid is the whole grid" "$work/five/2/log" ||
+  fail "a 5 x 5 grid on 2 ranks: rank 0 did not gather the grid"
 # A tile set beside the whole files (outputs.tiles.resize): each rank its tiles of the layers
 # resampled to 97², rank 0 the whole files at outputs.resize, one at a time; on 3 ranks.
 tileset=("${tiles[@]}" --set 'outputs.tiles.resize=[97,97]' --set 'outputs.resize=[129,129]')
