@@ -388,7 +388,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
     log << "outputs: rank 0 gathers the whole grid and writes every file: a rank's local grid is the whole grid\n";
   else
     log << "outputs: rank 0 gathers the whole grid and writes every file: the grid does not split into bands of whole tiles, one a rank,"
-           " each rank's local grid less than the whole grid\n";
+           " or a rank's local grid would be the whole grid\n";
   SeasonReport report;
   {  // the backend and its scratch live for the season alone
     dist::DistributedBackend backend(std::move(local), comm, d);

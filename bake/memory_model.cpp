@@ -188,8 +188,10 @@ double wholeFilesOnRankZeroBytes(const Scene& s, double cells) {
 double wholeSkiLayersBeyondLocalBytes(const Scene& s, double wholeCells, double localCells) {
   const double texels = static_cast<double>(s.outputs.skiTrackFactor) * s.outputs.skiTrackFactor;
   double bytes = 0;
-  if (hasLayer(s, "ski_tracks")) bytes += 3.0 * (wholeCells - localCells) * texels * 4.0;
-  if (hasLayer(s, "ski_route_map")) bytes += wholeCells * 4.0;
+  // The texture, the layer made from it, its encoding's quantised copy and a second raster set's
+  // copy at once; the route map's sort order and buffer beside it as it is made.
+  if (hasLayer(s, "ski_tracks")) bytes += 4.0 * (wholeCells - localCells) * texels * 4.0;
+  if (hasLayer(s, "ski_route_map")) bytes += wholeCells * 12.0;
   return bytes;
 }
 

@@ -118,8 +118,8 @@ void refuseRanksAboveBudget(const Scene& scene, const MemoryPrediction& rankZero
 double wholeFilesOnRankZeroBytes(const Scene& scene, double cells);
 // Across ranks: what each rank holds of the skiers' layers beyond its local grid's share of them
 // (a rank's bake is predicted on its local grid): every rank keeps the whole grid's ski-track
-// texture (with its layer and a frame's copy at once) and makes the whole route map before it
-// cuts its window.
+// texture (with the layer made from it and their copies at once) and makes the whole route map
+// before it cuts its window.
 double wholeSkiLayersBeyondLocalBytes(const Scene& scene, double wholeCells, double localCells);
 
 // Sizes the model cannot hold whatever the memory (coordinates past OpenVDB's 32-bit range, a

@@ -25,9 +25,10 @@ namespace snow {
 std::string whyRankZeroWritesEveryFile(const Scene& scene);
 
 // The ranks' subdomains cut on the starts of the scene's tiles of a grid of `spec`'s size (the
-// balanced splits without [outputs.tiles]), where whyRankZeroWritesEveryFile is empty and the
-// tiles can be shared; else nullopt. The halo is `minHalo`, or wider where the tiles' overlap and
-// the next cell need it.
+// balanced splits without [outputs.tiles]), where whyRankZeroWritesEveryFile is empty, the tiles
+// can be shared and no rank's local grid is the whole grid (the writers tell a rank's window from
+// an image every rank holds whole by its size); else nullopt. The halo is `minHalo`, or wider
+// where the tiles' overlap and the next cell need it.
 std::optional<dist::Decomposition> decompositionOnTiles(const Scene& scene, const GridSpec& spec, int ranks, int minHalo);
 
 // The scene a rank writing its tiles is predicted from (the memory guard, memory_model.h): its

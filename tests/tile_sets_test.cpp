@@ -146,6 +146,31 @@ TEST(TileSets, TilesSharingMoreThanTheSeasonsHaloWidenItSoTheRankATileStartsInHo
   EXPECT_EQ(d->halo, dist::kContinuousHalo);
 }
 
+// No rank's local grid is the whole grid where the ranks write their tiles and rank 0 the whole
+// files one at a time: the writers tell a rank's window of the cells from an image every rank
+// holds whole by its size, which must be alike on every rank (5 x 5 cells on 2 ranks with a halo
+// of 2 give one rank all of them: there rank 0 gathers the grid instead, with or without tiles).
+TEST(TileSets, NoSplitWhereARanksLocalGridWouldBeTheWholeGrid) {
+  Scene scene;
+  scene.outputs.layers = {"depth"};
+  GridSpec spec;
+  spec.width = spec.height = 5;
+  EXPECT_FALSE(decompositionOnTiles(scene, spec, 2, dist::kContinuousHalo));
+  scene.outputs.tiles.convention = TileConvention::Unity;
+  scene.outputs.tiles.sizePx = 3;
+  EXPECT_FALSE(decompositionOnTiles(scene, spec, 2, dist::kContinuousHalo));
+  for (const TileConvention convention : {TileConvention::None, TileConvention::Unity}) {
+    scene.outputs.tiles.convention = convention;
+    spec.width = spec.height = 13;
+    for (const int ranks : {2, 3, 4}) {
+      const std::optional<dist::Decomposition> d = decompositionOnTiles(scene, spec, ranks, dist::kContinuousHalo);
+      ASSERT_TRUE(d) << ranks << " ranks";
+      for (int r = 0; r < ranks; ++r)
+        EXPECT_FALSE(d->local(r).width() == spec.width && d->local(r).height() == spec.height) << "rank " << r << " of " << ranks;
+    }
+  }
+}
+
 // The memory guard predicts a rank that writes its tiles from sceneOfTheRanksTiles: each of its
 // resampled images at least as wide and high as the window of pixels its tiles cover with the
 // normal map's pixel around them (what OutputWriter::writtenPixels gives it), and, where the image

@@ -196,7 +196,7 @@ for y in 0 1 2 3 4; do echo "$((2000 + 15 * y)) $((2010 + 15 * y)) $((2020 + 15 
 five=("$work/winds.toml" --terrain "$work/five.asc")
 bake five "$work/five/alone" alone "${five[@]}"
 whole_launch=("${launch[@]}")
-launch=(timeout 120 "${launch[@]}")
+launch=(timeout -k 10 120 "${launch[@]}")
 bake five "$work/five/2" 2 "${five[@]}" && same "a 5 x 5 grid on 2 ranks" "$work/five/alone" "$work/five/2"
 launch=("${whole_launch[@]}")
 grep -q "^outputs: rank 0 gathers the whole grid and writes every file: a rank's local grid is the whole grid" "$work/five/2/log" ||
