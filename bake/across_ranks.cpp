@@ -236,20 +236,21 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
     // state and the whole files it writes one at a time (no [outputs.tiles], or those beside the
     // tiles of outputs.tiles.resize).
     m.rankZeroGathers = !ranksWriteTheirTiles(scene, whole);
-    m.rankZeroBytes = m.rankZeroGathers ? onWhole.peakBytes() : m.otherBytes;
-    std::vector<std::string> holds;
-    if (m.rankZeroGathers) holds.push_back("writes the whole grid's outputs");
-    if (!m.rankZeroGathers && scene.multipliers.noSnow) {
-      m.rankZeroBytes += initialStateBytesPerCell(scene) * cells;
-      holds.push_back("keeps the whole initial state for the no-snow mask");
+    if (m.rankZeroGathers) {
+      m.rankZeroBytes = onWhole.peakBytes();
+      m.rankZeroHolds = "writes the whole grid's outputs";
+      return m;
     }
+    m.rankZeroBytes = m.otherBytes;
+    auto holds = [&](double bytes, const std::string& what) {
+      m.rankZeroBytes += bytes;
+      m.rankZeroHolds += (m.rankZeroHolds.empty() ? "" : " and ") + what;
+    };
+    if (scene.multipliers.noSnow) holds(initialStateBytesPerCell(scene) * cells, "keeps the whole initial state for the no-snow mask");
     const OutputTiles& tiles = scene.outputs.tiles;
-    if (!m.rankZeroGathers && (tiles.convention == TileConvention::None || tiles.resizeWidth > 0)) {
-      m.rankZeroBytes += wholeFilesOnRankZeroBytes(scene, cells);
-      holds.push_back(tiles.convention == TileConvention::None ? "writes the whole files, one at a time"
-                                                                : "writes the whole files beside the tiles (outputs.tiles.resize)");
-    }
-    for (const std::string& h : holds) m.rankZeroHolds += (m.rankZeroHolds.empty() ? "" : " and ") + h;
+    if (tiles.convention == TileConvention::None) holds(wholeFilesOnRankZeroBytes(scene, cells), "writes the whole files, one at a time");
+    else if (tiles.resizeWidth > 0)
+      holds(wholeFilesOnRankZeroBytes(scene, cells), "writes the whole files beside the tiles (outputs.tiles.resize)");
   }
   return m;
 }

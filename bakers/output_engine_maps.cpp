@@ -38,7 +38,6 @@ OutputWriter::Resampled OutputWriter::atSetSize(const RasterSet& set, const Grid
   return resampled(set.tiles, set.resizeWidth, set.resizeHeight, g, &valid, marginPx);
 }
 
-
 constexpr const char* kSplatFormat = "PNG, 4 channels uint8, linear weights: R snow, G rock, B ground, A 0; R + G + B = 255";
 
 void OutputWriter::writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer) {

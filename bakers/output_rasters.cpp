@@ -84,16 +84,12 @@ bool OutputWriter::writesTile(const TileLayout& l, int column, int row, const Im
 std::optional<ImageWindow> OutputWriter::untiledWindow(const TileLayout& l, const ImageWindow& w) const {
   const CellRect& c = src_.stateCells;
   // Every rank decides alike (no rank's local grid is the whole grid: decompositionOnTiles).
-  if (!src_.gatherCells || l.tiled() || c.empty()) return std::nullopt;
+  if (src_.plan || !src_.gatherCells || l.tiled() || c.empty()) return std::nullopt;
   if (w.width != src_.geo.gridWidth || w.height != src_.geo.gridHeight || w.x0 != c.x0 || w.y0 != c.y0 || w.windowWidth != c.width() ||
       w.windowHeight != c.height())
     return std::nullopt;  // a resampled image's window, or an image every rank holds whole
   if (tileStartsIn(src_.tilesStartingIn, w.width, w.height, l, 0, 0, w.width, w.height)) return ImageWindow::whole(w.width, w.height);
   return ImageWindow{w.width, w.height, 0, 0, 0, 0};
-}
-
-void OutputWriter::gatherTo(const ImageWindow& to, const void* local, size_t elementBytes, void* held) const {
-  src_.gatherCells(local, elementBytes, CellRect{to.x0, to.y0, to.x0 + to.windowWidth, to.y0 + to.windowHeight}, held);
 }
 
 SeenRange OutputWriter::seenOnOwnCells(const Grid<float>& grid, const Grid<uint8_t>* valid, const ImageWindow* held) const {
@@ -132,7 +128,7 @@ void OutputWriter::writeFloatRaster(const RasterSet& set, const BaseOf& base, do
   const bool masked = valid && valid->width() == grid.width() && valid->height() == grid.height();
   Grid<float> whole;  // across ranks, an untiled file's pixels on the rank that writes it
   Grid<uint8_t> wholeValid;
-  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  const std::optional<ImageWindow> to = untiledWindow(l, w);
   if (to) {
     whole.adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, grid.data()));
     if (masked) wholeValid.adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, valid->data()));
@@ -177,7 +173,7 @@ void OutputWriter::writeEncodedRaster(const RasterSet& set, const BaseOf& base, 
   // gives each tile's bytes (and gathering them, an untiled file's across ranks).
   std::vector<uint16_t> pixels = write && !src_.plan ? quantisedPixels(encoding, grid, masked ? valid : nullptr, m.lo, m.hi, kNodataPixel)
                                                      : std::vector<uint16_t>();
-  if (const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w)) {
+  if (const std::optional<ImageWindow> to = untiledWindow(l, w)) {
     if (write) pixels = gatheredTo(*to, pixels.data());
     w = *to;
   }
@@ -208,7 +204,7 @@ void OutputWriter::writeRgbRaster(const RasterSet& set, const BaseOf& base, doub
   ImageWindow w = held ? *held : windowOf(width, height);
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   std::vector<uint8_t> whole;  // across ranks, an untiled file's pixels on the rank that writes it
-  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  const std::optional<ImageWindow> to = untiledWindow(l, w);
   if (to) whole = gatheredTo(*to, pixels.data(), channels), w = *to;
   const std::vector<uint8_t>& image = to ? whole : pixels;
   for (int r = 0; r < l.rows; ++r)
@@ -231,7 +227,7 @@ void OutputWriter::writeRawFloatRaster(const RasterSet& set, const BaseOf& base,
   ImageWindow w = held ? *held : windowOf(grid.width(), grid.height());
   const TileLayout l = tileLayout(set.tiles, w.width, w.height);
   Grid<float> whole;  // across ranks, an untiled file's pixels on the rank that writes it
-  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  const std::optional<ImageWindow> to = untiledWindow(l, w);
   if (to) whole.adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, grid.data())), w = *to;
   const Grid<float>& image = to ? whole : grid;
   for (int r = 0; r < l.rows; ++r)

@@ -139,11 +139,10 @@ void OutputWriter::writeLayers(const Day& d) {
     Grid<float> grid = src_.plan ? planGrid(d, layer) : layer.compute(in);
     // Across ranks every rank holds the whole ski-track texture: at one texel a cell it is a layer
     // of the grid's cells like the others, cut to the rank's window (resized with them and a
-    // channel of layers.exr, as in one process).
-    const CellRect& mine = src_.stateCells;
-    if (!src_.plan && (layer.needs & kNeedsSkiTracks) && !mine.empty() && grid.width() == src_.geo.gridWidth &&
-        grid.height() == src_.geo.gridHeight && (mine.width() != grid.width() || mine.height() != grid.height()))
-      grid = gridWindow(grid, mine);
+    // channel of layers.exr, as in one process; no rank's window is the whole grid).
+    if (!src_.plan && (layer.needs & kNeedsSkiTracks) && !src_.stateCells.empty() && grid.width() == src_.geo.gridWidth &&
+        grid.height() == src_.geo.gridHeight)
+      grid = gridWindow(grid, src_.stateCells);
     for (size_t k = 0; k < sets_.size(); ++k)  // the last set takes the grid itself
       writeFloatLayer(d, sets_[k], layer, k + 1 == sets_.size() ? std::move(grid) : Grid<float>(grid), channelNames[k], channels[k],
                       channelsWindow[k]);
@@ -280,7 +279,7 @@ void OutputWriter::writeMultiChannel(const Day& d, const RasterSet& set, const s
   const int width = w.width, height = w.height;
   const TileLayout l = tileLayout(set.tiles, width, height);
   std::vector<Grid<float>> whole;  // across ranks, an untiled file's channels on the rank that writes it
-  const std::optional<ImageWindow> to = src_.plan ? std::nullopt : untiledWindow(l, w);
+  const std::optional<ImageWindow> to = untiledWindow(l, w);
   if (to) {
     for (const Grid<float>& g : channels) whole.emplace_back().adopt(to->windowWidth, to->windowHeight, gatheredTo(*to, g.data()));
     w = *to;

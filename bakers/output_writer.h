@@ -178,16 +178,16 @@ class OutputWriter {
   bool writesTile(const TileLayout& l, int column, int row, const ImageWindow& w) const;
   // Across ranks, an untiled file held as this rank's local window of the grid's cells: the window
   // its writer holds instead (the whole image on the rank that writes it, writesTile's owner of
-  // its first cell; none on the others), whose pixels gatherTo brings, one file at a time. None
-  // in one process, for tiles, and for a resampled image's window (already whole or empty).
+  // its first cell; none on the others), whose pixels gatheredTo brings, one file at a time. None
+  // in one process or plan mode, for tiles, and for a resampled image's window (already whole or
+  // empty).
   std::optional<ImageWindow> untiledWindow(const TileLayout& l, const ImageWindow& w) const;
-  // `to`'s pixels of an image of `elementBytes` a pixel laid out on the rank's local grid (`local`),
-  // from their owners into `held`; every rank calls it at once.
-  void gatherTo(const ImageWindow& to, const void* local, size_t elementBytes, void* held) const;
+  // `to`'s pixels of an image of `channels` values a pixel laid out on the rank's local grid
+  // (`local`), from their owners; every rank calls it at once.
   template <class T>
   std::vector<T> gatheredTo(const ImageWindow& to, const T* local, int channels = 1) const {
     std::vector<T> held(static_cast<size_t>(to.windowWidth) * to.windowHeight * channels);
-    gatherTo(to, local, sizeof(T) * channels, held.data());
+    src_.gatherCells(local, sizeof(T) * channels, CellRect{to.x0, to.y0, to.x0 + to.windowWidth, to.y0 + to.windowHeight}, held.data());
     return held;
   }
   // Plan mode: a grid of the size `layer` is written at (values unset).
