@@ -210,8 +210,9 @@ TEST(TileSets, ARanksPredictedResampledImagesHoldItsTilesWindowAndAreItsShareOfT
         EXPECT_LE(displaced.height(), o.displacementHeight) << pixels << " px, rank " << r << " of " << ranks;
         EXPECT_LE(o.resizeWidth, pixels);
         EXPECT_LE(o.displacementHeight, 129);
-        if (pixels >= 641)  // 20 tiles or more across: the share of one of 2 or more ranks and a tile
+        if (pixels >= 641) {  // 20 tiles or more across: the share of one of 2 or more ranks and a tile
           EXPECT_LT(static_cast<double>(o.resizeWidth) * o.resizeHeight, 0.6 * pixels * pixels) << pixels << " px, rank " << r << " of " << ranks;
+        }
         ++checked;
       }
     }

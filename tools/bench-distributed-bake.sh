@@ -19,6 +19,8 @@
 # at a time, each gathered from the ranks; --sun-wind, --displacement and --resize apply alike.
 # --sun-wind: with --tiles, the layers sun_exposure, temperature, wind_speed and wind_shadow_mask
 # too (each rank's from its part of the precompute).
+# --ski-tracks F: with --tiles or --whole, the layer ski_tracks too, at F texels a cell
+# (outputs.ski_track_factor; every rank holds the whole texture, which the memory guard counts).
 # --displacement PX: with --tiles, displacement maps of PX x PX pixels too (each rank resamples the
 # cells its tiles read, gathered from their owners).
 # --resize PX: with --tiles, the layers resampled to PX x PX pixels (outputs.resize) before they
@@ -28,19 +30,21 @@
 # --resize's, which rank 0 writes one at a time, each gathered from the ranks.
 # --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
 # prints rank 0's log lines of each stage's time, the memory and the mass balance beside the row.
-#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles|--whole [--sun-wind] [--displacement PX] [--resize PX] [--tiles-resize PX]]
+#   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles|--whole [--sun-wind] [--ski-tracks F] [--displacement PX] [--resize PX]
+#                                   [--tiles-resize PX]]
 #                                   [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0 tiles=0 whole=0 sunwind="" only="" displacement="" resize="" tilesresize=""
+mode=strong events=0 tiles=0 whole=0 sunwind="" skitracks="" only="" displacement="" resize="" tilesresize=""
 while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --whole ] || [ "${1:-}" = --sun-wind ] ||
-  [ "${1:-}" = --displacement ] || [ "${1:-}" = --resize ] || [ "${1:-}" = --tiles-resize ] || [ "${1:-}" = --ranks-only ]; do
+  [ "${1:-}" = --ski-tracks ] || [ "${1:-}" = --displacement ] || [ "${1:-}" = --resize ] || [ "${1:-}" = --tiles-resize ] || [ "${1:-}" = --ranks-only ]; do
   case "$1" in
     --weak) mode=weak ;;
     --events) events=1 ;;
     --tiles) tiles=1 ;;
     --whole) tiles=1 whole=1 ;;
     --sun-wind) sunwind=', "sun_exposure", "temperature", "wind_speed", "wind_shadow_mask"' ;;
+    --ski-tracks) skitracks=', "ski_tracks"' factor="ski_track_factor = $2"; shift ;;
     --displacement) displacement="displacement_size = [$2, $2]"; shift ;;
     --resize) resize="resize = [$2, $2]"; shift ;;
     --tiles-resize) tilesresize="resize = [$2, $2]"; shift ;;
@@ -60,9 +64,10 @@ if [ "$tiles" = 1 ]; then  # the preset with its [outputs] table replaced
   cat >> "$scene" <<TOML
 [outputs]
 layers = ["compacted", "stable", "unstable", "powder", "depth", "surface", "snow_coverage", "weight_snow", "weight_rock",
-          "splat_map", "snow_normal", "preview"$sunwind]
+          "splat_map", "snow_normal", "preview"$sunwind$skitracks]
 format = "exr"
 encodings = ["png16"]
+${factor:-}
 $displacement
 $resize
 TOML
@@ -100,7 +105,7 @@ same() {
   done
 }
 
-echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as $([ "$whole" = 1 ] && echo "whole files" || echo "Unreal tiles of 505") ($([ -n "$displacement" ] && echo "${displacement#displacement_size = }" displacement maps, no || echo no displacement maps,) VDB or meshes)")$([ -n "$resize" ] && echo ", outputs.$resize")$([ -n "$tilesresize" ] && echo ", outputs.tiles.$tilesresize"), 10 m cells, $days days;" \
+echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as $([ "$whole" = 1 ] && echo "whole files" || echo "Unreal tiles of 505") ($([ -n "$displacement" ] && echo "${displacement#displacement_size = }" displacement maps, no || echo no displacement maps,) VDB or meshes)")$([ -n "$resize" ] && echo ", outputs.$resize")$([ -n "$tilesresize" ] && echo ", outputs.tiles.$tilesresize")$([ -n "$skitracks" ] && echo ", ski_tracks at ${factor#ski_track_factor = } texels a cell"), 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
 printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" \
   "largest rank / one process" "season's peak MiB per rank" "largest / one process" "replica gathers"
