@@ -146,7 +146,7 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
       sun = directSunFromHorizons(computeHorizonsBySweep(ts.heightsM, ts.valid, ts.info.spec, 4 * q.azimuths), ts.heightsM, ts.valid,
                                   ts.info.spec, latitude, doy, q.hourStep, p.directSunWeightHours);
     } else {
-      sky = computeSkyExposure(scene, ts.heightsM, ts.valid, ts.info.spec, q.azimuths, q.bisections, p.skyAmbientWeightHours);
+      sky = computeSkyExposure(scene, ts.valid, ts.info.spec, q.azimuths, q.bisections, p.skyAmbientWeightHours);
       sun = computeDirectSun(scene, ts.heightsM, ts.valid, ts.info.spec, latitude, doy, q.hourStep, p.directSunWeightHours);
     }
     ind = computeIndirectSun(sun, ts.heightsM, ts.valid, ts.info.spec, q.indirectDirections, q.indirectRings, q.indirectRadiusM,

@@ -49,20 +49,22 @@ void terrainNormals(const Grid<float>& a, const Grid<uint8_t>& valid, const Grid
 }
 
 // Direct sun for one day: for each sun position above the horizon, shadow rays in 4 x 4 tiles
-// (coherent 16-ray packets).
+// (coherent 16-ray packets). The tiles are the whole grid's wherever `cells` lie, the rays of
+// cells outside them left out: each ray is traced as in the whole grid's packet.
 Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
-                             double latitudeDeg, int doy, double hourStep, double kSun, unsigned long long* rayCount) {
-  const int w = spec.width, h = spec.height;
+                             double latitudeDeg, int doy, double hourStep, double kSun, unsigned long long* rayCount,
+                             std::optional<CellRect> cells) {
+  const CellRect c = cells.value_or(CellRect::whole(spec));
   std::vector<std::array<float, 3>> normals;
-  terrainNormals(heights, valid, spec, normals);
-  Grid<float> sun(w, h, 0.f);
+  terrainNormals(heights, valid, spec, normals, c);
+  Grid<float> sun(c.width(), c.height(), 0.f);
   std::atomic<unsigned long long> rays{0};
   for (double hour = hourStep / 2; hour < 24.0; hour += hourStep) {
     const SunPosition s = sunPosition(latitudeDeg, doy, hour);
     if (s.elevationDeg <= 0.0) continue;
     const std::array<float, 3> dir{static_cast<float>(s.direction[0]), static_cast<float>(s.direction[1]),
                                    static_cast<float>(s.direction[2])};
-    tbb::parallel_for(tbb::blocked_range2d<int>(0, (h + 3) / 4, 0, (w + 3) / 4), [&](const tbb::blocked_range2d<int>& r) {
+    tbb::parallel_for(tbb::blocked_range2d<int>(c.y0 / 4, (c.y1 + 3) / 4, c.x0 / 4, (c.x1 + 3) / 4), [&](const tbb::blocked_range2d<int>& r) {
       unsigned long long local = 0;
       for (int tj = r.rows().begin(); tj < r.rows().end(); ++tj)
         for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti) {
@@ -74,8 +76,8 @@ Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, 
             want[k] = false;
             cosine[k] = 0.f;
             dirs[k] = dir;
-            if (i >= w || j >= h || !valid(i, j)) continue;
-            const auto& n = normals[static_cast<size_t>(j) * w + i];
+            if (!c.contains(i, j) || !valid(i, j)) continue;
+            const auto& n = normals[c.offsetOf(i, j)];
             cosine[k] = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
             if (cosine[k] <= 0.f) continue;  // self-shadowed: facing away from the sun
             origins[k] = rayOrigin(scene, i, j, n, spec);
@@ -84,7 +86,7 @@ Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, 
           }
           scene.occluded16(want, origins, dirs, std::numeric_limits<float>::infinity(), hit);
           for (int k = 0; k < 16; ++k)
-            if (want[k] && !hit[k]) sun(ti * 4 + (k & 3), tj * 4 + (k >> 2)) += static_cast<float>(kSun * cosine[k] * hourStep);
+            if (want[k] && !hit[k]) sun(ti * 4 + (k & 3) - c.x0, tj * 4 + (k >> 2) - c.y0) += static_cast<float>(kSun * cosine[k] * hourStep);
         }
       rays += local;
     });
@@ -96,16 +98,14 @@ Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, 
 // The horizon angle per azimuth: the lowest elevation whose ray escapes, found by bisection on
 // exact ray queries (no marching step to jump a thin ridge); angles are above the horizontal
 // and never negative (a summit sees the whole sky).
-Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+Grid<float> computeSkyExposure(const RayScene& scene, const Grid<uint8_t>& valid, const GridSpec& spec,
                                int azimuths, int bisections, double kSky, unsigned long long* rayCount,
-                               std::vector<Grid<float>>* horizons) {
-  const int w = spec.width, h = spec.height;
-  std::vector<std::array<float, 3>> normals;
-  terrainNormals(heights, valid, spec, normals);
-  Grid<float> sky(w, h, 0.f);
-  if (horizons) horizons->assign(azimuths, Grid<float>(w, h, 0.f));
+                               std::vector<Grid<float>>* horizons, std::optional<CellRect> cells) {
+  const CellRect c = cells.value_or(CellRect::whole(spec));
+  Grid<float> sky(c.width(), c.height(), 0.f);
+  if (horizons) horizons->assign(azimuths, Grid<float>(c.width(), c.height(), 0.f));
   std::atomic<unsigned long long> rays{0};
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, h, 0, w), [&](const tbb::blocked_range2d<int>& r) {
+  tbb::parallel_for(tbb::blocked_range2d<int>(c.y0, c.y1, c.x0, c.x1), [&](const tbb::blocked_range2d<int>& r) {
     unsigned long long local = 0;
     for (int j = r.rows().begin(); j < r.rows().end(); ++j)
       for (int i = r.cols().begin(); i < r.cols().end(); ++i) {
@@ -131,10 +131,10 @@ Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights
             }
             phi = 0.5 * (lo + hi);
           }
-          if (horizons) (*horizons)[k](i, j) = static_cast<float>(phi * 180.0 / kPi);
+          if (horizons) (*horizons)[k](i - c.x0, j - c.y0) = static_cast<float>(phi * 180.0 / kPi);
           sum += std::cos(phi) * std::cos(phi);
         }
-        sky(i, j) = static_cast<float>(kSky * kPi / azimuths * sum);
+        sky(i - c.x0, j - c.y0) = static_cast<float>(kSky * kPi / azimuths * sum);
       }
     rays += local;
   });
@@ -291,10 +291,6 @@ CellRect indirectSenderCells(const CellRect& receivers, const GridSpec& spec, do
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& p, const ExposureSettings& s, std::optional<CellRect> cells) {
   if (!s.horizonSweep && !scene) throw std::invalid_argument("computeExposure: the Embree path needs a RayScene");
-  if (cells && !s.horizonSweep) {  // the rays' path: the whole grid, then its cells
-    const Exposure whole = computeExposure(scene, heights, valid, spec, p, s);
-    return whole.window(cells->x0, cells->y0, cells->width(), cells->height());
-  }
   const CellRect mine = cells.value_or(CellRect::whole(spec));
   Exposure e;
   const ExposureTerms terms = exposureTermsFor(p);
@@ -312,8 +308,8 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
     const Grid<uint8_t> validOfCells = cells ? gridWindow(valid, mine) : Grid<uint8_t>();
     e.skyHours = skyFromHorizons(skyHorizons, cells ? validOfCells : valid, p.skyAmbientWeightHours);
   } else {
-    e.skyHours = computeSkyExposure(*scene, heights, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
-                                    &e.timings.skyRays);
+    e.skyHours = computeSkyExposure(*scene, valid, spec, s.quality.azimuths, s.quality.bisections, p.skyAmbientWeightHours,
+                                    &e.timings.skyRays, nullptr, mine);
   }
   e.timings.skySeconds = elapsedSeconds(t0);
   const double kIndOverKSun = p.directSunWeightHours > 0 ? p.indirectSunWeightHours / p.directSunWeightHours : 0.0;
@@ -332,7 +328,7 @@ Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, cons
   } else {
     for (DailyExposure& day : e.days)
       day.sunHours = computeDirectSun(*scene, heights, valid, spec, s.latitudeDeg, day.dayOfYear, s.quality.hourStep,
-                                      p.directSunWeightHours, &e.timings.sunRays);
+                                      p.directSunWeightHours, &e.timings.sunRays, lit);
   }
   e.timings.sunSeconds = elapsedSeconds(t0);  // the shadows' sweeps included
   t0 = WallClock::now();

@@ -84,17 +84,20 @@ std::vector<DailyExposure> exposureSampleDays(const ExposureSettings& settings);
 
 // `scene` may be null when settings.horizonSweep is true. With `cells` (a rank's local grid), the
 // grids hold those cells alone, the bytes of the whole grid's cut to them: the horizon sweep
-// sweeps the lines through them, the direct sun covers them widened by the indirect term's radius
-// (its senders); the Embree path traces the whole grid and cuts.
+// sweeps the lines through them, the Embree path traces their rays alone (against the whole
+// terrain's scene), and the direct sun covers them widened by the indirect term's radius (its
+// senders).
 Exposure computeExposure(const RayScene* scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                          const ModelParameters& params, const ExposureSettings& settings, std::optional<CellRect> cells = std::nullopt);
 
-// Pieces, for tests and benchmarks.
+// Pieces, for tests and benchmarks; with `cells`, the grids hold those cells alone (the whole
+// grid's bytes cut to them).
 Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
-                             double latitudeDeg, int dayOfYear, double hourStep, double kSunHours, unsigned long long* rays = nullptr);
-Grid<float> computeSkyExposure(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
+                             double latitudeDeg, int dayOfYear, double hourStep, double kSunHours, unsigned long long* rays = nullptr,
+                             std::optional<CellRect> cells = std::nullopt);
+Grid<float> computeSkyExposure(const RayScene& scene, const Grid<uint8_t>& valid, const GridSpec& spec,
                                int azimuths, int bisections, double kSkyHours, unsigned long long* rays = nullptr,
-                               std::vector<Grid<float>>* horizonAnglesDeg = nullptr);
+                               std::vector<Grid<float>>* horizonAnglesDeg = nullptr, std::optional<CellRect> cells = std::nullopt);
 Grid<float> computeIndirectSun(const Grid<float>& sunHours, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                                int directions, int rings, double radiusM, double kIndOverKSun);
 // The same for several days' direct sun at once (the geometry computed once): the same bytes.

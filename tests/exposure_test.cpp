@@ -86,7 +86,7 @@ TEST(Exposure, FlatPlaneDirectIsTheAnalyticSumAndSkyIsKSkyPi) {
   }
   // December and June differ: the season matters.
   EXPECT_LT(analyticDirect({0, 0, 1}, 46.5, 355, 0.5, 1.0), 0.5 * analyticDirect({0, 0, 1}, 46.5, 172, 0.5, 1.0));
-  const Grid<float> sky = computeSkyExposure(scene, f.heights, f.valid, f.spec, 16, 8, p.skyAmbientWeightHours);
+  const Grid<float> sky = computeSkyExposure(scene, f.valid, f.spec, 16, 8, p.skyAmbientWeightHours);
   for (float v : sky.values()) ASSERT_NEAR(v, p.skyAmbientWeightHours * kPi, 1e-6);
   const Grid<float> ind = computeIndirectSun(Grid<float>(24, 20, 3.f), f.heights, f.valid, f.spec, 16, 8, 100.0, 1.0);
   for (float v : ind.values()) ASSERT_EQ(v, 0.f);  // an infinite flat plane sends nothing to itself
@@ -141,7 +141,7 @@ TEST(Exposure, VValleyHorizonAndSky) {
   const RayScene scene(f.heights, f.spec);
   std::vector<Grid<float>> horizons;
   const int azimuths = 16;
-  const Grid<float> sky = computeSkyExposure(scene, f.heights, f.valid, f.spec, azimuths, 12, 0.1, nullptr, &horizons);
+  const Grid<float> sky = computeSkyExposure(scene, f.valid, f.spec, azimuths, 12, 0.1, nullptr, &horizons);
   const int i = 50, j = h / 2;
   double expectedSky = 0.0;
   for (int k = 0; k < azimuths; ++k) {
@@ -170,7 +170,7 @@ TEST(Exposure, ConicalPitHorizonAndSky) {
   });
   const RayScene scene(f.heights, f.spec);
   std::vector<Grid<float>> horizons;
-  const Grid<float> sky = computeSkyExposure(scene, f.heights, f.valid, f.spec, 32, 12, 0.1, nullptr, &horizons);
+  const Grid<float> sky = computeSkyExposure(scene, f.valid, f.spec, 32, 12, 0.1, nullptr, &horizons);
   const double phi = std::atan(s * (rim - r0) / rim);
   for (const auto& hz : horizons) EXPECT_NEAR(hz(60, 60), phi * 180.0 / kPi, 0.5);
   const double expected = 0.1 * kPi * std::cos(phi) * std::cos(phi);
@@ -229,10 +229,11 @@ TEST(Exposure, AWindowGivesItsCellsOfTheWholeTotalOnEveryDay) {
 }
 
 // A rank's local grid computed alone (computeExposure with cells: the lines through them swept,
-// the direct sun widened by the indirect radius) is the whole grid's computed and cut, bit for bit:
-// sky, every sample day's direct and indirect sun, on rough relief with NODATA cells, for windows
-// inside, at each edge and corner, one cell wide, and the whole grid; with and without the
-// indirect term, on a grid whose cells are not square.
+// or their rays alone traced by Embree, in the whole grid's packets; the direct sun widened by
+// the indirect radius) is the whole grid's computed and cut, bit for bit: sky, every sample day's
+// direct and indirect sun, on rough relief with NODATA cells, for windows inside (their corners
+// off the packets' 4 x 4 tiles), at each edge and corner, one cell wide, and the whole grid; with
+// and without the indirect term, on a grid whose cells are not square.
 TEST(Exposure, CellsComputedAloneAreTheWholeGridsCutBitForBit) {
   Field f = makeField(61, 47, 10.0, [](double x, double y) {
     return 1500.0 + 300.0 * std::sin(x / 90.0) * std::cos(y / 70.0) + 0.4 * x + 40.0 * std::sin(0.37 * x + 0.23 * y);
@@ -245,11 +246,16 @@ TEST(Exposure, CellsComputedAloneAreTheWholeGridsCutBitForBit) {
   s.quality.indirectRadiusM = 60.0;  // several cells beyond a window's edge
   ModelParameters noIndirect;
   noIndirect.indirectSunWeightHours = 0.0;
+  const RayScene rays(f.heights, f.spec);
+  for (const bool sweep : {true, false})
   for (const ModelParameters& p : {ModelParameters{}, noIndirect}) {
-    const Exposure whole = computeExposure(nullptr, f.heights, f.valid, f.spec, p, s);
+    SCOPED_TRACE(std::string(sweep ? "horizon sweep" : "Embree rays") + (p.indirectSunWeightHours > 0.0 ? ", indirect" : ", no indirect"));
+    s.horizonSweep = sweep;
+    const RayScene* scene = sweep ? nullptr : &rays;
+    const Exposure whole = computeExposure(scene, f.heights, f.valid, f.spec, p, s);
     for (const CellRect c : {CellRect{10, 8, 40, 30}, CellRect{0, 0, 25, 20}, CellRect{36, 27, 61, 47}, CellRect{0, 30, 61, 47},
-                             CellRect{30, 0, 31, 47}, CellRect{0, 0, 61, 47}}) {
-      const Exposure part = computeExposure(nullptr, f.heights, f.valid, f.spec, p, s, c);
+                             CellRect{30, 0, 31, 47}, CellRect{0, 0, 61, 47}, CellRect{13, 7, 26, 22}}) {
+      const Exposure part = computeExposure(scene, f.heights, f.valid, f.spec, p, s, c);
       ASSERT_EQ(part.days.size(), whole.days.size());
       ASSERT_TRUE(part.cells && *part.cells == c);
       EXPECT_EQ(gridWindow(whole.skyHours, c), part.skyHours) << c.x0 << "," << c.y0;
@@ -313,7 +319,7 @@ TEST(Exposure, ATermOfZeroWeightIsSkippedAndIsTheBytesComputingItWouldGive) {
       EXPECT_EQ(b.timings.sunRays, 0u);
     }
     const Grid<float> sky0 = sweep ? skyFromHorizons(computeHorizonsBySweep(f.heights, f.valid, f.spec, s.quality.azimuths), f.valid, 0.0)
-                                   : computeSkyExposure(scene, f.heights, f.valid, f.spec, s.quality.azimuths, s.quality.bisections, 0.0);
+                                   : computeSkyExposure(scene, f.valid, f.spec, s.quality.azimuths, s.quality.bisections, 0.0);
     EXPECT_TRUE(same(a.skyHours, sky0)) << sweep;
     EXPECT_TRUE(same(b.skyHours, full.skyHours)) << sweep;
     ASSERT_EQ(a.days.size(), full.days.size());

@@ -21,7 +21,7 @@ struct Agreement {
 Agreement compare(const Terrain& t, int azimuths, int doy, double lat) {
   const RayScene scene(t.heightsM, t.info.spec);
   std::vector<Grid<float>> embreeHorizons;
-  const Grid<float> skyE = computeSkyExposure(scene, t.heightsM, t.valid, t.info.spec, azimuths, 12, 0.1, nullptr, &embreeHorizons);
+  const Grid<float> skyE = computeSkyExposure(scene, t.valid, t.info.spec, azimuths, 12, 0.1, nullptr, &embreeHorizons);
   const auto sweep = computeHorizonsBySweep(t.heightsM, t.valid, t.info.spec, azimuths);
   const Grid<float> skyF = skyFromHorizons(sweep, t.valid, 0.1);
   const Grid<float> sunE = computeDirectSun(scene, t.heightsM, t.valid, t.info.spec, lat, doy, 0.5, 0.9);

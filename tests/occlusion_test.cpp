@@ -198,7 +198,7 @@ TEST(Occlusion, AmbientOcclusionMatchesTheCanyonSkyViewFactor) {
 
   // The same quantity from the season's sky term (horizon angles by bisection): I_sky = k pi a.
   const RayScene scene(t.heights, t.spec);
-  const Grid<float> sky = computeSkyExposure(scene, t.heights, t.valid, t.spec, 64, 12, 1.0);
+  const Grid<float> sky = computeSkyExposure(scene, t.valid, t.spec, 64, 12, 1.0);
   double skyMean = 0.0;
   for (int x = 250; x < 350; ++x) skyMean += sky(x, 60) / kPi;
   skyMean /= n;

@@ -7,11 +7,12 @@
 # from ../shared/data (skipped with a message when absent); tiles each rank writes for its own
 # subdomain, with art direction placed on each rank's local grid, resampled images (outputs.resize,
 # displacement maps) and the avalanche maps' and skiers' tiles from each rank's replica; whole
-# files rank 0 writes one at a time from the ranks' cells, and beside a tile set; the ranks' parts of the
-# precompute read from the cache by a second bake. Their manifests differ in the "memory" line alone (the measured peak varies from run
-# to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too small for
-# the ranks), each exit 2 with one message and nothing written, a failure on rank 0 alone, and one
-# rank failing to write its tile.
+# files rank 0 writes one at a time from the ranks' cells, and beside a tile set; the ranks' parts
+# of the precompute, read from the cache by a second bake, and Embree's rays traced for each
+# rank's cells alone. Their manifests differ in the "memory" line alone (the measured peak varies
+# from run to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too
+# small for the ranks), each exit 2 with one message and nothing written, a failure on rank 0
+# alone, and one rank failing to write its tile.
 #   bash bake_across_ranks_test.sh SNOWBAKE MPIEXEC DATA_DIR [MPIEXEC_FLAGS...]
 set -euo pipefail
 bin="$(realpath "$1")" mpiexec="$2" data="$3"
@@ -141,6 +142,16 @@ TOML
 check_scene winds "$work/winds.toml"
 grep -q "precompute: wind, 2 states" "$work/winds/alone/log" || fail "winds: not two wind states"
 grep -q "replica" "$work/winds/2/log" && fail "winds on 2 ranks: a replica without events"
+# The Embree path (precompute.sun_method = "embree"): each rank traces its own cells' rays against
+# the whole terrain's scene, in the whole grid's ray packets; on 3 ranks.
+embree=("$work/winds.toml" --set precompute.sun_method=embree --set season.days=25 --set 'outputs.frames_days=[20]')
+if bake embree "$work/embree/alone" alone "${embree[@]}" && bake embree "$work/embree/3" 3 "${embree[@]}"; then
+  same "embree on 3 ranks" "$work/embree/alone" "$work/embree/3"
+  grep -q "sun exposure (Embree rays)" "$work/embree/3/log" || fail "embree on 3 ranks: not the Embree path"
+  sky_rays() { sed -n 's/^  sun exposure (Embree rays): .* sky [0-9.]* s (\([0-9]*\) rays).*$/\1/p' "$1"; }
+  [ "$(sky_rays "$work/embree/3/log")" -lt "$(sky_rays "$work/embree/alone/log")" ] ||
+    fail "embree on 3 ranks: rank 0 traced as many sky rays as the whole grid's"
+fi
 # The season's peak per rank, where the kernel lets a process reset its peak count.
 if (echo 5 > /proc/self/clear_refs) 2> /dev/null; then
   grep -qE "^memory: peak resident per rank in the season [0-9]+, [0-9]+ MiB; after it [0-9]+, [0-9]+ MiB" "$work/winds/2/log" ||
