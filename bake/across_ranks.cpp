@@ -20,6 +20,7 @@
 #include "distributed/launch.h"
 #include "distributed/local_state.h"
 #include "distributed/wind_across_ranks.h"
+#include "distributed/window_gather.h"
 #include "memory_model.h"
 #include "frame_writer.h"
 #include "memory_trace.h"
@@ -67,6 +68,24 @@ struct Exchanging {
     if (std::uncaught_exceptions() == failing) inExchanges = false;
   }
 };
+
+// The whole grid's exposure on every rank from each rank's of its local grid: each sample grid
+// gathered from its cells' owners (a grid folding freed is freed on every rank alike).
+Exposure wholeExposureOnEveryRank(const dist::Communicator& comm, const dist::Decomposition& d, const Exposure& share, const GridSpec& spec) {
+  Exposure whole;
+  whole.timings = share.timings;
+  whole.folded = share.folded;
+  auto gathered = [&](const Grid<float>& g) {
+    if (g.empty()) return Grid<float>();
+    Grid<float> out(spec.width, spec.height);
+    dist::gatherWindow(comm, d, g.data(), sizeof(float), CellRect::whole(spec), out.data());
+    return out;
+  };
+  whole.skyHours = gathered(share.skyHours);
+  for (const DailyExposure& day : share.days)
+    whole.days.push_back({day.seasonDay, day.dayOfYear, gathered(day.sunHours), gathered(day.indirectHours)});
+  return whole;
+}
 
 }  // namespace
 
@@ -257,10 +276,19 @@ std::optional<RanksMemory> ranksMemory(const Scene& scene, const GridSpec& whole
 
 PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, uint8_t outputNeeds) {
   PrecomputeParts parts;
-  if (!acrossRanks || seasonOnReplica(scene)) return parts;
+  if (!acrossRanks) return parts;
   const dist::Communicator comm = dist::Communicator::world();
   const dist::Decomposition d = decompositionOf(scene, spec);
   const dist::CellRect cells = d.local(comm.rank());
+  if (seasonOnReplica(scene)) {  // the replica reads the whole grid's exposure: each rank makes its share
+    parts.exposureShare = cells;
+    parts.wholeExposure = [comm, d, spec](const Exposure& share) {
+      agreeBeforeExchanges(comm, false);
+      const Exchanging exchanging;
+      return wholeExposureOnEveryRank(comm, d, share, spec);
+    };
+    return parts;
+  }
   // Where each rank writes its tiles, the sun's and the wind's layers read the rank's part too.
   const bool tilesOnRanks = ranksWriteTheirTiles(scene, spec);
   if (tilesOnRanks || !(comm.rank() == 0 && (outputNeeds & kNeedsSun))) parts.exposure = cells;

@@ -49,14 +49,19 @@ Exposure loadOrComputeExposure(const Terrain& terrain, const std::vector<Triangl
   return e;
 }
 
-void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const PrecomputeCache& cache, const std::optional<CellRect>& cells,
+void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const PrecomputeCache& cache, const PrecomputeParts& parts,
                         Precomputed& pre, std::ostream& log) {
   const auto t0 = WallClock::now();
   const ExposureSettings es = exposureSettings(scene, terrain);
   if (scene.sunMethod == SunMethod::Horizon && !terrain.occluders.empty())
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
-  pre.exposure = loadOrComputeExposure(terrain.terrain, terrain.occluders, scene.params, es, cache, cells, log);
+  const bool shared = !parts.exposure && parts.exposureShare;
+  pre.exposure = loadOrComputeExposure(terrain.terrain, terrain.occluders, scene.params, es, cache, shared ? parts.exposureShare : parts.exposure, log);
   pre.exposure->foldIndirect();  // the season and the layers read I_sun + I_ind only
+  if (shared) {
+    pre.exposure = parts.wholeExposure(*pre.exposure);
+    log << "  sun exposure: the ranks' local grids' gathered whole on every rank (the season's replica reads it)\n";
+  }
   log << "precompute: sun exposure (" << es.quality.name << ", " << (es.horizonSweep ? "horizon sweep" : "Embree") << ", "
       << pre.exposure->days.size() << " sample days) (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
 }
@@ -134,7 +139,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   const StageDecision sun = sunExposureDecision(scene), windStage = windDecision(scene);
   if (sun.runs)
-    precomputeExposure(scene, terrain, cache, parts.exposure, pre, log);
+    precomputeExposure(scene, terrain, cache, parts, pre, log);
   else if (occlusionMode)
     log << "precompute: sun exposure and wind not needed in occlusion mode: skipped\n";
   else

@@ -8,11 +8,12 @@
 # subdomain, with art direction placed on each rank's local grid, resampled images (outputs.resize,
 # displacement maps) and the avalanche maps' and skiers' tiles from each rank's replica; whole
 # files rank 0 writes one at a time from the ranks' cells, and beside a tile set; the ranks' parts
-# of the precompute, read from the cache by a second bake, and Embree's rays traced for each
-# rank's cells alone. Their manifests differ in the "memory" line alone (the measured peak varies
-# from run to run). Then what a launch refuses (the CUDA backend, a missing terrain, a grid too
-# small for the ranks), each exit 2 with one message and nothing written, a failure on rank 0
-# alone, and one rank failing to write its tile.
+# of the precompute, read from the cache by a second bake, Embree's rays traced for each rank's
+# cells alone, and the replica's sun exposure gathered from the ranks' shares. Their manifests
+# differ in the "memory" line alone (the measured peak varies from run to run). Then what a launch
+# refuses (the CUDA backend, a missing terrain, a grid too small for the ranks), each exit 2 with
+# one message and nothing written, a failure on rank 0 alone, and one rank failing to write its
+# tile.
 #   bash bake_across_ranks_test.sh SNOWBAKE MPIEXEC DATA_DIR [MPIEXEC_FLAGS...]
 set -euo pipefail
 bin="$(realpath "$1")" mpiexec="$2" data="$3"
@@ -77,6 +78,11 @@ grep -qE "avalanche day .* cells released" "$work/default/alone/log" || fail "de
 grep -qE "skiers: [0-9]+ .*, [1-9][0-9]* skied" "$work/default/alone/log" || fail "default: nobody skied"
 grep -qE "[1-9][0-9]* set off an avalanche" "$work/default/alone/log" || fail "default: no skier set off an avalanche"
 grep -q "replica of the whole grid, brought up to date [1-9]" "$work/default/2/log" || fail "default on 2 ranks: no replica"
+# The replica's sun exposure: each rank sweeps its local grid's, then every rank gathers the whole.
+for ranks in 2 3 4; do
+  grep -q "sun exposure: the ranks' local grids' gathered whole on every rank" "$work/default/$ranks/log" ||
+    fail "default on $ranks ranks: each rank swept the whole grid's sun exposure"
+done
 # The frames gathered on rank 0 and written beside the season, or held until its end.
 for timing in beside after_season; do
   frames=("${default[@]}" --set "run.frame_writing=\"$timing\"")
