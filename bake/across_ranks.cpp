@@ -281,6 +281,7 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
   const dist::Decomposition d = decompositionOf(scene, spec);
   const dist::CellRect cells = d.local(comm.rank());
   if (seasonOnReplica(scene)) {  // the replica reads the whole grid's exposure: each rank makes its share
+    if (comm.size() == 1) return parts;  // its share would be the whole grid
     parts.exposureShare = cells;
     parts.wholeExposure = [comm, d, spec](const Exposure& share) {
       agreeBeforeExchanges(comm, false);

@@ -49,14 +49,16 @@ void terrainNormals(const Grid<float>& a, const Grid<uint8_t>& valid, const Grid
 }
 
 // Direct sun for one day: for each sun position above the horizon, shadow rays in 4 x 4 tiles
-// (coherent 16-ray packets). The tiles are the whole grid's wherever `cells` lie, the rays of
-// cells outside them left out: each ray is traced as in the whole grid's packet.
+// (coherent 16-ray packets). With `cells`, the whole grid's tiles that cover them, each traced
+// whole (Embree may trace a packet's rays one by one when few are active, so a ray's result can
+// depend on its packet's others), and the cells' results kept.
 Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, const Grid<uint8_t>& valid, const GridSpec& spec,
                              double latitudeDeg, int doy, double hourStep, double kSun, unsigned long long* rayCount,
                              std::optional<CellRect> cells) {
   const CellRect c = cells.value_or(CellRect::whole(spec));
+  const CellRect tiles = CellRect{c.x0 / 4 * 4, c.y0 / 4 * 4, (c.x1 + 3) / 4 * 4, (c.y1 + 3) / 4 * 4}.intersect(CellRect::whole(spec));
   std::vector<std::array<float, 3>> normals;
-  terrainNormals(heights, valid, spec, normals, c);
+  terrainNormals(heights, valid, spec, normals, tiles);
   Grid<float> sun(c.width(), c.height(), 0.f);
   std::atomic<unsigned long long> rays{0};
   for (double hour = hourStep / 2; hour < 24.0; hour += hourStep) {
@@ -76,8 +78,8 @@ Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, 
             want[k] = false;
             cosine[k] = 0.f;
             dirs[k] = dir;
-            if (!c.contains(i, j) || !valid(i, j)) continue;
-            const auto& n = normals[c.offsetOf(i, j)];
+            if (!tiles.contains(i, j) || !valid(i, j)) continue;
+            const auto& n = normals[tiles.offsetOf(i, j)];
             cosine[k] = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
             if (cosine[k] <= 0.f) continue;  // self-shadowed: facing away from the sun
             origins[k] = rayOrigin(scene, i, j, n, spec);
@@ -85,8 +87,10 @@ Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, 
             ++local;
           }
           scene.occluded16(want, origins, dirs, std::numeric_limits<float>::infinity(), hit);
-          for (int k = 0; k < 16; ++k)
-            if (want[k] && !hit[k]) sun(ti * 4 + (k & 3) - c.x0, tj * 4 + (k >> 2) - c.y0) += static_cast<float>(kSun * cosine[k] * hourStep);
+          for (int k = 0; k < 16; ++k) {
+            const int i = ti * 4 + (k & 3), j = tj * 4 + (k >> 2);
+            if (want[k] && !hit[k] && c.contains(i, j)) sun(i - c.x0, j - c.y0) += static_cast<float>(kSun * cosine[k] * hourStep);
+          }
         }
       rays += local;
     });

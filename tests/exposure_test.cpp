@@ -229,11 +229,12 @@ TEST(Exposure, AWindowGivesItsCellsOfTheWholeTotalOnEveryDay) {
 }
 
 // A rank's local grid computed alone (computeExposure with cells: the lines through them swept,
-// or their rays alone traced by Embree, in the whole grid's packets; the direct sun widened by
-// the indirect radius) is the whole grid's computed and cut, bit for bit: sky, every sample day's
-// direct and indirect sun, on rough relief with NODATA cells, for windows inside (their corners
-// off the packets' 4 x 4 tiles), at each edge and corner, one cell wide, and the whole grid; with
-// and without the indirect term, on a grid whose cells are not square.
+// or their rays alone traced by Embree, in the whole grid's packets, fewer rays than the whole
+// grid's; the direct sun widened by the indirect radius) is the whole grid's computed and cut,
+// bit for bit: sky, every sample day's direct and indirect sun, on rough relief with NODATA
+// cells, for windows inside (their corners off the packets' 4 x 4 tiles), at each edge and
+// corner, one cell wide, and the whole grid; with and without the indirect term, on a grid whose
+// cells are not square.
 TEST(Exposure, CellsComputedAloneAreTheWholeGridsCutBitForBit) {
   Field f = makeField(61, 47, 10.0, [](double x, double y) {
     return 1500.0 + 300.0 * std::sin(x / 90.0) * std::cos(y / 70.0) + 0.4 * x + 40.0 * std::sin(0.37 * x + 0.23 * y);
@@ -256,6 +257,12 @@ TEST(Exposure, CellsComputedAloneAreTheWholeGridsCutBitForBit) {
     for (const CellRect c : {CellRect{10, 8, 40, 30}, CellRect{0, 0, 25, 20}, CellRect{36, 27, 61, 47}, CellRect{0, 30, 61, 47},
                              CellRect{30, 0, 31, 47}, CellRect{0, 0, 61, 47}, CellRect{13, 7, 26, 22}}) {
       const Exposure part = computeExposure(scene, f.heights, f.valid, f.spec, p, s, c);
+      if (!sweep && c != CellRect{0, 0, 61, 47}) {  // the rays of the cells (and of their packets) alone
+        EXPECT_LT(part.timings.skyRays, whole.timings.skyRays);
+        if (p.indirectSunWeightHours == 0.0) {
+          EXPECT_LT(part.timings.sunRays, whole.timings.sunRays);
+        }
+      }
       ASSERT_EQ(part.days.size(), whole.days.size());
       ASSERT_TRUE(part.cells && *part.cells == c);
       EXPECT_EQ(gridWindow(whole.skyHours, c), part.skyHours) << c.x0 << "," << c.y0;

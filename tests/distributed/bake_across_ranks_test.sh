@@ -154,9 +154,11 @@ embree=("$work/winds.toml" --set precompute.sun_method=embree --set season.days=
 if bake embree "$work/embree/alone" alone "${embree[@]}" && bake embree "$work/embree/3" 3 "${embree[@]}"; then
   same "embree on 3 ranks" "$work/embree/alone" "$work/embree/3"
   grep -q "sun exposure (Embree rays)" "$work/embree/3/log" || fail "embree on 3 ranks: not the Embree path"
-  sky_rays() { sed -n 's/^  sun exposure (Embree rays): .* sky [0-9.]* s (\([0-9]*\) rays).*$/\1/p' "$1"; }
-  [ "$(sky_rays "$work/embree/3/log")" -lt "$(sky_rays "$work/embree/alone/log")" ] ||
-    fail "embree on 3 ranks: rank 0 traced as many sky rays as the whole grid's"
+  rays() { sed -n "s/^  sun exposure (Embree rays): .*$1 [0-9.]* s (\([0-9]*\) rays).*\$/\1/p" "$2"; }
+  for term in direct sky; do
+    [ "$(rays $term "$work/embree/3/log")" -lt "$(rays $term "$work/embree/alone/log")" ] ||
+      fail "embree on 3 ranks: rank 0 traced as many $term rays as the whole grid's"
+  done
 fi
 # The season's peak per rank, where the kernel lets a process reset its peak count.
 if (echo 5 > /proc/self/clear_refs) 2> /dev/null; then
