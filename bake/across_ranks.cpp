@@ -20,7 +20,7 @@
 #include "distributed/launch.h"
 #include "distributed/local_state.h"
 #include "distributed/wind_across_ranks.h"
-#include "distributed/window_gather.h"
+#include "distributed/whole_replica.h"
 #include "memory_model.h"
 #include "frame_writer.h"
 #include "memory_trace.h"
@@ -69,8 +69,8 @@ struct Exchanging {
   }
 };
 
-// The whole grid's exposure on every rank from each rank's of its local grid: each sample grid
-// gathered from its cells' owners (a grid folding freed is freed on every rank alike).
+// The whole grid's exposure on every rank from each rank's of its local grid: each sample grid's
+// owned cells gathered from every rank (a grid folding freed is freed on every rank alike).
 Exposure wholeExposureOnEveryRank(const dist::Communicator& comm, const dist::Decomposition& d, const Exposure& share, const GridSpec& spec) {
   Exposure whole;
   whole.timings = share.timings;
@@ -78,7 +78,7 @@ Exposure wholeExposureOnEveryRank(const dist::Communicator& comm, const dist::De
   auto gathered = [&](const Grid<float>& g) {
     if (g.empty()) return Grid<float>();
     Grid<float> out(spec.width, spec.height);
-    dist::gatherWindow(comm, d, g.data(), sizeof(float), CellRect::whole(spec), out.data());
+    dist::allGatherOwned(comm, d, g.data(), out.data(), sizeof(float));
     return out;
   };
   whole.skyHours = gathered(share.skyHours);

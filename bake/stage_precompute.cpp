@@ -55,7 +55,7 @@ void precomputeExposure(const Scene& scene, const BakeTerrain& terrain, const Pr
   const ExposureSettings es = exposureSettings(scene, terrain);
   if (scene.sunMethod == SunMethod::Horizon && !terrain.occluders.empty())
     throw InputError(scene.sourceName + ": precompute.sun_method = \"horizon\" cannot see occluder meshes; use \"embree\" or \"auto\"");
-  const bool shared = !parts.exposure && parts.exposureShare;
+  const bool shared = parts.exposureShare.has_value();
   pre.exposure = loadOrComputeExposure(terrain.terrain, terrain.occluders, scene.params, es, cache, shared ? parts.exposureShare : parts.exposure, log);
   pre.exposure->foldIndirect();  // the season and the layers read I_sun + I_ind only
   if (shared) {

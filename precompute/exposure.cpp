@@ -66,7 +66,7 @@ Grid<float> computeDirectSun(const RayScene& scene, const Grid<float>& heights, 
     if (s.elevationDeg <= 0.0) continue;
     const std::array<float, 3> dir{static_cast<float>(s.direction[0]), static_cast<float>(s.direction[1]),
                                    static_cast<float>(s.direction[2])};
-    tbb::parallel_for(tbb::blocked_range2d<int>(c.y0 / 4, (c.y1 + 3) / 4, c.x0 / 4, (c.x1 + 3) / 4), [&](const tbb::blocked_range2d<int>& r) {
+    tbb::parallel_for(tbb::blocked_range2d<int>(tiles.y0 / 4, (tiles.y1 + 3) / 4, tiles.x0 / 4, (tiles.x1 + 3) / 4), [&](const tbb::blocked_range2d<int>& r) {
       unsigned long long local = 0;
       for (int tj = r.rows().begin(); tj < r.rows().end(); ++tj)
         for (int ti = r.cols().begin(); ti < r.cols().end(); ++ti) {

@@ -248,27 +248,28 @@ TEST(Exposure, CellsComputedAloneAreTheWholeGridsCutBitForBit) {
   ModelParameters noIndirect;
   noIndirect.indirectSunWeightHours = 0.0;
   const RayScene rays(f.heights, f.spec);
-  for (const bool sweep : {true, false})
-  for (const ModelParameters& p : {ModelParameters{}, noIndirect}) {
-    SCOPED_TRACE(std::string(sweep ? "horizon sweep" : "Embree rays") + (p.indirectSunWeightHours > 0.0 ? ", indirect" : ", no indirect"));
-    s.horizonSweep = sweep;
-    const RayScene* scene = sweep ? nullptr : &rays;
-    const Exposure whole = computeExposure(scene, f.heights, f.valid, f.spec, p, s);
-    for (const CellRect c : {CellRect{10, 8, 40, 30}, CellRect{0, 0, 25, 20}, CellRect{36, 27, 61, 47}, CellRect{0, 30, 61, 47},
-                             CellRect{30, 0, 31, 47}, CellRect{0, 0, 61, 47}, CellRect{13, 7, 26, 22}}) {
-      const Exposure part = computeExposure(scene, f.heights, f.valid, f.spec, p, s, c);
-      if (!sweep && c != CellRect{0, 0, 61, 47}) {  // the rays of the cells (and of their packets) alone
-        EXPECT_LT(part.timings.skyRays, whole.timings.skyRays);
-        if (p.indirectSunWeightHours == 0.0) {
-          EXPECT_LT(part.timings.sunRays, whole.timings.sunRays);
+  for (const bool sweep : {true, false}) {
+    for (const ModelParameters& p : {ModelParameters{}, noIndirect}) {
+      SCOPED_TRACE(std::string(sweep ? "horizon sweep" : "Embree rays") + (p.indirectSunWeightHours > 0.0 ? ", indirect" : ", no indirect"));
+      s.horizonSweep = sweep;
+      const RayScene* scene = sweep ? nullptr : &rays;
+      const Exposure whole = computeExposure(scene, f.heights, f.valid, f.spec, p, s);
+      for (const CellRect c : {CellRect{10, 8, 40, 30}, CellRect{0, 0, 25, 20}, CellRect{36, 27, 61, 47}, CellRect{0, 30, 61, 47},
+                               CellRect{30, 0, 31, 47}, CellRect{0, 0, 61, 47}, CellRect{13, 7, 26, 22}}) {
+        const Exposure part = computeExposure(scene, f.heights, f.valid, f.spec, p, s, c);
+        if (!sweep && c != CellRect{0, 0, 61, 47}) {  // the rays of the cells (and of their packets) alone
+          EXPECT_LT(part.timings.skyRays, whole.timings.skyRays);
+          if (p.indirectSunWeightHours == 0.0) {
+            EXPECT_LT(part.timings.sunRays, whole.timings.sunRays);
+          }
         }
-      }
-      ASSERT_EQ(part.days.size(), whole.days.size());
-      ASSERT_TRUE(part.cells && *part.cells == c);
-      EXPECT_EQ(gridWindow(whole.skyHours, c), part.skyHours) << c.x0 << "," << c.y0;
-      for (size_t d = 0; d < whole.days.size(); ++d) {
-        EXPECT_EQ(gridWindow(whole.days[d].sunHours, c), part.days[d].sunHours) << c.x0 << "," << c.y0 << " day " << d;
-        EXPECT_EQ(gridWindow(whole.days[d].indirectHours, c), part.days[d].indirectHours) << c.x0 << "," << c.y0 << " day " << d;
+        ASSERT_EQ(part.days.size(), whole.days.size());
+        ASSERT_TRUE(part.cells && *part.cells == c);
+        EXPECT_EQ(gridWindow(whole.skyHours, c), part.skyHours) << c.x0 << "," << c.y0;
+        for (size_t d = 0; d < whole.days.size(); ++d) {
+          EXPECT_EQ(gridWindow(whole.days[d].sunHours, c), part.days[d].sunHours) << c.x0 << "," << c.y0 << " day " << d;
+          EXPECT_EQ(gridWindow(whole.days[d].indirectHours, c), part.days[d].indirectHours) << c.x0 << "," << c.y0 << " day " << d;
+        }
       }
     }
   }
