@@ -28,16 +28,22 @@
 # --tiles-resize PX: with --tiles, the tiles cut from the layers resampled to PX x PX pixels
 # (outputs.tiles.resize, PX = n 504 + 1) and the whole files beside them at the grid's size or
 # --resize's, which rank 0 writes one at a time, each gathered from the ranks.
+# --sun-method M: precompute.sun_method = M (horizon or embree). After the table, rank 0's
+# sun exposure lines of each run: its time, its parts and, by Embree, the rays traced.
+# --set KEY=VALUE: a scene key for every run, as `snowbake bake --set` (repeatable), e.g.
+# --set outputs.vdb=false.
 # --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
 # prints rank 0's log lines of each stage's time, the memory and the mass balance beside the row.
 #   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles|--whole [--sun-wind] [--ski-tracks F] [--displacement PX] [--resize PX]
-#                                   [--tiles-resize PX]]
+#                                   [--tiles-resize PX]] [--sun-method M] [--set KEY=VALUE ...]
 #                                   [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0 tiles=0 whole=0 sunwind="" skitracks="" only="" displacement="" resize="" tilesresize=""
+mode=strong events=0 tiles=0 whole=0 sunwind="" skitracks="" only="" displacement="" resize="" tilesresize="" sunmethod=""
+sets=()
 while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --whole ] || [ "${1:-}" = --sun-wind ] ||
-  [ "${1:-}" = --ski-tracks ] || [ "${1:-}" = --displacement ] || [ "${1:-}" = --resize ] || [ "${1:-}" = --tiles-resize ] || [ "${1:-}" = --ranks-only ]; do
+  [ "${1:-}" = --ski-tracks ] || [ "${1:-}" = --displacement ] || [ "${1:-}" = --resize ] || [ "${1:-}" = --tiles-resize ] ||
+  [ "${1:-}" = --sun-method ] || [ "${1:-}" = --set ] || [ "${1:-}" = --ranks-only ]; do
   case "$1" in
     --weak) mode=weak ;;
     --events) events=1 ;;
@@ -48,6 +54,8 @@ while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ]
     --displacement) displacement="displacement_size = [$2, $2]"; shift ;;
     --resize) resize="resize = [$2, $2]"; shift ;;
     --tiles-resize) tilesresize="resize = [$2, $2]"; shift ;;
+    --sun-method) sunmethod="$2" sets+=(--set "precompute.sun_method=$2"); shift ;;
+    --set) sets+=(--set "$2"); shift ;;
     --ranks-only) mode=only only="$2"; shift ;;
   esac
   shift
@@ -75,6 +83,7 @@ TOML
 fi
 args=(bake "$scene" --set "season.days=$days" --set 'outputs.frames_days=[]' --no-cache --quiet --out out)
 [ "$events" = 1 ] || args+=(--set parameters.avalanche_rate_per_km2_per_day=0 --set parameters.skiers_per_hour=0)
+args+=(${sets[@]+"${sets[@]}"})
 # run RANKS SIZE: bakes into $work/RANKS-SIZE; prints its table row ($one: the alone bake's peak).
 run() {
   local ranks="$1" size="$2" dir="$work/$1-$2" peaks largest season total season_peaks season_largest
@@ -105,7 +114,7 @@ same() {
   done
 }
 
-echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as $([ "$whole" = 1 ] && echo "whole files" || echo "Unreal tiles of 505") ($([ -n "$displacement" ] && echo "${displacement#displacement_size = }" displacement maps, no || echo no displacement maps,) VDB or meshes)")$([ -n "$resize" ] && echo ", outputs.$resize")$([ -n "$tilesresize" ] && echo ", outputs.tiles.$tilesresize")$([ -n "$skitracks" ] && echo ", ski_tracks at ${factor#ski_track_factor = } texels a cell"), 10 m cells, $days days;" \
+echo "bake across ranks ($mode): the default preset $([ "$events" = 1 ] && echo with || echo without) avalanches and skiers$([ "$tiles" = 1 ] && echo ", its layers as $([ "$whole" = 1 ] && echo "whole files" || echo "Unreal tiles of 505") ($([ -n "$displacement" ] && echo "${displacement#displacement_size = }" displacement maps, no || echo no displacement maps,) VDB or meshes)")$([ -n "$resize" ] && echo ", outputs.$resize")$([ -n "$tilesresize" ] && echo ", outputs.tiles.$tilesresize")$([ -n "$skitracks" ] && echo ", ski_tracks at ${factor#ski_track_factor = } texels a cell")$([ ${#sets[@]} -gt 0 ] && printf ' %s' "${sets[@]}"), 10 m cells, $days days;" \
      "$(nproc) cores: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'); commit $(git rev-parse --short HEAD)"
 printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' ranks grid "threads/rank" "season s" "total s" "peak MiB per rank" \
   "largest rank / one process" "season's peak MiB per rank" "largest / one process" "replica gathers"
@@ -120,9 +129,17 @@ elif [ "$mode" = only ]; then
   run "$only" "$size"
   echo
   echo "rank 0's log:"
-  grep -E '^(terrain|sun exposure|wind|season|outputs|total|memory|mass)' "$work/$only-$size/log" | sed 's/^/    /'
+  grep -E '^(terrain|precompute|  sun exposure|wind|season|outputs|total|memory|mass)' "$work/$only-$size/log" | sed 's/^/    /'
 else  # weak: SIZE² cells a rank (1448² is 2.0 x 1024²)
   run 1 "$size"
   run 2 "$(awk -v s="$size" 'BEGIN { printf "%d", s * sqrt(2) + 0.5 }')"
   run 4 "$((2 * size))"
+fi
+if [ "$mode" != only ]; then  # every run's sun exposure lines (their parts; by Embree, the rays)
+  echo
+  for dir in "$work"/*-*/; do
+    name="$(basename "$dir")"
+    echo "rank 0's sun exposure, ${name%%-*} rank$([ "${name%%-*}" = 1 ] || echo s), ${name#*-}²:"
+    grep -E '^(precompute: sun exposure|  sun exposure)' "$dir/log" | sed 's/^ */    /'
+  done
 fi
