@@ -1,7 +1,7 @@
 // The memory model (memory_model.h): every owner's bytes from the scene and the grid, the
 // field sizes from the field table (core/snow_fields.h), the phases of a bake as mode_grid.cpp
-// and mode_mesh.cpp run them. The few constants measured rather than counted say so; their
-// source is tools/measure-memory.sh (docs/memory.md).
+// and mode_mesh.cpp run them. The few constants measured rather than counted say so, and how;
+// tools/measure-memory.sh checks the whole model against measured peaks (docs/memory.md).
 #include "memory_model.h"
 #include "memory_trace.h"
 #include "memory_vdb.h"

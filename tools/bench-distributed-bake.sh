@@ -28,8 +28,9 @@
 # --tiles-resize PX: with --tiles, the tiles cut from the layers resampled to PX x PX pixels
 # (outputs.tiles.resize, PX = n 504 + 1) and the whole files beside them at the grid's size or
 # --resize's, which rank 0 writes one at a time, each gathered from the ranks.
-# --sun-method M: precompute.sun_method = M (horizon or embree). After the table, rank 0's
-# sun exposure lines of each run: its time, its parts and, by Embree, the rays traced.
+# --sun-method M: precompute.sun_method = M (horizon or embree).
+# After the table, rank 0's log lines of each run: the memory guard's prediction, and the sun
+# exposure's time, its parts and, by Embree, the rays traced.
 # --set KEY=VALUE: a scene key for every run, as `snowbake bake --set` (repeatable), e.g.
 # --set outputs.vdb=false.
 # --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
@@ -135,11 +136,11 @@ else  # weak: SIZE² cells a rank (1448² is 2.0 x 1024²)
   run 2 "$(awk -v s="$size" 'BEGIN { printf "%d", s * sqrt(2) + 0.5 }')"
   run 4 "$((2 * size))"
 fi
-if [ "$mode" != only ]; then  # every run's sun exposure lines (their parts; by Embree, the rays)
+if [ "$mode" != only ]; then  # each run's memory guard lines and sun exposure lines (their parts; by Embree, the rays)
   echo
   for dir in "$work"/*-*/; do
     name="$(basename "$dir")"
-    echo "rank 0's sun exposure, ${name%%-*} rank$([ "${name%%-*}" = 1 ] || echo s), ${name#*-}²:"
-    grep -E '^(precompute: sun exposure|  sun exposure)' "$dir/log" | sed 's/^ */    /'
+    echo "rank 0's log, ${name%%-*} rank$([ "${name%%-*}" = 1 ] || echo s), ${name#*-}²:"
+    grep -E '^(memory: (across|predicted)|precompute: sun exposure|  sun exposure)' "$dir/log" | sed 's/^ */    /'
   done
 fi
