@@ -288,118 +288,157 @@ std::string measuredMemoryBreakdown(const MemoryPrediction& p, double units, con
   return memoryBreakdownJson(p, measured, stage, units, unit);
 }
 
-MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach,
-                                 FrameTiming timing) {
-  if (timing == FrameTiming::Auto) timing = frameTimingOf(s);
-  using G = MemoryGroup;
-  const double cells = static_cast<double>(spec.width) * spec.height;
-  const OptionalFields present{s};
-  const bool occlusion = s.mode == SceneMode::Occlusion;
-  auto bytesOf = [&](auto pick) { return cells * fieldBytes(pick, present); };
-  const double state = bytesOf([](FieldRole r) { return r != FieldRole::Record; });  // and recordOwner's
-  const MemoryOwner terrain{"terrain", cells * 5.0, "terrain.size", G::State};
-  const MemoryOwner stateOwner{"snow state", bytesOf([](FieldRole r) { return r != FieldRole::Static && r != FieldRole::Record; }), "terrain.size", G::State};
-  const MemoryOwner staticOwner{"snow state: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields};
-  // Of the record fields (all floats), only those the layers read (SeasonConfig::recordFields).
-  const double keptRecords = std::popcount(recordFieldsToKeep(layersRecords(s.outputs.layers), s.outputs.avalancheMaps));
-  const MemoryOwner recordOwner{"snow state: record fields", cells * 4.0 * keptRecords, "outputs.layers", G::Records};
-  MemoryPrediction p;
-  p.libraryBytes = kLibraryBytes;
-
-  // Precompute: the horizons of every azimuth (or Embree's BVH), the exposure samples, the wind.
-  ExposureSettings es;
-  es.quality = sunQuality(s.sunQuality);
-  es.seasonDays = s.days;
-  const bool sweep = s.sunMethod == SunMethod::Horizon || (s.sunMethod == SunMethod::Auto && s.occluders.empty());
-  const double samples = (!occlusion && s.sunExposure) ? static_cast<double>(exposureSampleDays(es).size()) : 0.0;
-  // I_sky and, per sample day, I_sun and I_ind; the season keeps I_sun + I_ind (Exposure::foldIndirect).
-  const MemoryOwner computedExposure{"exposure samples", cells * 4.0 * (samples > 0 ? 1.0 + 2.0 * samples : 0.0), "precompute.sun_quality", G::ExposureSamples};
-  const MemoryOwner exposure{"exposure samples", cells * 4.0 * (samples > 0 ? 1.0 + samples : 0.0), "precompute.sun_quality", G::ExposureSamples};
-  size_t windStates = 0;
+namespace {
+// The distinct wind states of the keyframes (none in occlusion mode), and whether a calm keyframe
+// is among them (then one state varies too).
+struct WindStates {
+  size_t count = 0;
   bool calmKeyframe = false;
-  {
-    std::vector<std::pair<double, double>> seen;
-    for (const auto& k : s.weather.keyframes) {
-      calmKeyframe = calmKeyframe || k.state.windSpeedMps <= 0.0;
-      if (k.state.windSpeedMps > 0.0 && std::find(seen.begin(), seen.end(), std::make_pair(k.state.windDirectionDeg, k.state.windSpeedMps)) == seen.end())
-        seen.emplace_back(k.state.windDirectionDeg, k.state.windSpeedMps);
-    }
-    windStates = occlusion ? 0 : seen.size();
+};
+WindStates windStatesOf(const Scene& s) {
+  WindStates w;
+  std::vector<std::pair<double, double>> seen;
+  for (const auto& k : s.weather.keyframes) {
+    w.calmKeyframe = w.calmKeyframe || k.state.windSpeedMps <= 0.0;
+    if (k.state.windSpeedMps > 0.0 && std::find(seen.begin(), seen.end(), std::make_pair(k.state.windDirectionDeg, k.state.windSpeedMps)) == seen.end())
+      seen.emplace_back(k.state.windDirectionDeg, k.state.windSpeedMps);
   }
-  const MemoryOwner wind{"wind fields", cells * 20.0 * static_cast<double>(windStates), "weather.keyframe", G::WindFields};
+  w.count = s.mode == SceneMode::Occlusion ? 0 : seen.size();
+  return w;
+}
+
+MemoryOwner heldIf(bool held, MemoryOwner o) {
+  if (!held) o.bytes = 0.0;
+  return o;
+}
+
+// What a grid bake's phases hold, sized once from the scene and the grid; each phase below lists
+// the ones it holds at once.
+struct GridBakeOwners {
+  double cells = 0;
+  double state = 0;  // every field but the record fields (recordOwner's)
+  double samples = 0;  // the exposure's sample days (0: no sun exposure)
+  ExposureSettings es;
+  bool sweep = false;  // the sun by the horizon sweep, else by Embree's rays
+  double rayScene = 0;
+  WindStates wind;
+  bool windVaries = false;
+  MemoryOwner terrain, stateOwner, staticOwner, recordOwner;
+  // The exposure as computed (I_sky, I_sun and I_ind a sample day) and as kept (I_sun + I_ind:
+  // Exposure::foldIndirect); the wind's fields.
+  MemoryOwner computedExposure, exposure, windFields;
   // After the precompute a constant wind's fields are the state's copy unless a layer reads the
   // wind; after the season the exposure samples go unless a layer reads the sun, and the state's
   // static fields go (no writer reads them): bake/mode_grid.cpp.
-  const uint8_t needs = layersNeeds(s.outputs.layers);
-  const bool windVaries = windStates > 1 || (windStates > 0 && calmKeyframe);
-  auto heldIf = [](bool held, MemoryOwner o) {
-    if (!held) o.bytes = 0.0;
-    return o;
-  };
-  const MemoryOwner windKept = heldIf(windVaries || (needs & kNeedsWind), wind);
-  const MemoryOwner exposureAfter = heldIf(needs & kNeedsSun, exposure);
-  const double rayScene = cells * kEmbreeGridBytesPerCell + static_cast<double>(occluderTriangles) * kEmbreeBytesPerTriangle;
-  // The sun exposure, then the wind (the sun's working set freed between them); the record fields
-  // are made after both.
-  // The static fields are made by the precompute's fill of day 0: the exposure and the
-  // temperature base after the sun, the wind's after the wind (bake/stage_precompute.cpp).
-  const MemoryOwner staticBeforeWind{"snow state: static fields", cells * 8.0, "terrain.size", G::StaticFields};
-  MemoryPhase pre{"precompute: sun exposure", {terrain, stateOwner}};
-  if (samples > 0) {
-    // The sky's horizon grids (one an azimuth), or the shadows' sweep (three grids, the normals,
-    // a bit a cell for each sun position above the horizon: precompute/horizon.h).
-    const double sunPositions = samples * 24.0 / es.quality.hourStep * 0.5;
-    if (sweep)
-      pre.owners.push_back({"horizon angles", cells * (std::max(4.0 * es.quality.azimuths, 12.0 + 12.0 + sunPositions / 8.0) + kSweepScratchPerCell),
-                            "precompute.sun_quality", G::PrecomputeWork});
-    else
-      pre.owners.push_back({"ray scene (Embree)", rayScene, "precompute.sun_method", G::PrecomputeWork});
-    pre.owners.push_back(computedExposure);
-  }
-  p.phases.push_back(pre);
-  if (windStates > 0) {
-    MemoryPhase windPhase{"precompute: wind", {terrain, stateOwner, staticBeforeWind, computedExposure, wind,
-                                               {"wind solver", cells * kWindSolverPerCell, "weather.keyframe", G::PrecomputeWork}}};
-    if (samples <= 0) windPhase.owners[3].bytes = 0.0;
-    p.phases.push_back(windPhase);
-  }
-
-  // The season's end's writers, and the latest frame's (the most snow a frame writes).
-  const std::vector<MemoryOwner> writer = dayWriters(s, spec, cells, reach, s.days);
-  double lastFrame = 0;
-  for (double d : s.outputs.frameDays) lastFrame = std::max(lastFrame, std::min(d, s.days));
-  const std::vector<MemoryOwner> frameWriter = dayWriters(s, spec, cells, reach, lastFrame);
-  const double track = s.outputs.skiTrackFactor;
-  const bool skiTracks = hasLayer(s, "ski_tracks");
-  const MemoryOwner skiTexture{"ski-track texture", skiTracks ? cells * track * track * 4.0 : 0.0, "outputs.ski_track_factor", G::Records};
+  MemoryOwner windKept, exposureAfter;
+  std::vector<MemoryOwner> writer, frameWriter;  // the season's end's writers, the latest frame's
+  bool skiTracks = false;
+  MemoryOwner skiTexture;
   // The layers whose encodings wait for a "season" range wait on disk; the outputs read them back
   // one at a time.
-  const double readBack = seasonRangeReadBackBytes(s, cells, skiTexture.bytes);
-  if (occlusion) {
-    MemoryPhase occ{"occlusion", {terrain, stateOwner, staticOwner, recordOwner,
-                                  {"ray scene (Embree)", rayScene, "terrain.size", G::PrecomputeWork},
-                                  {"ray origins and normals", cells * 25.0, "terrain.size", G::Scratch},
-                                  {"occlusion fields", cells * 16.0, "terrain.size", G::StaticFields}}};
-    p.phases.push_back(occ);
-    MemoryPhase out{"outputs", {terrain, stateOwner, staticOwner, recordOwner, {"occlusion fields", cells * 16.0, "terrain.size", G::StaticFields}}};
-    out.owners.insert(out.owners.end(), writer.begin(), writer.end());
-    p.phases.push_back(out);
-    return p;
-  }
+  double readBack = 0;
+};
 
-  // The season: the backend holds the state's fields (the host keeps the terrain and, unless
-  // they are refilled daily, the static fields: SeasonRun::releaseHostCopies), its scratch, the
-  // avalanche runner's layers at release and scratch, the route map, a frame in flight.
-  const bool staticOnHost = !((samples > 0 || windVaries) && !s.bedforms.enabled);
-  // What the season holds whether it runs or waits for a frame (FrameTiming::Paused).
+GridBakeOwners gridBakeOwners(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach) {
+  using G = MemoryGroup;
+  GridBakeOwners o;
+  const double cells = o.cells = static_cast<double>(spec.width) * spec.height;
+  const OptionalFields present{s};
+  auto bytesOf = [&](auto pick) { return cells * fieldBytes(pick, present); };
+  o.state = bytesOf([](FieldRole r) { return r != FieldRole::Record; });
+  o.terrain = {"terrain", cells * 5.0, "terrain.size", G::State};
+  o.stateOwner = {"snow state", bytesOf([](FieldRole r) { return r != FieldRole::Static && r != FieldRole::Record; }), "terrain.size", G::State};
+  o.staticOwner = {"snow state: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields};
+  // Of the record fields (all floats), only those the layers read (SeasonConfig::recordFields).
+  const double keptRecords = std::popcount(recordFieldsToKeep(layersRecords(s.outputs.layers), s.outputs.avalancheMaps));
+  o.recordOwner = {"snow state: record fields", cells * 4.0 * keptRecords, "outputs.layers", G::Records};
+  o.es.quality = sunQuality(s.sunQuality);
+  o.es.seasonDays = s.days;
+  o.sweep = s.sunMethod == SunMethod::Horizon || (s.sunMethod == SunMethod::Auto && s.occluders.empty());
+  const bool occlusion = s.mode == SceneMode::Occlusion;
+  o.samples = (!occlusion && s.sunExposure) ? static_cast<double>(exposureSampleDays(o.es).size()) : 0.0;
+  o.computedExposure = {"exposure samples", cells * 4.0 * (o.samples > 0 ? 1.0 + 2.0 * o.samples : 0.0), "precompute.sun_quality", G::ExposureSamples};
+  o.exposure = {"exposure samples", cells * 4.0 * (o.samples > 0 ? 1.0 + o.samples : 0.0), "precompute.sun_quality", G::ExposureSamples};
+  o.wind = windStatesOf(s);
+  o.windFields = {"wind fields", cells * 20.0 * static_cast<double>(o.wind.count), "weather.keyframe", G::WindFields};
+  const uint8_t needs = layersNeeds(s.outputs.layers);
+  o.windVaries = o.wind.count > 1 || (o.wind.count > 0 && o.wind.calmKeyframe);
+  o.windKept = heldIf(o.windVaries || (needs & kNeedsWind), o.windFields);
+  o.exposureAfter = heldIf(needs & kNeedsSun, o.exposure);
+  o.rayScene = cells * kEmbreeGridBytesPerCell + static_cast<double>(occluderTriangles) * kEmbreeBytesPerTriangle;
+  o.writer = dayWriters(s, spec, cells, reach, s.days);
+  double lastFrame = 0;
+  for (double d : s.outputs.frameDays) lastFrame = std::max(lastFrame, std::min(d, s.days));
+  o.frameWriter = dayWriters(s, spec, cells, reach, lastFrame);
+  const double track = s.outputs.skiTrackFactor;
+  o.skiTracks = hasLayer(s, "ski_tracks");
+  o.skiTexture = {"ski-track texture", o.skiTracks ? cells * track * track * 4.0 : 0.0, "outputs.ski_track_factor", G::Records};
+  o.readBack = seasonRangeReadBackBytes(s, cells, o.skiTexture.bytes);
+  return o;
+}
+
+// The sun exposure, then the wind (the sun's working set freed between them); the record fields
+// are made after both. The static fields are made by the precompute's fill of day 0: the exposure
+// and the temperature base after the sun, the wind's after the wind (bake/stage_precompute.cpp).
+void addPrecomputePhases(MemoryPrediction& p, const GridBakeOwners& o) {
+  using G = MemoryGroup;
+  const double cells = o.cells;
+  MemoryPhase pre{"precompute: sun exposure", {o.terrain, o.stateOwner}};
+  if (o.samples > 0) {
+    // The sky's horizon grids (one an azimuth), or the shadows' sweep (three grids, the normals,
+    // a bit a cell for each sun position above the horizon: precompute/horizon.h).
+    const double sunPositions = o.samples * 24.0 / o.es.quality.hourStep * 0.5;
+    if (o.sweep)
+      pre.owners.push_back({"horizon angles", cells * (std::max(4.0 * o.es.quality.azimuths, 12.0 + 12.0 + sunPositions / 8.0) + kSweepScratchPerCell),
+                            "precompute.sun_quality", G::PrecomputeWork});
+    else
+      pre.owners.push_back({"ray scene (Embree)", o.rayScene, "precompute.sun_method", G::PrecomputeWork});
+    pre.owners.push_back(o.computedExposure);
+  }
+  p.phases.push_back(pre);
+  if (o.wind.count > 0) {
+    const MemoryOwner staticBeforeWind{"snow state: static fields", cells * 8.0, "terrain.size", G::StaticFields};
+    MemoryPhase windPhase{"precompute: wind", {o.terrain, o.stateOwner, staticBeforeWind, o.computedExposure, o.windFields,
+                                               {"wind solver", cells * kWindSolverPerCell, "weather.keyframe", G::PrecomputeWork}}};
+    if (o.samples <= 0) windPhase.owners[3].bytes = 0.0;
+    p.phases.push_back(windPhase);
+  }
+}
+
+// Occlusion mode in place of the season: the rays' scene and the occlusion fields, then the outputs.
+void addOcclusionPhases(MemoryPrediction& p, const GridBakeOwners& o) {
+  using G = MemoryGroup;
+  const double cells = o.cells;
+  MemoryPhase occ{"occlusion", {o.terrain, o.stateOwner, o.staticOwner, o.recordOwner,
+                                {"ray scene (Embree)", o.rayScene, "terrain.size", G::PrecomputeWork},
+                                {"ray origins and normals", cells * 25.0, "terrain.size", G::Scratch},
+                                {"occlusion fields", cells * 16.0, "terrain.size", G::StaticFields}}};
+  p.phases.push_back(occ);
+  MemoryPhase out{"outputs", {o.terrain, o.stateOwner, o.staticOwner, o.recordOwner, {"occlusion fields", cells * 16.0, "terrain.size", G::StaticFields}}};
+  out.owners.insert(out.owners.end(), o.writer.begin(), o.writer.end());
+  p.phases.push_back(out);
+}
+
+// The season, and its frames as `timing` writes them: beside it (one in flight), while it waits
+// (FrameTiming::Paused) or after it (every frame's copy held through it). The backend holds the
+// state's fields (the host keeps the terrain and, unless they are refilled daily, the static
+// fields: SeasonRun::releaseHostCopies), its scratch, the avalanche runner's layers at release and
+// scratch, the route map.
+void addSeasonPhases(MemoryPrediction& p, const GridBakeOwners& o, const Scene& s, FrameTiming timing) {
+  using G = MemoryGroup;
+  const double cells = o.cells;
+  const OptionalFields present{s};
+  auto bytesOf = [&](auto pick) { return cells * fieldBytes(pick, present); };
+  const bool staticOnHost = !((o.samples > 0 || o.windVaries) && !s.bedforms.enabled);
+  // What the season holds whether it runs or waits for a frame.
   const std::vector<MemoryOwner> held{
-      terrain,
+      o.terrain,
       {"snow state: terrain on the host", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || optionalField(r); }), "terrain.size", G::State},
-      exposure,
-      windKept,
+      o.exposure,
+      o.windKept,
       {"backend: state", bytesOf([](FieldRole r) { return r == FieldRole::Terrain || r == FieldRole::Evolved || r == FieldRole::ArtDirection; }), "terrain.size", G::State},
       {"backend: static fields", bytesOf([](FieldRole r) { return r == FieldRole::Static; }), "terrain.size", G::StaticFields},
-      {"backend: record fields", recordOwner.bytes, recordOwner.key, G::Records}};
+      {"backend: record fields", o.recordOwner.bytes, o.recordOwner.key, G::Records}};
   MemoryPhase season{"season", held};
   season.owners.push_back({"backend scratch", cells * (scratchBytes(true, true) + 16.0), "terrain.size", G::Scratch});
   // The avalanche runner and the route map exist only where the season can have avalanches and skiers.
@@ -407,8 +446,8 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   if (s.params.avalancheRatePerKm2PerDay > 0.0 || !s.userAvalanches.empty() || (skiing && s.params.skiTriggerFactor > 0.0))
     season.owners.push_back({"avalanche runner", cells * (16.0 + 1.0 + scratchBytes(false, true)), "terrain.size", G::Scratch});
   if (skiing) season.owners.push_back({"ski route map", cells * 20.0, "parameters.skiers_per_hour", G::Scratch});
-  if (staticOnHost) season.owners.push_back({"snow state: static fields on the host", staticOwner.bytes, "terrain.size", G::StaticFields});
-  if (skiTracks) season.owners.push_back(skiTexture);
+  if (staticOnHost) season.owners.push_back({"snow state: static fields on the host", o.staticOwner.bytes, "terrain.size", G::StaticFields});
+  if (o.skiTracks) season.owners.push_back(o.skiTexture);
   // Each skier's record (its refined track, about 4 KiB) and each scene avalanche's.
   double skiers = s.params.skiersPerHour * s.params.skiHoursPerDay * s.days;
   for (const auto& e : s.userSkiers) skiers += e.count;
@@ -419,18 +458,18 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
   // released, with the record fields the season keeps.
   const double frames = static_cast<double>(s.outputs.frameDays.size());
   const bool framesAfterSeason = frames > 0 && timing == FrameTiming::AfterSeason;
-  const double copy = state + recordOwner.bytes - (staticOnHost ? 0.0 : staticOwner.bytes);
+  const double copy = o.state + o.recordOwner.bytes - (staticOnHost ? 0.0 : o.staticOwner.bytes);
   const MemoryOwner heldCopies{"frames held: state copies", frames * copy, "outputs.frames_days", G::FramesInFlight};
-  const MemoryOwner heldTextures{"frames held: ski-track texture copies", frames * skiTexture.bytes, "outputs.frames_days", G::FramesInFlight};
+  const MemoryOwner heldTextures{"frames held: ski-track texture copies", frames * o.skiTexture.bytes, "outputs.frames_days", G::FramesInFlight};
   if (framesAfterSeason) {
     // Every frame's copies held through the season, written once the backend is freed.
     season.owners.push_back(heldCopies);
-    if (skiTracks) season.owners.push_back(heldTextures);
+    if (o.skiTracks) season.owners.push_back(heldTextures);
   } else if (frames > 0 && timing != FrameTiming::Paused) {
     // One frame in flight: its copy, two of the texture (the writer's and its layer), its writers.
     season.owners.push_back({"frame in flight: state copy", copy, "outputs.frames_days", G::FramesInFlight});
-    if (skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::FramesInFlight});
-    for (const auto& w : frameWriter) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
+    if (o.skiTracks) season.owners.push_back({"frame in flight: ski-track texture copies", 2.0 * o.skiTexture.bytes, "outputs.ski_track_factor", G::FramesInFlight});
+    for (const auto& w : o.frameWriter) season.owners.push_back({"frame in flight: " + w.name, w.bytes, w.key, G::Writers});
   }
   p.phases.push_back(season);
   if (frames > 0 && timing == FrameTiming::Paused) {
@@ -440,27 +479,47 @@ MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t oc
     MemoryPhase paused{"frame (the season paused)", held};
     paused.owners.push_back({"frame set aside: state copy", copy, "outputs.frames_days", G::FramesInFlight});
     if (skiing) paused.owners.push_back({"ski route map on the host", cells * 4.0, "parameters.skiers_per_hour", G::Scratch});
-    if (staticOnHost) paused.owners.push_back({"snow state: static fields on the host", staticOwner.bytes, "terrain.size", G::StaticFields});
-    if (skiTracks) paused.owners.push_back(skiTexture), paused.owners.push_back({"frame set aside: ski-track texture", skiTexture.bytes, "outputs.frames_days", G::FramesInFlight});
+    if (staticOnHost) paused.owners.push_back({"snow state: static fields on the host", o.staticOwner.bytes, "terrain.size", G::StaticFields});
+    if (o.skiTracks) paused.owners.push_back(o.skiTexture), paused.owners.push_back({"frame set aside: ski-track texture", o.skiTexture.bytes, "outputs.frames_days", G::FramesInFlight});
     paused.owners.push_back(records);
-    paused.owners.insert(paused.owners.end(), frameWriter.begin(), frameWriter.end());
+    paused.owners.insert(paused.owners.end(), o.frameWriter.begin(), o.frameWriter.end());
     p.phases.push_back(paused);
   }
   if (framesAfterSeason) {
     // The host's state whole again (the season's last download), the copies not yet written
     // (counted whole), the frame's writers.
-    MemoryPhase after{"frames after the season", {terrain, stateOwner, recordOwner, exposureAfter, windKept, heldCopies}};
-    if (skiTracks) after.owners.push_back(skiTexture), after.owners.push_back(heldTextures);
-    after.owners.insert(after.owners.end(), frameWriter.begin(), frameWriter.end());
+    MemoryPhase after{"frames after the season", {o.terrain, o.stateOwner, o.recordOwner, o.exposureAfter, o.windKept, heldCopies}};
+    if (o.skiTracks) after.owners.push_back(o.skiTexture), after.owners.push_back(heldTextures);
+    after.owners.insert(after.owners.end(), o.frameWriter.begin(), o.frameWriter.end());
     p.phases.push_back(after);
   }
+}
 
-  // The outputs: the backend is freed once the season ends, and the state's static fields.
-  MemoryPhase out{"outputs", {terrain, stateOwner, recordOwner, exposureAfter, windKept}};
-  if (skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * skiTexture.bytes, "outputs.ski_track_factor", G::Records});
-  out.owners.insert(out.owners.end(), writer.begin(), writer.end());
-  if (readBack > 0) out.owners.push_back({"a layer read back for its season range", readBack, "outputs.ranges", G::Writers});
+// The outputs: the backend is freed once the season ends, and the state's static fields.
+void addOutputsPhase(MemoryPrediction& p, const GridBakeOwners& o) {
+  using G = MemoryGroup;
+  MemoryPhase out{"outputs", {o.terrain, o.stateOwner, o.recordOwner, o.exposureAfter, o.windKept}};
+  if (o.skiTracks) out.owners.push_back({"ski-track texture and its layer", 2.0 * o.skiTexture.bytes, "outputs.ski_track_factor", G::Records});
+  out.owners.insert(out.owners.end(), o.writer.begin(), o.writer.end());
+  if (o.readBack > 0) out.owners.push_back({"a layer read back for its season range", o.readBack, "outputs.ranges", G::Writers});
   p.phases.push_back(out);
+}
+}  // namespace
+
+// The bake's phases in order, each with the owners it holds at once (docs/memory.md).
+MemoryPrediction predictGridBake(const Scene& s, const GridSpec& spec, size_t occluderTriangles, const SnowReach& reach,
+                                 FrameTiming timing) {
+  if (timing == FrameTiming::Auto) timing = frameTimingOf(s);
+  const GridBakeOwners o = gridBakeOwners(s, spec, occluderTriangles, reach);
+  MemoryPrediction p;
+  p.libraryBytes = kLibraryBytes;
+  addPrecomputePhases(p, o);
+  if (s.mode == SceneMode::Occlusion) {
+    addOcclusionPhases(p, o);
+    return p;
+  }
+  addSeasonPhases(p, o, s, timing);
+  addOutputsPhase(p, o);
   return p;
 }
 
