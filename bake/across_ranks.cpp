@@ -69,22 +69,43 @@ struct Exchanging {
   }
 };
 
+// A grid of the rank's local grid made the whole grid's on every rank: its owned cells gathered
+// from every rank.
+Grid<float> wholeOnEveryRank(const dist::Communicator& comm, const dist::Decomposition& d, const Grid<float>& local, const GridSpec& spec) {
+  if (local.empty()) return Grid<float>();
+  Grid<float> out(spec.width, spec.height);
+  dist::allGatherOwned(comm, d, local.data(), out.data(), sizeof(float));
+  return out;
+}
+
 // The whole grid's exposure on every rank from each rank's of its local grid: each sample grid's
 // owned cells gathered from every rank (a grid folding freed is freed on every rank alike).
 Exposure wholeExposureOnEveryRank(const dist::Communicator& comm, const dist::Decomposition& d, const Exposure& share, const GridSpec& spec) {
   Exposure whole;
   whole.timings = share.timings;
   whole.folded = share.folded;
-  auto gathered = [&](const Grid<float>& g) {
-    if (g.empty()) return Grid<float>();
-    Grid<float> out(spec.width, spec.height);
-    dist::allGatherOwned(comm, d, g.data(), out.data(), sizeof(float));
-    return out;
-  };
+  auto gathered = [&](const Grid<float>& g) { return wholeOnEveryRank(comm, d, g, spec); };
   whole.skyHours = gathered(share.skyHours);
   for (const DailyExposure& day : share.days)
     whole.days.push_back({day.seasonDay, day.dayOfYear, gathered(day.sunHours), gathered(day.indirectHours)});
   return whole;
+}
+
+// The wind on a rank's local grid, its solve exchanging with the other ranks' (each rank solves
+// the same states in the same order).
+WindPart windPartOn(const dist::Communicator& comm, const dist::Decomposition& d, const dist::CellRect& cells) {
+  return WindPart{cells,
+                  [comm, d](const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& s, const WindState& state,
+                            const ModelParameters& p, const WindSolverOptions& o, WindField& f, Grid<float>& loading) {
+                    agreeBeforeExchanges(comm, false);
+                    const Exchanging exchanging;
+                    return dist::solveWindOnLocalGrid(comm, d, altitude, valid, s, state, p, o, f, loading);
+                  },
+                  [comm](bool found) {  // after the failures' agreement, as a solve: a rank that failed joins that
+                    agreeBeforeExchanges(comm, false);
+                    const std::vector<double> all = comm.allGather({found ? 1.0 : 0.0});
+                    return std::all_of(all.begin(), all.end(), [](double f) { return f == 1.0; });
+                  }};
 }
 
 }  // namespace
@@ -288,23 +309,18 @@ PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, ui
       const Exchanging exchanging;
       return wholeExposureOnEveryRank(comm, d, share, spec);
     };
+    parts.windShare = windPartOn(comm, d, cells);
+    parts.wholeWind = [comm, d, spec](const WindTimeline& share, const Grid<float>& altitude) {
+      agreeBeforeExchanges(comm, false);
+      const Exchanging exchanging;
+      return share.gatheredWhole(altitude, [&](const Grid<float>& g) { return wholeOnEveryRank(comm, d, g, spec); });
+    };
     return parts;
   }
   // Where each rank writes its tiles, the sun's and the wind's layers read the rank's part too.
   const bool tilesOnRanks = ranksWriteTheirTiles(scene, spec);
   if (tilesOnRanks || !(comm.rank() == 0 && (outputNeeds & kNeedsSun))) parts.exposure = cells;
-  if (tilesOnRanks || !(outputNeeds & kNeedsWind))
-    parts.wind = WindPart{cells, [comm, d](const Grid<float>& altitude, const Grid<uint8_t>& valid, const GridSpec& s, const WindState& state,
-                                           const ModelParameters& p, const WindSolverOptions& o, WindField& f, Grid<float>& loading) {
-                            agreeBeforeExchanges(comm, false);
-                            const Exchanging exchanging;
-                            return dist::solveWindOnLocalGrid(comm, d, altitude, valid, s, state, p, o, f, loading);
-                          },
-                          [comm](bool found) {  // after the failures' agreement, as a solve: a rank that failed joins that
-                            agreeBeforeExchanges(comm, false);
-                            const std::vector<double> all = comm.allGather({found ? 1.0 : 0.0});
-                            return std::all_of(all.begin(), all.end(), [](double f) { return f == 1.0; });
-                          }};
+  if (tilesOnRanks || !(outputNeeds & kNeedsWind)) parts.wind = windPartOn(comm, d, cells);
   return parts;
 }
 

@@ -56,8 +56,8 @@ void checkRanksSuitTheGrid(const Scene& scene, const GridSpec& spec);
 // The parts of the precompute this rank makes on its local grid alone (none when not across
 // ranks): the exposure, but on rank 0 where a layer in `outputNeeds` reads the sun; the wind on
 // every rank alike (its solve exchanges), unless a layer reads the wind. Where the season runs on
-// the replica, which reads the whole grid's, only the exposure's share, gathered whole on every
-// rank (PrecomputeParts::exposureShare); the wind whole on every rank.
+// the replica, which reads the whole grid's, only the exposure's and the wind's shares, gathered
+// whole on every rank (PrecomputeParts::exposureShare, windShare).
 PrecomputeParts rankPrecomputeParts(const Scene& scene, const GridSpec& spec, uint8_t outputNeeds);
 
 // Across ranks, the peak each rank of this machine is predicted to hold (memory_model.h): rank 0

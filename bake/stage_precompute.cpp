@@ -149,8 +149,13 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   const auto t0 = WallClock::now();
   const WeatherTimeline calm;
   const Terrain& t = terrain.terrain;  // the state's terrain fields' bytes, which a rank may hold in part
-  pre.wind.emplace(t.heightsM, t.valid, t.info.spec, occlusionMode ? calm : scene.weather, scene.params, cache,
-                   WindSolverOptions{}, &log, parts.wind ? &*parts.wind : nullptr);
+  const WindPart* windPart = parts.wind ? &*parts.wind : parts.windShare ? &*parts.windShare : nullptr;
+  pre.wind.emplace(t.heightsM, t.valid, t.info.spec, occlusionMode ? calm : scene.weather, scene.params, cache, WindSolverOptions{}, &log,
+                   windPart);
+  if (parts.windShare) {
+    pre.wind = parts.wholeWind(*pre.wind, t.heightsM);
+    if (windStage.runs) log << "  wind: the ranks' local grids' gathered whole on every rank (the season's replica reads it)\n";
+  }
   const WindTimeline& wind = *pre.wind;
   if (windStage.runs)
     progress().event("precompute", "wind", {{"status", jsonText(wind.computedStates() ? "computed" : "cached")},
@@ -161,7 +166,7 @@ Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowSt
   } else if (windStage.runs) {
     log << "precompute: wind, " << wind.stateCount() << " state" << (wind.stateCount() == 1 ? "" : "s") << " (" << wind.computedStates()
         << " computed, " << wind.cachedStates() << " from the cache"
-        << (parts.wind ? ", each rank its local grid's" : "") << (cache.enabled() ? " " + cache.directory() : std::string(", cache off"))
+        << (windPart ? ", each rank its local grid's" : "") << (cache.enabled() ? " " + cache.directory() : std::string(", cache off"))
         << ") (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   } else {
     log << "precompute: no wind in the season: wind field skipped\n";

@@ -89,9 +89,11 @@ struct PrecomputeParts {
   bool any() const { return exposure || wind; }
   // Where the season runs on the whole grid's replica (no part above): the sun exposure computed
   // on these cells alone, then made whole by `wholeExposure` from every rank's (a gather), so the
-  // ranks share its rays and sweeps instead of each computing the whole grid's.
+  // ranks share its rays and sweeps instead of each computing the whole grid's; the wind alike.
   std::optional<CellRect> exposureShare;
   std::function<Exposure(const Exposure&)> wholeExposure;
+  std::optional<WindPart> windShare;
+  std::function<WindTimeline(const WindTimeline& share, const Grid<float>& wholeAltitude)> wholeWind;
 };
 Precomputed runPrecompute(const Scene& scene, const BakeTerrain& terrain, SnowState& state, const PrecomputeCache& cache,
                           const PrecomputeParts& parts, std::ostream& log);

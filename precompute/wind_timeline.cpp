@@ -150,6 +150,24 @@ WindTimeline WindTimeline::window(int x0, int y0, int width, int height) const {
   return out;
 }
 
+WindTimeline WindTimeline::gatheredWhole(const Grid<float>& altitude, const std::function<Grid<float>(const Grid<float>&)>& gather) const {
+  WindTimeline out;
+  out.altitude_ = &altitude;
+  out.weather_ = weather_;
+  out.states_ = states_;
+  out.keyframeState_ = keyframeState_;
+  out.computed_ = computed_, out.cached_ = cached_, out.released_ = released_;
+  for (const WindField& f : fields_) {
+    WindField whole;
+    whole.windXMps = gather(f.windXMps), whole.windYMps = gather(f.windYMps), whole.windEffectZM = gather(f.windEffectZM);
+    whole.verticalSpeedMps = gather(f.verticalSpeedMps);
+    whole.stats = f.stats;
+    out.fields_.push_back(std::move(whole));
+  }
+  for (const Grid<float>& g : loading_) out.loading_.push_back(gather(g));
+  return out;
+}
+
 WindFieldsAtDay WindTimeline::at(double day) const {
   if (released_ && !states_.empty()) throw std::logic_error("WindTimeline::at: the wind fields were released");
   WindFieldsAtDay out;

@@ -70,6 +70,10 @@ class WindTimeline {
   WindTimeline window(int x0, int y0, int width, int height) const;
   // The whole grid's cells its fields cover: nullopt for the whole grid.
   const std::optional<CellRect>& cells() const { return cells_; }
+  // This part's timeline made the whole grid's (across ranks, where every rank made its part):
+  // each of its grids by `gather`, which makes the whole grid's from every rank's part of it, over
+  // the whole grid's `altitude` (which must outlive it).
+  WindTimeline gatheredWhole(const Grid<float>& altitude, const std::function<Grid<float>(const Grid<float>&)>& gather) const;
 
  private:
   WindTimeline() = default;

@@ -78,10 +78,12 @@ grep -qE "avalanche day .* cells released" "$work/default/alone/log" || fail "de
 grep -qE "skiers: [0-9]+ .*, [1-9][0-9]* skied" "$work/default/alone/log" || fail "default: nobody skied"
 grep -qE "[1-9][0-9]* set off an avalanche" "$work/default/alone/log" || fail "default: no skier set off an avalanche"
 grep -q "replica of the whole grid, brought up to date [1-9]" "$work/default/2/log" || fail "default on 2 ranks: no replica"
-# The replica's sun exposure: each rank sweeps its local grid's, then every rank gathers the whole.
+# The replica's sun exposure and wind: each rank makes its local grid's, then every rank gathers the whole.
 for ranks in 2 3 4; do
   grep -q "sun exposure: the ranks' local grids' gathered whole on every rank" "$work/default/$ranks/log" ||
     fail "default on $ranks ranks: each rank swept the whole grid's sun exposure"
+  grep -q "wind: the ranks' local grids' gathered whole on every rank" "$work/default/$ranks/log" ||
+    fail "default on $ranks ranks: each rank solved the whole grid's wind"
 done
 # The frames gathered on rank 0 and written beside the season, or held until its end.
 for timing in beside after_season; do
@@ -148,6 +150,16 @@ TOML
 check_scene winds "$work/winds.toml"
 grep -q "precompute: wind, 2 states" "$work/winds/alone/log" || fail "winds: not two wind states"
 grep -q "replica" "$work/winds/2/log" && fail "winds on 2 ranks: a replica without events"
+# The varying wind on the replica (skiers on): each rank solves its local grid's two states, then
+# every rank gathers the whole grid's; on 3 ranks.
+replica_winds=("$work/winds.toml" --set parameters.skiers_per_hour=1.0 --set season.days=50)
+if bake replica_winds "$work/replica_winds/alone" alone "${replica_winds[@]}" && bake replica_winds "$work/replica_winds/3" 3 "${replica_winds[@]}"; then
+  same "the varying wind on the replica on 3 ranks" "$work/replica_winds/alone" "$work/replica_winds/3"
+  grep -q "replica of the whole grid" "$work/replica_winds/3/log" || fail "replica_winds on 3 ranks: no replica"
+  grep -q "precompute: wind, 2 states (2 computed, 0 from the cache, each rank its local grid's" "$work/replica_winds/3/log" &&
+    grep -q "wind: the ranks' local grids' gathered whole on every rank" "$work/replica_winds/3/log" ||
+    fail "replica_winds on 3 ranks: each rank solved the whole grid's wind"
+fi
 # The Embree path (precompute.sun_method = "embree"): each rank traces its own cells' rays against
 # the whole terrain's scene, in the whole grid's ray packets; on 3 ranks.
 embree=("$work/winds.toml" --set precompute.sun_method=embree --set season.days=25 --set 'outputs.frames_days=[20]')
