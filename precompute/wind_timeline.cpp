@@ -129,42 +129,35 @@ void WindTimeline::releaseFields() {
   released_ = true;
 }
 
-WindTimeline WindTimeline::window(int x0, int y0, int width, int height) const {
-  auto cut = [&](const Grid<float>& g) { return gridWindow(g, x0, y0, width, height); };
+WindTimeline WindTimeline::withGrids(const std::function<Grid<float>(const Grid<float>&)>& each) const {
   WindTimeline out;
-  const CellRect base = cells_.value_or(CellRect{0, 0, altitude().width(), altitude().height()});
-  out.cells_ = CellRect{base.x0 + x0, base.y0 + y0, base.x0 + x0 + width, base.y0 + y0 + height};
-  out.windowAltitude_ = cut(altitude());
   out.weather_ = weather_;
   out.states_ = states_;
   out.keyframeState_ = keyframeState_;
   out.computed_ = computed_, out.cached_ = cached_, out.released_ = released_;
   for (const WindField& f : fields_) {
-    WindField c;
-    c.windXMps = cut(f.windXMps), c.windYMps = cut(f.windYMps), c.windEffectZM = cut(f.windEffectZM);
-    c.verticalSpeedMps = cut(f.verticalSpeedMps);
-    c.stats = f.stats;
-    out.fields_.push_back(std::move(c));
+    WindField g;
+    g.windXMps = each(f.windXMps), g.windYMps = each(f.windYMps), g.windEffectZM = each(f.windEffectZM);
+    g.verticalSpeedMps = each(f.verticalSpeedMps);
+    g.stats = f.stats;
+    out.fields_.push_back(std::move(g));
   }
-  for (const Grid<float>& g : loading_) out.loading_.push_back(cut(g));
+  for (const Grid<float>& g : loading_) out.loading_.push_back(each(g));
+  return out;
+}
+
+WindTimeline WindTimeline::window(int x0, int y0, int width, int height) const {
+  auto cut = [&](const Grid<float>& g) { return gridWindow(g, x0, y0, width, height); };
+  WindTimeline out = withGrids(cut);
+  const CellRect base = cells_.value_or(CellRect{0, 0, altitude().width(), altitude().height()});
+  out.cells_ = CellRect{base.x0 + x0, base.y0 + y0, base.x0 + x0 + width, base.y0 + y0 + height};
+  out.windowAltitude_ = cut(altitude());
   return out;
 }
 
 WindTimeline WindTimeline::gatheredWhole(const Grid<float>& altitude, const std::function<Grid<float>(const Grid<float>&)>& gather) const {
-  WindTimeline out;
+  WindTimeline out = withGrids(gather);
   out.altitude_ = &altitude;
-  out.weather_ = weather_;
-  out.states_ = states_;
-  out.keyframeState_ = keyframeState_;
-  out.computed_ = computed_, out.cached_ = cached_, out.released_ = released_;
-  for (const WindField& f : fields_) {
-    WindField whole;
-    whole.windXMps = gather(f.windXMps), whole.windYMps = gather(f.windYMps), whole.windEffectZM = gather(f.windEffectZM);
-    whole.verticalSpeedMps = gather(f.verticalSpeedMps);
-    whole.stats = f.stats;
-    out.fields_.push_back(std::move(whole));
-  }
-  for (const Grid<float>& g : loading_) out.loading_.push_back(gather(g));
   return out;
 }
 

@@ -77,6 +77,8 @@ class WindTimeline {
 
  private:
   WindTimeline() = default;
+  // A copy of its states and keyframes with each of its grids (fields and loading) made by `each`.
+  WindTimeline withGrids(const std::function<Grid<float>(const Grid<float>&)>& each) const;
   const Grid<float>& altitude() const { return altitude_ ? *altitude_ : windowAltitude_; }
   const Grid<float>* altitude_ = nullptr;  // the terrain's; null in a window, which holds its own
   Grid<float> windowAltitude_;
