@@ -366,6 +366,28 @@ void mergeTheRanksFiles(OutputSink& files) {
   inExchanges = false;  // the ranks' last exchange before the end's agreement
 }
 
+namespace {
+// The log's lines on how the ranks split the grid and who writes the outputs.
+void logTheRanksLayout(const Scene& scene, const dist::Communicator& comm, const dist::Decomposition& d, bool tilesOnRanks, std::ostream& log) {
+  const bool untiled = scene.outputs.tiles.convention == TileConvention::None;
+  log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid"
+      << (tilesOnRanks && !untiled ? " cut on the tiles' starts" : "") << "; rank 0's subdomain " << d.owned(0).width() << " x "
+      << d.owned(0).height() << " cells, halo " << d.halo << "\n";
+  if (tilesOnRanks && untiled)
+    log << "outputs: rank 0 writes every file, each gathered from the ranks one at a time\n";
+  else if (tilesOnRanks)
+    log << "outputs: each rank writes the tiles that start in its subdomain\n";
+  else if (const std::string why = whyRankZeroWritesEveryFile(scene); !why.empty())
+    log << "outputs: rank 0 gathers the whole grid and writes every file: " << why << "\n";
+  else if (untiled)
+    log << "outputs: rank 0 gathers the whole grid and writes every file: a rank's local grid is the whole grid\n";
+  else
+    log << "outputs: rank 0 gathers the whole grid and writes every file: the grid does not split into bands of whole tiles, one a rank,"
+           " or a rank's local grid would be the whole grid\n";
+}
+
+}  // namespace
+
 SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std::unique_ptr<SnowBackend> local, SnowState& state,
                                   Precomputed& pre, uint8_t outputNeeds, SeasonConfig config, FrameWriter& frames, std::ostream& log) {
   const dist::Communicator comm = dist::Communicator::world();
@@ -420,21 +442,7 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   agreeBeforeExchanges(comm, true);
   inExchanges = true;
   startSeasonPeak();
-  const bool untiled = scene.outputs.tiles.convention == TileConvention::None;
-  log << "season: across " << comm.size() << " ranks, a " << d.columns << " x " << d.rows << " process grid"
-      << (tilesOnRanks && !untiled ? " cut on the tiles' starts" : "") << "; rank 0's subdomain " << d.owned(0).width() << " x "
-      << d.owned(0).height() << " cells, halo " << d.halo << "\n";
-  if (tilesOnRanks && untiled)
-    log << "outputs: rank 0 writes every file, each gathered from the ranks one at a time\n";
-  else if (tilesOnRanks)
-    log << "outputs: each rank writes the tiles that start in its subdomain\n";
-  else if (const std::string why = whyRankZeroWritesEveryFile(scene); !why.empty())
-    log << "outputs: rank 0 gathers the whole grid and writes every file: " << why << "\n";
-  else if (untiled)
-    log << "outputs: rank 0 gathers the whole grid and writes every file: a rank's local grid is the whole grid\n";
-  else
-    log << "outputs: rank 0 gathers the whole grid and writes every file: the grid does not split into bands of whole tiles, one a rank,"
-           " or a rank's local grid would be the whole grid\n";
+  logTheRanksLayout(scene, comm, d, tilesOnRanks, log);
   SeasonReport report;
   {  // the backend and its scratch live for the season alone
     dist::DistributedBackend backend(std::move(local), comm, d);
