@@ -29,18 +29,18 @@
 # (outputs.tiles.resize, PX = n 504 + 1) and the whole files beside them at the grid's size or
 # --resize's, which rank 0 writes one at a time, each gathered from the ranks.
 # --sun-method M: precompute.sun_method = M (horizon or embree).
-# After the table, rank 0's log lines of each run: the memory guard's prediction, and the sun
-# exposure's time, its parts and, by Embree, the rays traced.
 # --set KEY=VALUE: a scene key for every run, as `snowbake bake --set` (repeatable), e.g.
 # --set outputs.vdb=false.
 # --ranks-only N: N ranks alone, for a grid one process cannot hold (no byte check, no ratios);
 # prints rank 0's log lines of each stage's time, the memory and the mass balance beside the row.
+# Otherwise, after the table, rank 0's log lines of each run: the memory guard's prediction, and
+# the sun exposure's time, its parts and, by Embree, the rays traced.
 #   tools/bench-distributed-bake.sh [--weak] [--events] [--tiles|--whole [--sun-wind] [--ski-tracks F] [--displacement PX] [--resize PX]
 #                                   [--tiles-resize PX]] [--sun-method M] [--set KEY=VALUE ...]
 #                                   [--ranks-only N] [BUILD=build] [SIZE=1024] [DAYS=30]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-mode=strong events=0 tiles=0 whole=0 sunwind="" skitracks="" only="" displacement="" resize="" tilesresize="" sunmethod=""
+mode=strong events=0 tiles=0 whole=0 sunwind="" skitracks="" only="" displacement="" resize="" tilesresize=""
 sets=()
 while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ] || [ "${1:-}" = --whole ] || [ "${1:-}" = --sun-wind ] ||
   [ "${1:-}" = --ski-tracks ] || [ "${1:-}" = --displacement ] || [ "${1:-}" = --resize ] || [ "${1:-}" = --tiles-resize ] ||
@@ -55,7 +55,7 @@ while [ "${1:-}" = --weak ] || [ "${1:-}" = --events ] || [ "${1:-}" = --tiles ]
     --displacement) displacement="displacement_size = [$2, $2]"; shift ;;
     --resize) resize="resize = [$2, $2]"; shift ;;
     --tiles-resize) tilesresize="resize = [$2, $2]"; shift ;;
-    --sun-method) sunmethod="$2" sets+=(--set "precompute.sun_method=$2"); shift ;;
+    --sun-method) sets+=(--set "precompute.sun_method=$2"); shift ;;
     --set) sets+=(--set "$2"); shift ;;
     --ranks-only) mode=only only="$2"; shift ;;
   esac
