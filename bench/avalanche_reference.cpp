@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -92,6 +93,66 @@ PathScore scoreFootprint(const AvalancheReferenceCase& c, const Grid<float>& pea
   return r;
 }
 
+// The case's DEM on a grid k times finer: bilinear between the valid coarse cells around each
+// fine cell's centre (the containing cell's height where one of them is NODATA).
+void refineTerrain(AvalancheReferenceCase& c, int k) {
+  const GridSpec coarse = c.spec;
+  const Grid<float> h = c.bedrockM;
+  const Grid<uint8_t> v = c.valid;
+  c.spec.width *= k, c.spec.height *= k;
+  c.spec.cellSizeXM /= k, c.spec.cellSizeYM /= k;
+  c.geoCellX /= k, c.geoCellY /= k;
+  c.bedrockM = Grid<float>(c.spec.width, c.spec.height, 0.f);
+  c.valid = Grid<uint8_t>(c.spec.width, c.spec.height, 0);
+  for (int y = 0; y < c.spec.height; ++y)
+    for (int x = 0; x < c.spec.width; ++x) {
+      const double u = std::clamp((x + 0.5) / k - 0.5, 0.0, coarse.width - 1.0), w = std::clamp((y + 0.5) / k - 0.5, 0.0, coarse.height - 1.0);
+      const int x0 = std::min(static_cast<int>(u), coarse.width - 2), y0 = std::min(static_cast<int>(w), coarse.height - 2);
+      const double fx = u - x0, fy = w - y0;
+      const int cx = x / k, cy = y / k;
+      c.valid(x, y) = v(cx, cy);
+      if (v(x0, y0) && v(x0 + 1, y0) && v(x0, y0 + 1) && v(x0 + 1, y0 + 1))
+        c.bedrockM(x, y) = static_cast<float>((1 - fy) * ((1 - fx) * h(x0, y0) + fx * h(x0 + 1, y0)) +
+                                              fy * ((1 - fx) * h(x0, y0 + 1) + fx * h(x0 + 1, y0 + 1)));
+      else
+        c.bedrockM(x, y) = h(cx, cy);
+    }
+}
+
+// The case's DEM and release on a grid k times coarser (the cells a whole k x k block covers): the
+// block's mean height, valid where all its cells are, and its mean release (the same volume).
+void coarsenCase(AvalancheReferenceCase& c, int k) {
+  const Grid<float> h = c.bedrockM, release = c.releaseM;
+  const Grid<uint8_t> v = c.valid;
+  c.spec.width /= k, c.spec.height /= k;
+  c.spec.cellSizeXM *= k, c.spec.cellSizeYM *= k;
+  c.geoCellX *= k, c.geoCellY *= k;
+  c.bedrockM = c.releaseM = Grid<float>(c.spec.width, c.spec.height, 0.f);
+  c.valid = Grid<uint8_t>(c.spec.width, c.spec.height, 0);
+  for (int y = 0; y < c.spec.height; ++y)
+    for (int x = 0; x < c.spec.width; ++x) {
+      double height = 0, thickness = 0;
+      bool all = true;
+      for (int j = 0; j < k; ++j)
+        for (int i = 0; i < k; ++i) {
+          all = all && v(k * x + i, k * y + j);
+          height += h(k * x + i, k * y + j), thickness += release(k * x + i, k * y + j);
+        }
+      c.valid(x, y) = all;
+      c.bedrockM(x, y) = static_cast<float>(height / (k * k));
+      c.releaseM(x, y) = all ? static_cast<float>(thickness / (k * k)) : 0.f;
+    }
+}
+
+// `r` at the centres of the case's cells.
+Grid<float> sampledAtCentres(const GeoRaster& r, const AvalancheReferenceCase& c) {
+  Grid<float> out(c.spec.width, c.spec.height, 0.f);
+  for (int y = 0; y < c.spec.height; ++y)
+    for (int x = 0; x < c.spec.width; ++x)
+      out(x, y) = r.sampleAt(c.spec.originX + (x + 0.5) * c.geoCellX, c.spec.originY - (y + 0.5) * c.geoCellY);
+  return out;
+}
+
 }  // namespace
 
 float GeoRaster::sampleAt(double wx, double wy) const {
@@ -116,7 +177,7 @@ const std::vector<std::string>& avalancheReferenceCaseNames() {
   return names;
 }
 
-AvalancheReferenceCase loadAvalancheReferenceCase(const std::string& folder) {
+AvalancheReferenceCase loadAvalancheReferenceCase(const std::string& folder, int cellScale) {
   AvalancheReferenceCase c;
   c.name = fs::path(folder).filename().string();
   const Terrain t = loadDem((fs::path(folder) / "dem.tif").string());
@@ -126,14 +187,21 @@ AvalancheReferenceCase loadAvalancheReferenceCase(const std::string& folder) {
   const GeoRaster release = readGeoRaster((fs::path(folder) / "release_thickness_m.tif").string());
   const GeoRaster pft = readGeoRaster((fs::path(folder) / "reference_pft.tif").string());
   const GeoRaster pfv = readGeoRaster((fs::path(folder) / "reference_pfv.tif").string());
-  c.releaseM = Grid<float>(c.spec.width, c.spec.height, 0.f);
-  c.referencePftM = Grid<float>(c.spec.width, c.spec.height, 0.f);
-  for (int y = 0; y < c.spec.height; ++y)
-    for (int x = 0; x < c.spec.width; ++x) {
-      const double wx = c.spec.originX + (x + 0.5) * c.geoCellX, wy = c.spec.originY - (y + 0.5) * c.geoCellY;
-      c.releaseM(x, y) = c.valid(x, y) ? std::max(0.f, release.sampleAt(wx, wy)) : 0.f;
-      c.referencePftM(x, y) = pft.sampleAt(wx, wy);
-    }
+  c.releaseM = sampledAtCentres(release, c);
+  if (cellScale > 1) {
+    coarsenCase(c, cellScale);
+  } else if (cellScale < -1) {
+    refineTerrain(c, -cellScale);
+    c.releaseM = sampledAtCentres(release, c);  // each fine cell its coarse cell's: the same volume
+  }
+  if (cellScale > 1 || cellScale < -1) {
+    char size[32];
+    std::snprintf(size, sizeof size, "_%.3gm", c.spec.cellSizeXM);
+    c.name += size;
+  }
+  for (size_t i = 0; i < c.spec.cellCount(); ++i)
+    c.releaseM.values()[i] = c.valid.values()[i] ? std::max(0.f, c.releaseM.values()[i]) : 0.f;
+  c.referencePftM = sampledAtCentres(pft, c);
   for (float v : pfv.values) c.referencePeakSpeedMps = std::max(c.referencePeakSpeedMps, static_cast<double>(v));
   c.pathXY = readPath((fs::path(folder) / "path_ab.csv").string());
   return c;

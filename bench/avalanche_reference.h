@@ -44,8 +44,12 @@ struct AvalancheReferenceCase {
   std::vector<std::pair<double, double>> pathXY;  // world coordinates, from the top
 };
 
-// The case folder's DEM, release, reference and path. InputError when a file is missing.
-AvalancheReferenceCase loadAvalancheReferenceCase(const std::string& folder);
+// The case folder's DEM, release, reference and path, on the DEM's grid. InputError when a file
+// is missing. A resolution study's grid with `cellScale` k > 1: k times coarser (each k x k block
+// of cells averaged, valid where all are); k < -1: |k| times finer (the DEM bilinear at the fine
+// cells' centres, the release each fine cell its coarse cell's). The reference is sampled at the
+// grid's cell centres either way, and the name says the cell size (avaKot_2.5m).
+AvalancheReferenceCase loadAvalancheReferenceCase(const std::string& folder, int cellScale = 1);
 
 struct AvalancheReferenceScores {
   std::string name;

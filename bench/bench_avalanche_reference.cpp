@@ -71,6 +71,30 @@ std::string fitTable(const std::vector<AvalancheReferenceCase>& cases, std::ostr
   return t.str();
 }
 
+// The cases on grids coarser and finer than their DEMs' (loadAvalancheReferenceCase's cellScale),
+// default parameters: how the scores depend on the cell size.
+std::string resolutionTable(const fs::path& root, std::ostringstream& csv, std::ostream& log) {
+  std::ostringstream t;
+  t << "| case | cell (m) | runout error | IoU | α − reference α | peak speed (m/s) | / reference | simulated (s) | wall (s) | "
+       "mass error |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const std::string& name : avalancheReferenceCaseNames()) {
+    if (!fs::exists(root / name)) continue;
+    for (int scale : {2, 1, -2, -4}) {
+      const AvalancheReferenceCase c = loadAvalancheReferenceCase((root / name).string(), scale);
+      const AvalancheReferenceScores r = runAvalancheReferenceCase(c, ModelParameters());
+      const double speed = r.peakSpeedMps / r.referencePeakSpeedMps;
+      t << "| " << name << " | " << fmt("%.2f", c.spec.cellSizeXM) << " | " << fmt("%+.1f %%", 100.0 * r.runoutError) << " | "
+        << fmt("%.2f", r.iou) << " | " << fmt("%+.1f°", r.alphaDeg - r.referenceAlphaDeg) << " | " << fmt("%.1f", r.peakSpeedMps) << " | "
+        << fmt("%.2f", speed) << " | " << fmt("%.0f", r.simulatedS) << " | " << fmt("%.2f", r.seconds) << " | " << fmt("%.1e", r.massError)
+        << " |\n";
+      csv << name << "," << c.spec.cellSizeXM << "," << r.runoutError << "," << r.iou << "," << r.alphaDeg - r.referenceAlphaDeg << ","
+          << r.peakSpeedMps << "," << speed << "," << r.simulatedS << "," << r.seconds << "," << r.massError << "\n";
+      log << "  " << c.name << ": " << r.why << "\n";
+    }
+  }
+  return t.str();
+}
+
 }  // namespace
 
 std::string avalancheReferenceBench(const BenchOptions& o, std::ostream& log, int threads) {
@@ -91,19 +115,25 @@ std::string avalancheReferenceBench(const BenchOptions& o, std::ostream& log, in
       table << "| " << name << " | absent | | | | | | | | | | |\n";
       continue;
     }
-    const AvalancheReferenceCase c = loadAvalancheReferenceCase((root / name).string());
+    const AvalancheReferenceCase c = loadAvalancheReferenceCase((root / name).string(), 1);
     const AvalancheReferenceScores r = runAvalancheReferenceCase(c, p);
     log << "  " << name << ": " << r.why << "\n";
     table << "| " << name << " | " << fmt("%.0f", r.runoutM - r.releaseTopS) << " | " << fmt("%.0f", r.referenceRunoutM - r.releaseTopS)
           << " | " << fmt("%+.1f %%", 100.0 * r.runoutError) << " | " << fmt("%.1f", r.alphaDeg) << " | " << fmt("%.1f", r.referenceAlphaDeg)
           << " | " << fmt("%.2f", r.iou) << " | " << fmt("%.1f", r.peakSpeedMps) << " | " << fmt("%.1f", r.referencePeakSpeedMps) << " | "
-          << fmt("%.0f", r.simulatedS) << " | " << fmt("%.1f", r.seconds) << " | " << fmt("%.1e", r.massError) << " |\n";
+          << fmt("%.0f", r.simulatedS) << " | " << fmt("%.2f", r.seconds) << " | " << fmt("%.1e", r.massError) << " |\n";
     csv << name << "," << r.runoutM << "," << r.referenceRunoutM << "," << r.releaseTopS << "," << r.runoutError << "," << r.alphaDeg << ","
         << r.referenceAlphaDeg << "," << r.iou << "," << r.peakSpeedMps << "," << r.referencePeakSpeedMps << "," << r.footprintCells << ","
         << r.referenceFootprintCells << "," << r.simulatedS << "," << r.seconds << "," << r.massError << "\n";
     writeCasePicture(o, c, r, pictures);
   }
   table << "\nRunouts are path lengths from the release top. Pictures: ours red, com1DFA's blue, both purple.\n";
+  std::ostringstream resolutionCsv;
+  table << "\nThe cell size: each case on grids twice coarser (2 x 2 blocks averaged), as its DEM, twice and four times finer "
+           "(the DEM bilinear), default parameters.\n\n"
+        << resolutionTable(root, resolutionCsv, log);
+  writeCsvFile(o, "avalanche_reference_resolution.csv",
+               "case,cell_m,runout_error,iou,alpha_diff_deg,peak_speed_mps,speed_ratio,simulated_s,wall_s,mass_error\n" + resolutionCsv.str(), table);
   if (o.avalancheFit) {
     std::vector<AvalancheReferenceCase> cases;
     for (const std::string& name : avalancheReferenceCaseNames())
