@@ -379,11 +379,8 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
   args_ = makeAvalancheArgs(p_, seaLevelTemperatureC);
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
   backend_.avalancheRelease(moving, args_);
-  // A fixed-time action (a user's skiers, an edit) may write the layers while this avalanche
-  // runs: first, every cell's layers at release.
-  backend_.beforeNextWrite([this] {
-    if (active_) growBeforeBox(0, 0, terrain_.spec.width, terrain_.spec.height);
-  });
+  liveFrom_ = 2, liveSteps_ = 0;
+  backend_.beforeNextWrite([this] { onOutsideWrite(); });
   unionBox_ = args_;
   record_.released = true;
   for (int y = y0; y < y1; ++y) std::fill_n(moving.begin() + static_cast<std::ptrdiff_t>(index(x0, y)), x1 - x0, uint8_t{0});
@@ -391,6 +388,16 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
   lastSpeed_ = 0.f;
   peakEnergy_ = 0.0;
   wallSeconds_ = elapsedSeconds(t0);
+}
+
+// A fixed-time action (a user's skiers, an edit, a storm's edge) may write the state while this
+// avalanche runs: first, every cell's layers at release; and the next two steps' passes keep to
+// the source spans (a cell the action changed is not one a pipe touched). Again at every write.
+void AvalancheRun::onOutsideWrite() {
+  if (!active_) return;
+  growBeforeBox(0, 0, terrain_.spec.width, terrain_.spec.height);
+  liveFrom_ = record_.steps + 2;
+  backend_.beforeNextWrite([this] { onOutsideWrite(); });
 }
 
 // Widens before_ to hold [x0, x1) x [y0, y1) (with a margin, so that a box growing a cell a
@@ -439,11 +446,16 @@ bool AvalancheRun::step() {
   a.spanY0 = spans ? args_.y0 : 0;
   a.spanY1 = spans ? args_.y1 : 0;
   a.statsIn = record_.steps % 2;
+  // With one substep a step, the last two steps' touched columns bound the passes too.
+  a.live = spans && substeps == 1 && record_.steps >= liveFrom_ && liveSpans_;
+  liveSteps_ += a.live;
+  for (int set = 0; set < 2; ++set) a.liveY0[set] = statsY0_[set], a.liveY1[set] = statsY1_[set];
   const std::vector<float> stats = backend_.avalancheSteps(a, substeps);
   // The grown box this step covered, then the rows' statistics.
   const size_t n = stats.size() - 4;
   const int bx0 = static_cast<int>(stats[n]), by0 = static_cast<int>(stats[n + 1]);
   const int bx1 = static_cast<int>(stats[n + 2]), by1 = static_cast<int>(stats[n + 3]);
+  statsY0_[1 - a.statsIn] = by0, statsY1_[1 - a.statsIn] = by1;
   unionBox_.x0 = std::min(unionBox_.x0, bx0), unionBox_.y0 = std::min(unionBox_.y0, by0);
   unionBox_.x1 = std::max(unionBox_.x1, bx1), unionBox_.y1 = std::max(unionBox_.y1, by1);
   record_.boxCellsMax = std::max(record_.boxCellsMax, (bx1 - bx0) * (by1 - by0));

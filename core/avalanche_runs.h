@@ -127,6 +127,10 @@ class AvalancheRun {
   // Off: every step's passes run over the whole box, not its rows' spans (the reference whose
   // bytes the spans must give: Avalanche.RowSpansGiveTheSameBytesAsTheWholeBox).
   void useRowSpans(bool on) { rowSpans_ = on; }
+  // Off: the flow, scale and height passes keep to the source spans alone, not also the live
+  // spans (AvalancheArgs::live; the tests compare them).
+  void useLiveSpans(bool on) { liveSpans_ = on; }
+  int liveSteps() const { return liveSteps_; }  // this avalanche's steps that used them
 
   // The spontaneous release weights of rows [y0, y1), width doubles a row, into w (public for
   // the tests, which check its AVX2 lanes against its per-cell loop).
@@ -153,7 +157,7 @@ class AvalancheRun {
   // substep arguments), then clears them.
   void start(const CellBox& released, double seaLevelTemperatureC, std::chrono::steady_clock::time_point t0);
   SnowBackend& backend_;
-  bool rowSpans_ = true;
+  bool rowSpans_ = true, liveSpans_ = true;
   const ModelParameters& p_;
   const SnowState& terrain_;
   // The snow layers a release reads (C, S, U, P over the grid): the backend's own fields where they
@@ -186,6 +190,11 @@ class AvalancheRun {
   void takeSnapshot();
   AvalancheArgs args_;
   AvalancheArgs unionBox_;
+  // The live spans (AvalancheArgs::live): each set of row statistics' rows, and the first step
+  // that may use them (two after the release or after anything else wrote the state).
+  int statsY0_[2] = {0, 0}, statsY1_[2] = {0, 0};
+  int liveFrom_ = 2, liveSteps_ = 0;
+  void onOutsideWrite();
   AvalancheRecord record_;
   bool active_ = false, atRest_ = false;
   float lastSpeed_ = 0.f;

@@ -516,6 +516,73 @@ TEST(Avalanche, RowSpansGiveTheSameBytesAsTheWholeBox) {
               spans.record.steps, spans.record.boxCellsMax, band, spans.record.runoutM);
 }
 
+// The live spans (AvalancheArgs::live: the passes also kept to the cells a pipe touched in the
+// last two steps) give the source spans' bytes, on the diagonal band and in a bowl whose
+// deposit rests thick behind its front; and so does an edit between the avalanche's steps that
+// raises every other block of cells, which sets cells no pipe touched flowing (the next two
+// steps keep to the source spans).
+TEST(Avalanche, LiveSpansGiveTheSourceSpansBytesAlsoWhenTheStateIsEditedMidRun) {
+  SnowState band = test::terrainFrom(96, 96, 5.0, -20.f, [](double x, double y) {
+    return 2000.0 - 0.6 * (x + y) + 0.4 * std::sin(0.37 * x) * std::cos(0.29 * y);
+  });
+  for (int y = 0; y < 96; ++y)
+    for (int x = 0; x < 96; ++x)
+      if (std::abs(x - y) < 4) band.unstableM(x, y) = 1.2f;
+  SnowState bowl = test::terrainFrom(80, 80, 10.0, -20.f, [](double x, double y) {
+    return 1500.0 + 0.02 * (x - 40) * (x - 40) + 0.02 * (y - 40) * (y - 40) + 0.3 * std::sin(0.5 * x);
+  });
+  for (int y = 0; y < 80; ++y)
+    for (int x = 0; x < 80; ++x) bowl.unstableM(x, y) = 0.8f + 0.01f * static_cast<float>((x * 7 + y * 3) % 13);
+  // A slab that slides off a slope onto a flat runout, where its deposit rests behind the front.
+  SnowState runout = test::terrainFrom(40, 140, 5.0, -20.f, [](double x, double y) {
+    return 2000.0 - (y < 40 ? 0.8 * y : 32.0 + 0.05 * (y - 40)) + 0.2 * std::sin(0.7 * x);
+  });
+  for (int y = 4; y < 36; ++y)
+    for (int x = 8; x < 32; ++x) runout.unstableM(x, y) = 2.0f;
+  // A V valley of 45-degree sides: the snow runs up the far side, stops and slides back.
+  SnowState valley = test::terrainFrom(60, 30, 5.0, -20.f, [](double x, double y) { return 2000.0 + std::abs(x - 150.0) + 0.1 * y; });
+  for (int y = 5; y < 25; ++y)
+    for (int x = 2; x < 14; ++x) valley.unstableM(x, y) = 2.0f;
+  for (const SnowState* s : {&band, &bowl, &runout, &valley}) {
+    for (int fallAt : {-1, 6, 30}) {
+      auto run = [&](bool live, int& liveSteps) {
+        auto backend = createCpuBackend();
+        backend->upload(*s);
+        const ModelParameters p;
+        AvalancheRun r(*backend, p, *s);
+        r.useLiveSpans(live);
+        const int rx = s == &band ? 6 : (s == &valley ? 8 : 20), ry = s == &band ? 6 : (s == &bowl ? 20 : (s == &valley ? 15 : 10));
+        r.release(rx, ry, 0.0, 0.0, true);
+        for (int step = 0; !r.atRest() && !r.step(); ++step)
+          if (step == fallAt) {  // 10 m of compacted snow on every other 3 x 3 block: steep new slopes
+            std::vector<float> weights(s->spec.cellCount());
+            for (int y = 0; y < s->spec.height; ++y)
+              for (int x = 0; x < s->spec.width; ++x) weights[static_cast<size_t>(y) * s->spec.width + x] = (x / 3 + y / 3) % 2;
+            EditArgs edit;
+            edit.layer = 0;
+            edit.depthM = 10.f;
+            backend->applyEdit(edit, weights);
+          }
+        liveSteps = r.liveSteps();
+        Outcome o{r.settle(), *s};
+        backend->download(o.state);
+        return o;
+      };
+      int liveSteps = 0, none = 0;
+      const Outcome live = run(true, liveSteps), source = run(false, none);
+      ASSERT_TRUE(source.record.released);
+      EXPECT_EQ(none, 0);
+      EXPECT_GT(liveSteps, source.record.steps / 2) << "the live spans were used";
+      test::expectSameBytes(source.state, live.state);
+      EXPECT_EQ(source.state.avalancheScourM.values(), live.state.avalancheScourM.values());
+      EXPECT_EQ(source.state.avalancheDepositM.values(), live.state.avalancheDepositM.values());
+      EXPECT_EQ(source.record.steps, live.record.steps);
+      std::printf("[ measure ] %s, edit after step %d: %d steps, %d with live spans\n", s == &band ? "band" : (s == &bowl ? "bowl" : (s == &runout ? "runout" : "valley")), fallAt,
+                  live.record.steps, liveSteps);
+    }
+  }
+}
+
 // The record's box-cell steps (the bench's cost per box cell) sum each step's box: at least a
 // cell a step, at most the largest box every step, and more than the largest box once the run
 // has more than one step.

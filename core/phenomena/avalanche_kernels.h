@@ -25,17 +25,50 @@ struct AvalancheArgs {
   // columns of the snow that could flow; spanY1 <= spanY0: none yet (the passes run over the box).
   // The step's statistics go to the other set.
   int spanY0 = 0, spanY1 = 0, statsIn = 0;
+  // With `live` (one substep a step, the last two steps' statistics this avalanche's and nothing
+  // else written since): the flow, scale and height passes also keep to the cells within k of one
+  // a pipe touched in either of the last two steps (avalancheLiveSpan); set s of rowStats holds
+  // those columns for rows [liveY0[s], liveY1[s]).
+  int live = 0, liveY0[2] = {0, 0}, liveY1[2] = {0, 0};
 };
+
+// Floats a row of one set of the avalanche's row statistics: the fastest pipe, the kinetic
+// energy, the first and last column of snow that can flow, the first and last column a pipe
+// touched in the last substep (each -1 when none).
+constexpr int kAvalancheRowStats = 6;
 
 // Row y's statistics of set `set` (AvalancheRowStatsKernel).
 SNOW_HD SNOW_INLINE float* avalancheRowStats(const SnowFieldsView& v, int y, int set) {
-  return v.rowStats + 8 * static_cast<size_t>(y) + 4 * set;
+  return v.rowStats + 2 * kAvalancheRowStats * static_cast<size_t>(y) + kAvalancheRowStats * set;
+}
+
+// Why the live spans give the box's bytes: a pipe's flow in a substep is a function of its own
+// moved flow and its two end cells' state (surface, moving snow, flowing flag), nothing else. If
+// no pipe touched either end in the last two substeps, the pipe was zero in the last one and its
+// inputs are now what they were then, so it is zero again. Every pipe that can flow at substep k
+// of a step therefore has an end within k - 1 cells of a cell touched in the last two substeps
+// of the previous step, and every cell a pass would change is within k of one.
+SNOW_HD SNOW_INLINE void avalancheLiveSpan(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, int& lo, int& hi) {
+  int l = a.x1, h = a.x0 - 1;
+  for (int set = 0; set < 2; ++set) {
+    const int r0 = y - k > a.liveY0[set] ? y - k : a.liveY0[set], r1 = y + k < a.liveY1[set] - 1 ? y + k : a.liveY1[set] - 1;
+    for (int r = r0; r <= r1; ++r) {
+      const float* s = avalancheRowStats(v, r, set);
+      if (!(s[5] >= 0.f)) continue;
+      const int sl = static_cast<int>(s[4]) - k, sh = static_cast<int>(s[5]) + k;
+      l = sl < l ? sl : l;
+      h = sh > h ? sh : h;
+    }
+  }
+  lo = l > lo ? l : lo;
+  hi = h < hi ? h : hi;
 }
 
 // The columns [lo, hi] of row y that snow can reach within k substeps of the step's start: every
 // cell within k cells of one that could flow then (snow crosses at most one cell a substep), cut
-// to the box; lo > hi when none.
-SNOW_HD SNOW_INLINE void avalancheRowSpan(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, int& lo, int& hi) {
+// to the box, and with `live` (the flow, scale and height passes) to avalancheLiveSpan's; lo > hi
+// when none.
+SNOW_HD SNOW_INLINE void avalancheRowSpan(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, int& lo, int& hi, bool live) {
   if (a.spanY1 <= a.spanY0) {
     lo = a.x0, hi = a.x1 - 1;
     return;
@@ -51,6 +84,7 @@ SNOW_HD SNOW_INLINE void avalancheRowSpan(const SnowFieldsView& v, const Avalanc
   }
   lo = lo > a.x0 ? lo : a.x0;
   hi = hi < a.x1 - 1 ? hi : a.x1 - 1;
+  if (live && a.live && lo <= hi) avalancheLiveSpan(v, a, y, k, lo, hi);
 }
 
 // A cell that can send snow: moving snow thicker than h_stop (a granular layer thinner than its
@@ -103,7 +137,7 @@ struct InRowSpans {
   SNOW_HD void operator()(int, int row) const {
     const int y = a.y0 + row;
     int lo = 0, hi = -1;
-    avalancheRowSpan(v, a, y, k, lo, hi);
+    avalancheRowSpan(v, a, y, k, lo, hi, true);
     for (int x = lo; x <= hi; ++x) kernel(x, y);
   }
 };
@@ -270,17 +304,21 @@ struct AvalancheRowStatsKernel {
   SNOW_HD void operator()(int, int row) const {
     const int y = a.y0 + row;
     float speed = 0.f, energy = 0.f;
-    int lo = v.width, hi = -1;
+    int lo = v.width, hi = -1, touchedLo = v.width, touchedHi = -1;
     int x0 = 0, x1 = -1;
-    avalancheRowSpan(v, a, y, k, x0, x1);
-    for (int x = x0; x <= x1; ++x) cell(x, y, speed, energy, lo, hi);
-    store(y, speed, energy, lo, hi);
+    avalancheRowSpan(v, a, y, k, x0, x1, false);  // the snow that can flow, wherever it is
+    for (int x = x0; x <= x1; ++x) cell(x, y, speed, energy, lo, hi, touchedLo, touchedHi);
+    store(y, speed, energy, lo, hi, touchedLo, touchedHi);
   }
   // Cell (x, y) of the row, in column order: its idle pipes cleared, then the row's fastest pipe,
-  // kinetic energy and columns of snow that can flow taken in.
-  SNOW_HD void cell(int x, int y, float& speed, float& energy, int& lo, int& hi) const {
+  // kinetic energy, columns of snow that can flow and columns a pipe touched taken in.
+  SNOW_HD void cell(int x, int y, float& speed, float& energy, int& lo, int& hi, int& touchedLo, int& touchedHi) const {
     AvalancheClearIdleKernel{v, a}(x, y);  // the cell's own pipes, which are all it reads
     const int i = v.index(x, y);
+    if (v.avalancheFlowing[i]) {  // every touched cell is in the span: it is next to a source
+      if (x < touchedLo) touchedLo = x;
+      touchedHi = x;
+    }
     const float c = v.cellSizeXM * v.cellSizeYM;
     float fastest = 0.f;
     for (int d = 0; d < 4; ++d) fastest = maxf(fastest, fabsf(movedPipe(v, x, y, i, d)) / c);
@@ -291,12 +329,14 @@ struct AvalancheRowStatsKernel {
       hi = x;
     }
   }
-  SNOW_HD void store(int y, float speed, float energy, int lo, int hi) const {
+  SNOW_HD void store(int y, float speed, float energy, int lo, int hi, int touchedLo, int touchedHi) const {
     float* s = avalancheRowStats(v, y, 1 - a.statsIn);
     s[0] = speed;
     s[1] = energy;
     s[2] = static_cast<float>(lo);
     s[3] = static_cast<float>(hi);
+    s[4] = static_cast<float>(touchedLo);
+    s[5] = static_cast<float>(touchedHi);
   }
 };
 

@@ -25,14 +25,15 @@ inline int lanesEnd(int x, int end, int limit, int lanes) {
   return whole <= limit ? whole : end;
 }
 
-// Row y's span at substep k (avalancheRowSpan) in column order: `cell(x)` where a neighbour may
+// Row y's span at substep k (avalancheRowSpan, with `live` for the passes) in column order: `cell(x)` where a neighbour may
 // be outside the grid (the first and last row and column) and on what the lanes leave of the
 // span, `avx2(x, end)` (avx2Lanes wide) on the cells between, which returns where it stopped,
 // then `sse2(x, end)` (four wide) the same way.
 template <class Cell, class Avx2, class Sse2Lanes>
-void avalancheSpanByLanes(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, Cell cell, Avx2 avx2, int avx2Lanes, Sse2Lanes sse2) {
+void avalancheSpanByLanes(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, bool live, Cell cell, Avx2 avx2, int avx2Lanes,
+                          Sse2Lanes sse2) {
   int lo = 0, hi = -1;
-  avalancheRowSpan(v, a, y, k, lo, hi);
+  avalancheRowSpan(v, a, y, k, lo, hi, live);
   int x = lo;
   if (y > 0 && y < v.height - 1) {
     for (; x <= hi && x < 1; ++x) cell(x);
@@ -57,19 +58,19 @@ void avalancheSpanByLanes(const SnowFieldsView& v, const AvalancheArgs& a, int y
 inline void rowSpan(const InRowSpans<AvalancheFlowKernel>& k, int row, int, int) {
   const int y = k.a.y0 + row;
   avalancheSpanByLanes(
-      k.v, k.a, y, k.k, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(flowLanes(k.kernel, y, x, end)); }, 8,
+      k.v, k.a, y, k.k, true, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(flowLanes(k.kernel, y, x, end)); }, 8,
       [&](int x, int end) { return sse2_lanes::flowLanes(k.kernel, y, x, end); });
 }
 inline void rowSpan(const InRowSpans<AvalancheScaleKernel>& k, int row, int, int) {
   const int y = k.a.y0 + row;
   avalancheSpanByLanes(
-      k.v, k.a, y, k.k, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(scaleLanes(k.kernel, y, x, end)); }, 8,
+      k.v, k.a, y, k.k, true, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(scaleLanes(k.kernel, y, x, end)); }, 8,
       [&](int x, int end) { return sse2_lanes::scaleLanes(k.kernel, y, x, end); });
 }
 inline void rowSpan(const InRowSpans<AvalancheHeightKernel>& k, int row, int, int) {
   const int y = k.a.y0 + row;
   avalancheSpanByLanes(
-      k.v, k.a, y, k.k, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(heightLanes(k.kernel, y, x, end)); }, 4,
+      k.v, k.a, y, k.k, true, [&](int x) { k.kernel(x, y); }, [&](int x, int end) { return SNOW_LANES_AVX2_CALL(heightLanes(k.kernel, y, x, end)); }, 4,
       [](int x, int) { return x; });  // no SSE2 body: the per-cell one
 }
 
@@ -78,12 +79,12 @@ inline void rowSpan(const InRowSpans<AvalancheHeightKernel>& k, int row, int, in
 inline void rowSpan(const AvalancheRowStatsKernel& k, int row, int, int) {
   const int y = k.a.y0 + row;
   float speed = 0.f, energy = 0.f;
-  int lo = k.v.width, hi = -1;
+  int lo = k.v.width, hi = -1, touchedLo = k.v.width, touchedHi = -1;
   avalancheSpanByLanes(
-      k.v, k.a, y, k.k, [&](int x) { k.cell(x, y, speed, energy, lo, hi); },
-      [&](int x, int end) { return SNOW_LANES_AVX2_CALL(rowStatsLanes(k, y, x, end, speed, energy, lo, hi)); }, 8,
-      [&](int x, int end) { return sse2_lanes::rowStatsLanes(k, y, x, end, speed, energy, lo, hi); });
-  k.store(y, speed, energy, lo, hi);
+      k.v, k.a, y, k.k, false, [&](int x) { k.cell(x, y, speed, energy, lo, hi, touchedLo, touchedHi); },
+      [&](int x, int end) { return SNOW_LANES_AVX2_CALL(rowStatsLanes(k, y, x, end, speed, energy, lo, hi, touchedLo, touchedHi)); }, 8,
+      [&](int x, int end) { return sse2_lanes::rowStatsLanes(k, y, x, end, speed, energy, lo, hi, touchedLo, touchedHi); });
+  k.store(y, speed, energy, lo, hi, touchedLo, touchedHi);
 }
 #endif
 #undef SNOW_LANES_AVX2_CALL

@@ -149,14 +149,14 @@ std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowSta
                                      const AvalancheArgs& args, int substeps) {
   AvalancheArgs a = args;
   runAvalancheSubsteps(exec, v, touched, a, substeps);
-  // The grown box's rows only, both sets (8 floats a row, side by side): not the grid's rows.
-  const size_t rows = a.y1 > a.y0 ? static_cast<size_t>(a.y1 - a.y0) : 0;
-  std::vector<float> stats(8 * rows);
-  exec.downloadRange(rowStats, 8 * static_cast<size_t>(a.y0 > 0 ? a.y0 : 0), stats.size(), stats.data());
+  // The grown box's rows only, both sets (side by side): not the grid's rows.
+  const size_t rows = a.y1 > a.y0 ? static_cast<size_t>(a.y1 - a.y0) : 0, row = 2 * kAvalancheRowStats;
+  std::vector<float> stats(row * rows);
+  exec.downloadRange(rowStats, row * static_cast<size_t>(a.y0 > 0 ? a.y0 : 0), stats.size(), stats.data());
   std::vector<float> box;
   box.reserve(4 * rows + 4);
   for (size_t r = 0; r < rows; ++r) {
-    const size_t at = 8 * r + 4 * static_cast<size_t>(1 - a.statsIn);
+    const size_t at = row * r + kAvalancheRowStats * static_cast<size_t>(1 - a.statsIn);
     box.insert(box.end(), stats.begin() + at, stats.begin() + at + 4);
   }
   box.push_back(static_cast<float>(a.x0));
