@@ -327,6 +327,127 @@ std::string seasonAvalancheCostBench(const BenchOptions& o, std::ostream& log, c
   return table.str();
 }
 
+// Occlusion mode, part 1: a canyon 100 m wide and 50 m deep, 1200 m long at 2 m cells, whose
+// floor's middle sees cos(atan(2H/W)) of the sky: the ambient occlusion value against it.
+void occlusionCanyonPart(OcclusionSettings s, int threads, std::ostream& table, std::ostream& csv) {
+  const double W = 100.0, H = 50.0, cell = 2.0;
+  GridSpec spec;
+  spec.width = 600, spec.height = 120, spec.cellSizeXM = spec.cellSizeYM = cell;
+  Grid<float> z(spec.width, spec.height, 0.f);
+  Grid<uint8_t> valid(spec.width, spec.height, 1);
+  for (int y = 0; y < spec.height; ++y)
+    for (int x = 0; x < spec.width; ++x) z(x, y) = std::abs(y * cell - 120.0) < W / 2 ? 1000.f : static_cast<float>(1000.0 + H);
+  const RayScene scene(z, spec);
+  const double analytic = std::cos(std::atan(2.0 * H / W));
+  table << "Occlusion mode: ambient occlusion value a at the middle of a canyon floor (W = 100 m, H = 50 m, 2 m cells) against the "
+           "analytic sky-view factor cos(atan(2H/W)) = "
+        << format("%.4f", analytic) << ", 100 cells along the floor, " << benchMachineDescription() << ", " << threads << " threads\n\n"
+        << "| rays per point | mean a | mean error | max abs error (one cell) | M rays/s |\n|---|---|---|---|---|\n";
+  for (int rays : {16, 64, 256, 1024}) {
+    s.aoRays = rays;
+    s.sunPositions = 0;
+    const OcclusionSnow r = computeOcclusionSnowOnTerrain(scene, z, valid, spec, s);
+    double mean = 0.0, maxErr = 0.0;
+    for (int x = 250; x < 350; ++x) {
+      const double a = r.ambient[static_cast<size_t>(60) * spec.width + x];
+      mean += a / 100.0;
+      maxErr = std::max(maxErr, std::abs(a - analytic));
+    }
+    const double rate = r.aoRayCount / std::max(r.aoSeconds, 1e-9) / 1e6;
+    table << "| " << rays << " | " << format("%.4f", mean) << " | " << format("%+.4f", mean - analytic) << " | " << format("%.4f", maxErr)
+          << " | " << format("%.1f", rate) << " |\n";
+    csv << "canyon," << rays << ",600x120," << r.aoSeconds << ",,," << rate << "," << mean - analytic << "," << maxErr << "\n";
+  }
+}
+
+// Occlusion mode, part 2: quality levels on the builtin range, the error against a 4096-ray run on
+// a small grid and the time on the full one.
+void occlusionQualityPart(const BenchOptions& o, OcclusionSettings s, std::ostream& log, std::ostream& table, std::ostream& csv) {
+  DefaultTerrainOptions small;
+  small.size = 128;
+  small.cellSizeM = 10240.0 / 256;
+  const Terrain ts = makeBuiltinTerrain(small);
+  const RayScene scene(ts.heightsM, ts.info.spec);
+  s.aoRays = 4096;
+  const OcclusionSnow ref = computeOcclusionSnowOnTerrain(scene, ts.heightsM, ts.valid, ts.info.spec, s);
+  double refSnow = 0.0;
+  for (float v : ref.snowM) refSnow += v;
+  const int timingSize = std::max(64, o.sunSize / 2);
+  table << "\nQuality levels: error against 4096 rays per cell (builtin range 128² at 40 m), and time on the builtin range " << timingSize
+        << "² at " << format("%.0f", 10240.0 / timingSize) << " m (10 sun positions, 21 December, 46.5 N):\n\n"
+        << "| quality | rays per cell | mean abs error of a | snow, relative L1 | AO (s) | sun (s) | total (s) | M rays/s |\n"
+        << "|---|---|---|---|---|---|---|---|\n";
+  DefaultTerrainOptions big;
+  big.size = timingSize;
+  big.cellSizeM = 10240.0 / timingSize;
+  const Terrain tb = makeBuiltinTerrain(big);
+  const RayScene bigScene(tb.heightsM, tb.info.spec);
+  PlotSeries ps{"ambient occlusion", {}};
+  for (const char* q : {"draft", "production", "reference"}) {
+    s.aoRays = occlusionRaysForQuality(q);
+    const OcclusionSnow r = computeOcclusionSnowOnTerrain(scene, ts.heightsM, ts.valid, ts.info.spec, s);
+    double errA = 0.0, errSnow = 0.0;
+    for (size_t k = 0; k < r.ambient.size(); ++k) {
+      errA += std::abs(r.ambient[k] - ref.ambient[k]) / r.ambient.size();
+      errSnow += std::abs(r.snowM[k] - ref.snowM[k]);
+    }
+    errSnow /= std::max(refSnow, 1e-12);
+    const auto t0 = WallClock::now();
+    const OcclusionSnow b = computeOcclusionSnowOnTerrain(bigScene, tb.heightsM, tb.valid, tb.info.spec, s);
+    const double total = elapsedSeconds(t0);
+    const double rate = (b.aoRayCount + b.sunRayCount) / std::max(b.aoSeconds + b.sunSeconds, 1e-9) / 1e6;
+    table << "| " << q << " | " << s.aoRays << " | " << format("%.4f", errA) << " | " << format("%.4f", errSnow) << " | "
+          << format("%.2f", b.aoSeconds) << " | " << format("%.2f", b.sunSeconds) << " | " << format("%.2f", total) << " | "
+          << format("%.1f", rate) << " |\n";
+    csv << "quality_" << q << "," << s.aoRays << "," << timingSize << "," << b.aoSeconds << "," << b.sunSeconds << "," << total << "," << rate
+        << "," << errA << "," << errSnow << "\n";
+    log << "  occlusion " << q << " " << timingSize << "²: " << format("%.1f", total) << " s\n";
+    ps.points.push_back({total, errA, q});
+  }
+  table << "\nDefault level: draft (precompute.sun_quality; 64 rays). Error falls monotonically with the rays per cell.\n";
+  writePlot(o, "occlusion_accuracy",
+            logLogSvg("Occlusion mode: error against time", "time on " + std::to_string(timingSize) + "² (s)", "mean |a - a_ref|", {ps}), table);
+}
+
+// Occlusion mode, part 3: the paper's Puget Sound size, a mesh of 500 000 triangles (the builtin
+// range triangulated, 501 x 501 vertices), snow per vertex, everything from the Embree build on.
+void occlusionMeshPart(OcclusionSettings s, std::ostream& log, std::ostream& table, std::ostream& csv) {
+  DefaultTerrainOptions m;
+  m.size = 501;
+  m.cellSizeM = 20.0;
+  const Terrain t = makeBuiltinTerrain(m);
+  TriangleMesh mesh;
+  const int n = 501;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) mesh.positions.push_back({float(i * 20.0), float((n - 1 - j) * 20.0), t.heightsM(i, j)});
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const uint32_t a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+      mesh.triangles.push_back({a, c, d});
+      mesh.triangles.push_back({a, d, b});
+    }
+  mesh.boundsMin = {0.f, 0.f, t.info.minElevationM > 0 ? float(t.info.minElevationM) : 0.f};
+  mesh.boundsMax = {float((n - 1) * 20.0), float((n - 1) * 20.0), float(t.info.maxElevationM)};
+  table << "\nA mesh of " << mesh.triangles.size() << " triangles (" << mesh.positions.size()
+        << " vertices; the paper's Puget Sound took about 7 minutes on a 2007 GPU), snow per vertex, target 60 s:\n\n"
+        << "| quality | rays per vertex | Embree build (s) | AO (s) | sun (s) | total (s) | M rays/s |\n|---|---|---|---|---|---|---|\n";
+  for (const char* q : {"draft", "production"}) {
+    s.aoRays = occlusionRaysForQuality(q);
+    const auto t0 = WallClock::now();
+    const Grid<float> none;
+    const RayScene scene(none, GridSpec{}, {mesh});
+    const double build = elapsedSeconds(t0);
+    const OcclusionSnow r = computeOcclusionSnowOnMesh(scene, mesh, s);
+    const double total = elapsedSeconds(t0);
+    const double rate = (r.aoRayCount + r.sunRayCount) / std::max(r.aoSeconds + r.sunSeconds, 1e-9) / 1e6;
+    table << "| " << q << " | " << s.aoRays << " | " << format("%.2f", build) << " | " << format("%.2f", r.aoSeconds) << " | "
+          << format("%.2f", r.sunSeconds) << " | " << format("%.2f", total) << " | " << format("%.1f", rate) << " |\n";
+    csv << "mesh_" << q << "," << s.aoRays << "," << mesh.triangles.size() << "," << r.aoSeconds << "," << r.sunSeconds << "," << total << ","
+        << rate << ",,\n";
+    log << "  occlusion mesh " << q << ": " << format("%.1f", total) << " s\n";
+  }
+}
+
 // Occlusion mode (Foldes & Benes 2007): the ambient occlusion value against an analytic
 // sky-view factor and against a many-ray run, the cost per quality on a terrain, and the paper's
 // 500 000-triangle mesh.
@@ -336,128 +457,10 @@ std::string occlusionBench(const BenchOptions& o, std::ostream& log, int threads
   OcclusionSettings s;
   s.latitudeDeg = 46.5;
   s.dayOfYear = 355;
-
-  // 1. A canyon 100 m wide and 50 m deep, 1200 m long at 2 m cells: the floor's middle sees
-  //    cos(atan(2H/W)) of the sky.
-  {
-    const double W = 100.0, H = 50.0, cell = 2.0;
-    GridSpec spec;
-    spec.width = 600, spec.height = 120, spec.cellSizeXM = spec.cellSizeYM = cell;
-    Grid<float> z(spec.width, spec.height, 0.f);
-    Grid<uint8_t> valid(spec.width, spec.height, 1);
-    for (int y = 0; y < spec.height; ++y)
-      for (int x = 0; x < spec.width; ++x) z(x, y) = std::abs(y * cell - 120.0) < W / 2 ? 1000.f : static_cast<float>(1000.0 + H);
-    const RayScene scene(z, spec);
-    const double analytic = std::cos(std::atan(2.0 * H / W));
-    table << "Occlusion mode: ambient occlusion value a at the middle of a canyon floor (W = 100 m, H = 50 m, 2 m cells) against the "
-             "analytic sky-view factor cos(atan(2H/W)) = "
-          << format("%.4f", analytic) << ", 100 cells along the floor, " << benchMachineDescription() << ", " << threads << " threads\n\n"
-          << "| rays per point | mean a | mean error | max abs error (one cell) | M rays/s |\n|---|---|---|---|---|\n";
-    for (int rays : {16, 64, 256, 1024}) {
-      s.aoRays = rays;
-      s.sunPositions = 0;
-      const OcclusionSnow r = computeOcclusionSnowOnTerrain(scene, z, valid, spec, s);
-      double mean = 0.0, maxErr = 0.0;
-      for (int x = 250; x < 350; ++x) {
-        const double a = r.ambient[static_cast<size_t>(60) * spec.width + x];
-        mean += a / 100.0;
-        maxErr = std::max(maxErr, std::abs(a - analytic));
-      }
-      const double rate = r.aoRayCount / std::max(r.aoSeconds, 1e-9) / 1e6;
-      table << "| " << rays << " | " << format("%.4f", mean) << " | " << format("%+.4f", mean - analytic) << " | " << format("%.4f", maxErr)
-            << " | " << format("%.1f", rate) << " |\n";
-      csv << "canyon," << rays << ",600x120," << r.aoSeconds << ",,," << rate << "," << mean - analytic << "," << maxErr << "\n";
-    }
-  }
-
-  // 2. Quality levels on the builtin range: error against a 4096-ray run on a small grid, time
-  //    on the full one.
+  occlusionCanyonPart(s, threads, table, csv);
   s.sunPositions = 10;
-  {
-    DefaultTerrainOptions small;
-    small.size = 128;
-    small.cellSizeM = 10240.0 / 256;
-    const Terrain ts = makeBuiltinTerrain(small);
-    const RayScene scene(ts.heightsM, ts.info.spec);
-    s.aoRays = 4096;
-    const OcclusionSnow ref = computeOcclusionSnowOnTerrain(scene, ts.heightsM, ts.valid, ts.info.spec, s);
-    double refSnow = 0.0;
-    for (float v : ref.snowM) refSnow += v;
-    const int timingSize = std::max(64, o.sunSize / 2);
-    table << "\nQuality levels: error against 4096 rays per cell (builtin range 128² at 40 m), and time on the builtin range " << timingSize
-          << "² at " << format("%.0f", 10240.0 / timingSize) << " m (10 sun positions, 21 December, 46.5 N):\n\n"
-          << "| quality | rays per cell | mean abs error of a | snow, relative L1 | AO (s) | sun (s) | total (s) | M rays/s |\n"
-          << "|---|---|---|---|---|---|---|---|\n";
-    DefaultTerrainOptions big;
-    big.size = timingSize;
-    big.cellSizeM = 10240.0 / timingSize;
-    const Terrain tb = makeBuiltinTerrain(big);
-    const RayScene bigScene(tb.heightsM, tb.info.spec);
-    PlotSeries ps{"ambient occlusion", {}};
-    for (const char* q : {"draft", "production", "reference"}) {
-      s.aoRays = occlusionRaysForQuality(q);
-      const OcclusionSnow r = computeOcclusionSnowOnTerrain(scene, ts.heightsM, ts.valid, ts.info.spec, s);
-      double errA = 0.0, errSnow = 0.0;
-      for (size_t k = 0; k < r.ambient.size(); ++k) {
-        errA += std::abs(r.ambient[k] - ref.ambient[k]) / r.ambient.size();
-        errSnow += std::abs(r.snowM[k] - ref.snowM[k]);
-      }
-      errSnow /= std::max(refSnow, 1e-12);
-      const auto t0 = WallClock::now();
-      const OcclusionSnow b = computeOcclusionSnowOnTerrain(bigScene, tb.heightsM, tb.valid, tb.info.spec, s);
-      const double total = elapsedSeconds(t0);
-      const double rate = (b.aoRayCount + b.sunRayCount) / std::max(b.aoSeconds + b.sunSeconds, 1e-9) / 1e6;
-      table << "| " << q << " | " << s.aoRays << " | " << format("%.4f", errA) << " | " << format("%.4f", errSnow) << " | "
-            << format("%.2f", b.aoSeconds) << " | " << format("%.2f", b.sunSeconds) << " | " << format("%.2f", total) << " | "
-            << format("%.1f", rate) << " |\n";
-      csv << "quality_" << q << "," << s.aoRays << "," << timingSize << "," << b.aoSeconds << "," << b.sunSeconds << "," << total << "," << rate
-          << "," << errA << "," << errSnow << "\n";
-      log << "  occlusion " << q << " " << timingSize << "²: " << format("%.1f", total) << " s\n";
-      ps.points.push_back({total, errA, q});
-    }
-    table << "\nDefault level: draft (precompute.sun_quality; 64 rays). Error falls monotonically with the rays per cell.\n";
-    writePlot(o, "occlusion_accuracy",
-              logLogSvg("Occlusion mode: error against time", "time on " + std::to_string(timingSize) + "² (s)", "mean |a - a_ref|", {ps}), table);
-  }
-
-  // 3. The paper's Puget Sound size: a mesh of 500 000 triangles (the builtin range triangulated,
-  //    501 x 501 vertices), snow per vertex, everything from the Embree build to the snow.
-  {
-    DefaultTerrainOptions m;
-    m.size = 501;
-    m.cellSizeM = 20.0;
-    const Terrain t = makeBuiltinTerrain(m);
-    TriangleMesh mesh;
-    const int n = 501;
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) mesh.positions.push_back({float(i * 20.0), float((n - 1 - j) * 20.0), t.heightsM(i, j)});
-    for (int j = 0; j + 1 < n; ++j)
-      for (int i = 0; i + 1 < n; ++i) {
-        const uint32_t a = j * n + i, b = a + 1, c = a + n, d = c + 1;
-        mesh.triangles.push_back({a, c, d});
-        mesh.triangles.push_back({a, d, b});
-      }
-    mesh.boundsMin = {0.f, 0.f, t.info.minElevationM > 0 ? float(t.info.minElevationM) : 0.f};
-    mesh.boundsMax = {float((n - 1) * 20.0), float((n - 1) * 20.0), float(t.info.maxElevationM)};
-    table << "\nA mesh of " << mesh.triangles.size() << " triangles (" << mesh.positions.size()
-          << " vertices; the paper's Puget Sound took about 7 minutes on a 2007 GPU), snow per vertex, target 60 s:\n\n"
-          << "| quality | rays per vertex | Embree build (s) | AO (s) | sun (s) | total (s) | M rays/s |\n|---|---|---|---|---|---|---|\n";
-    for (const char* q : {"draft", "production"}) {
-      s.aoRays = occlusionRaysForQuality(q);
-      const auto t0 = WallClock::now();
-      const Grid<float> none;
-      const RayScene scene(none, GridSpec{}, {mesh});
-      const double build = elapsedSeconds(t0);
-      const OcclusionSnow r = computeOcclusionSnowOnMesh(scene, mesh, s);
-      const double total = elapsedSeconds(t0);
-      const double rate = (r.aoRayCount + r.sunRayCount) / std::max(r.aoSeconds + r.sunSeconds, 1e-9) / 1e6;
-      table << "| " << q << " | " << s.aoRays << " | " << format("%.2f", build) << " | " << format("%.2f", r.aoSeconds) << " | "
-            << format("%.2f", r.sunSeconds) << " | " << format("%.2f", total) << " | " << format("%.1f", rate) << " |\n";
-      csv << "mesh_" << q << "," << s.aoRays << "," << mesh.triangles.size() << "," << r.aoSeconds << "," << r.sunSeconds << "," << total << ","
-          << rate << ",,\n";
-      log << "  occlusion mesh " << q << ": " << format("%.1f", total) << " s\n";
-    }
-  }
+  occlusionQualityPart(o, s, log, table, csv);
+  occlusionMeshPart(s, log, table, csv);
   writeCsvFile(o, "occlusion.csv", csv.str(), table);
   return table.str();
 }
