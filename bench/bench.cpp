@@ -87,15 +87,16 @@ std::string runBench(const BenchOptions& o, std::ostream& log) {
 
 namespace {
 
-// Sun exposure: run time of each term for a 120-day season on a sunSize^2 grid, per quality
-// level, and each level's error on one day against the Embree path at reference quality.
-std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
-  std::ostringstream table, csv;
-  const ModelParameters p;
-  const double latitude = 46.5;
+constexpr double kSunBenchLatitudeDeg = 46.5;
+const std::vector<std::string> kSunLevels{"draft", "production", "reference"};
+
+// The sun bench's timing: each quality level's season exposure (horizon sweep) and 120 days of
+// temperature on the builtin range at o.sunSize^2; the seconds per level.
+std::vector<double> sunTimingPart(const BenchOptions& o, const ModelParameters& p, int threads, std::ostream& table, std::ostream& csv,
+                                  std::ostream& log) {
+  const double latitude = kSunBenchLatitudeDeg;
   const int startDoy = 335;  // 1 December
-  csv << "part,quality,method,size,horizons_s,sky_s,direct_s,indirect_s,temperature_s,total_s,err_sky,err_sun,err_ind,err_total\n";
-  // Timing.
+  const std::vector<std::string>& levels = kSunLevels;
   DefaultTerrainOptions big;
   big.size = o.sunSize;
   big.cellSizeM = 10240.0 / o.sunSize;
@@ -104,7 +105,6 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
         << format("%.0f", big.cellSizeM) << " m, " << benchMachineDescription() << ", " << threads << " threads\n\n"
         << "| quality | method | horizons (s) | sky (s) | direct (s) | indirect (s) | temperature, 120 days (s) | total (s) |\n"
         << "|---|---|---|---|---|---|---|---|\n";
-  std::vector<std::string> levels{"draft", "production", "reference"};
   std::vector<double> levelSeconds;
   for (const auto& name : levels) {
     ExposureSettings es;
@@ -133,7 +133,16 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
     log << "  sun " << name << " " << o.sunSize << "²: " << format("%.1f", total) << " s\n";
     levelSeconds.push_back(total);
   }
-  // Accuracy on one day, against the Embree path at reference quality.
+  return levelSeconds;
+}
+
+// The sun bench's accuracy: each level and method on one day against the Embree path at reference
+// quality; the horizon sweep's rows with the level's season seconds (`levelSeconds`).
+std::vector<AccuracyRow> sunAccuracyPart(const BenchOptions& o, const ModelParameters& p, const std::vector<double>& levelSeconds,
+                                         std::ostream& table, std::ostream& csv) {
+  const double latitude = kSunBenchLatitudeDeg;
+  const std::vector<std::string>& levels = kSunLevels;
+  std::vector<AccuracyRow> accuracy;
   DefaultTerrainOptions small;
   small.size = o.sunAccuracySize;
   small.cellSizeM = 10240.0 / o.sunAccuracySize;
@@ -153,7 +162,6 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
                              p.indirectSunWeightHours / p.directSunWeightHours);
   };
   Grid<float> refSky, refSun, refInd;
-  std::vector<AccuracyRow> accuracy;
   oneDay(sunQuality("reference"), false, refSky, refSun, refInd);
   Grid<float> refTotal = refSky;
   for (size_t i = 0; i < refTotal.size(); ++i) refTotal.values()[i] += refSun.values()[i] + refInd.values()[i];
@@ -178,6 +186,17 @@ std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
         accuracy.push_back({name, levelSeconds[k], et, name == "draft"});
       }
     }
+  return accuracy;
+}
+
+// Sun exposure: run time of each term for a 120-day season on a sunSize^2 grid, per quality
+// level, and each level's error on one day against the Embree path at reference quality.
+std::string sunBench(const BenchOptions& o, std::ostream& log, int threads) {
+  std::ostringstream table, csv;
+  const ModelParameters p;
+  csv << "part,quality,method,size,horizons_s,sky_s,direct_s,indirect_s,temperature_s,total_s,err_sky,err_sun,err_ind,err_total\n";
+  const std::vector<double> levelSeconds = sunTimingPart(o, p, threads, table, csv, log);
+  const std::vector<AccuracyRow> accuracy = sunAccuracyPart(o, p, levelSeconds, table, csv);
   table << "\nDefault level: draft (precompute.sun_quality), " << format("%.2f", accuracy[0].seconds) << " s for the season's exposure on "
         << o.sunSize << "², error of I " << format("%.4f", accuracy[0].error) << ". Error against time, horizon sweep:\n\n"
         << "| level | season exposure on " << o.sunSize << "² (s) | I, relative L1 |\n|---|---|---|\n";
