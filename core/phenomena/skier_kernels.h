@@ -202,30 +202,15 @@ struct SkierMoveKernel {
     return w > 0.0 ? w : 0.0;
   }
 
-  SNOW_HD void operator()(int i) const {
-    SkierAgent& s = f.agents[i];
-    s.dest = -1;
-    if (s.status != kSkierActive) return;
-    const int w = v.width, h = v.height;
-    const int step = s.steps++;
-    if (step >= a.maxSteps) {
-      s.status = kSkierStepLimit;
-      return;
-    }
-    const int cur = s.cell, cx = cur % w, cy = cur / w;
-    if (f.route[cur] <= 0.f) {
-      s.status = kSkierRouteEnd;
-      return;
-    }
-    const float here = v.surface(cur);
+  // The cell the skier aims at this step: drawn among the cells within reach, each by its weight
+  // (counter-based: the same on every backend); -1 when none has weight.
+  SNOW_HD int drawTarget(const SkierAgent& s, int cx, int cy, float here, int step) const {
+    const int w = v.width;
     const int R = a.reach;
     double total = 0.0;
     for (int oy = -R; oy <= R; ++oy)
       for (int ox = -R; ox <= R; ++ox) total += weight(s, cx, cy, ox, oy, here);
-    if (!(total > 0.0)) {
-      s.status = kSkierNoCellAhead;
-      return;
-    }
+    if (!(total > 0.0)) return -1;
     const RandomKey key{a.seed};
     const Philox4x32 draw = key.draw(s.id * 1000003ull + static_cast<unsigned long long>(step), 0, RngStream::Skier);
     double u = uniformOpenDouble(draw.v[0], draw.v[1]) * total;
@@ -240,10 +225,11 @@ struct SkierMoveKernel {
           break;
         }
       }
-    if (chosen < 0) chosen = last;
-    const double tx = (chosen % w + 0.5) * a.dx - s.x, ty = (chosen / w + 0.5) * a.dy - s.y;
-    const double tl = sqrt(tx * tx + ty * ty);
-    const double wantX = tx / tl, wantY = ty / tl;
+    return chosen < 0 ? last : chosen;
+  }
+
+  // The heading turned towards the target's direction (wantX, wantY) by the steering share.
+  SNOW_HD void turn(SkierAgent& s, double wantX, double wantY) const {
     if (s.hx == 0.0 && s.hy == 0.0) {
       s.hx = wantX;
       s.hy = wantY;
@@ -258,10 +244,15 @@ struct SkierMoveKernel {
         s.hy = wantY;
       }
     }
-    // The smooth turn must not carry the skier where it would not go: uphill, out of the snow,
-    // or into a dead end (a route much shorter than the target's). Then it turns straight at
-    // the target in the same step (redrawing would turn it toward an old target and could spin
-    // it in place); if even that fails, it steps to the neighbour nearest the target's direction.
+  }
+
+  // Where the step ends (toX, toY), or why the skier stops (kSkierActive: it goes on). The smooth
+  // turn must not carry the skier where it would not go: uphill, out of the snow, or into a dead
+  // end (a route much shorter than the target's). Then it turns straight at the target in the
+  // same step (redrawing would turn it toward an old target and could spin it in place); if even
+  // that fails, it steps to the neighbour nearest the target's direction.
+  SNOW_HD int stepEnd(SkierAgent& s, int cur, int chosen, double wantX, double wantY, double& toX, double& toY) const {
+    const int w = v.width, h = v.height, cx = cur % w, cy = cur / w;
     const float routeFloor = 0.5f * f.route[chosen];
     auto enterable = [&](int c) {
       return v.snowDepth(c) >= a.minSnowM && v.surface(c) <= v.surface(cur) && f.route[c] >= routeFloor;
@@ -283,33 +274,59 @@ struct SkierMoveKernel {
       s.hy = wantY;
       stop = aim();
     }
+    if (stop != kSkierActive) return stop;
+    toX = nextX, toY = nextY;
+    if (ncell == cur || enterable(ncell)) return kSkierActive;
+    int best = -1;
+    double bestDot = 0.5;  // cos 60 deg
+    for (int oy = -1; oy <= 1; ++oy)
+      for (int ox = -1; ox <= 1; ++ox) {
+        const int bx = cx + ox, by = cy + oy;
+        if ((ox == 0 && oy == 0) || !v.isValid(bx, by)) continue;
+        const int b = by * w + bx;
+        if (!enterable(b)) continue;
+        const double ex = (bx + 0.5) * a.dx - s.x, ey = (by + 0.5) * a.dy - s.y, el = sqrt(ex * ex + ey * ey);
+        const double dot = (ex * wantX + ey * wantY) / el;
+        if (dot > bestDot) bestDot = dot, best = b;
+      }
+    if (best < 0) return kSkierNoCellAhead;
+    toX = (best % w + 0.5) * a.dx;
+    toY = (best / w + 0.5) * a.dy;
+    const double ex = toX - s.x, ey = toY - s.y, el = sqrt(ex * ex + ey * ey);
+    s.hx = ex / el;
+    s.hy = ey / el;
+    return kSkierActive;
+  }
+
+  SNOW_HD void operator()(int i) const {
+    SkierAgent& s = f.agents[i];
+    s.dest = -1;
+    if (s.status != kSkierActive) return;
+    const int w = v.width;
+    const int step = s.steps++;
+    if (step >= a.maxSteps) {
+      s.status = kSkierStepLimit;
+      return;
+    }
+    const int cur = s.cell, cx = cur % w, cy = cur / w;
+    if (f.route[cur] <= 0.f) {
+      s.status = kSkierRouteEnd;
+      return;
+    }
+    const int chosen = drawTarget(s, cx, cy, v.surface(cur), step);
+    if (chosen < 0) {
+      s.status = kSkierNoCellAhead;
+      return;
+    }
+    const double tx = (chosen % w + 0.5) * a.dx - s.x, ty = (chosen / w + 0.5) * a.dy - s.y;
+    const double tl = sqrt(tx * tx + ty * ty);
+    const double wantX = tx / tl, wantY = ty / tl;
+    turn(s, wantX, wantY);
+    double toX = 0.0, toY = 0.0;
+    const int stop = stepEnd(s, cur, chosen, wantX, wantY, toX, toY);
     if (stop != kSkierActive) {
       s.status = stop;
       return;
-    }
-    double toX = nextX, toY = nextY;
-    if (ncell != cur && !enterable(ncell)) {
-      int best = -1;
-      double bestDot = 0.5;  // cos 60 deg
-      for (int oy = -1; oy <= 1; ++oy)
-        for (int ox = -1; ox <= 1; ++ox) {
-          const int bx = cx + ox, by = cy + oy;
-          if ((ox == 0 && oy == 0) || !v.isValid(bx, by)) continue;
-          const int b = by * w + bx;
-          if (!enterable(b)) continue;
-          const double ex = (bx + 0.5) * a.dx - s.x, ey = (by + 0.5) * a.dy - s.y, el = sqrt(ex * ex + ey * ey);
-          const double dot = (ex * wantX + ey * wantY) / el;
-          if (dot > bestDot) bestDot = dot, best = b;
-        }
-      if (best < 0) {
-        s.status = kSkierNoCellAhead;
-        return;
-      }
-      toX = (best % w + 0.5) * a.dx;
-      toY = (best / w + 0.5) * a.dy;
-      const double ex = toX - s.x, ey = toY - s.y, el = sqrt(ex * ex + ey * ey);
-      s.hx = ex / el;
-      s.hy = ey / el;
     }
     const double mx = toX - s.x, my = toY - s.y;
     s.lengthM += sqrt(mx * mx + my * my);
