@@ -386,6 +386,30 @@ void logTheRanksLayout(const Scene& scene, const dist::Communicator& comm, const
            " or a rank's local grid would be the whole grid\n";
 }
 
+// A whole-grid state on rank 0 from every rank's owned cells (an empty state on the others).
+SnowState gatheredOnRankZero(const dist::Communicator& comm, const dist::Decomposition& d, const SnowState& s, const GridSpec& whole) {
+  SnowState out = comm.rank() == 0 ? dist::wholeLike(s, whole) : SnowState();
+  dist::gatherOwned(comm, d, s, out);
+  return out;
+}
+
+// A season's frame across ranks: each rank writes its tiles from its own copy (FrameWriter writes
+// in place: it calls MPI), or rank 0 the frame gathered whole.
+void writeFrameAcrossRanks(const dist::Communicator& comm, const dist::Decomposition& d, const GridSpec& whole, bool tilesOnRanks,
+                           FrameWriter& frames, double day, SnowState& s) {
+  throwIfStopRequested();
+  if (tilesOnRanks) {
+    dist::refreshHalos(comm, d, s);
+    frames.write(day, s);
+    if (comm.rank() == 0) progress().event("season", "frame", {{"day", jsonNumber(day)}});
+    return;
+  }
+  SnowState frame = gatheredOnRankZero(comm, d, s, whole);
+  if (comm.rank() != 0) return;
+  frames.write(day, frame);
+  progress().event("season", "frame", {{"day", jsonNumber(day)}});
+}
+
 }  // namespace
 
 SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std::unique_ptr<SnowBackend> local, SnowState& state,
@@ -447,12 +471,6 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
   {  // the backend and its scratch live for the season alone
     dist::DistributedBackend backend(std::move(local), comm, d);
     if (replicated) backend.replicateEvents(createCpuBackend(), state);
-    // A whole-grid state on rank 0 from every rank's owned cells.
-    auto gathered = [&](const SnowState& s) {
-      SnowState out = comm.rank() == 0 ? dist::wholeLike(s, whole) : SnowState();
-      dist::gatherOwned(comm, d, s, out);
-      return out;
-    };
     progress().stage("season", 0.0);
     report = runSeason(
         backend, mine, config,
@@ -460,25 +478,13 @@ SeasonReport runSeasonAcrossRanks(const Scene& scene, BakeTerrain& terrain, std:
           throwIfStopRequested();  // once a simulated day: MPI_Abort ends every rank with 130
           progress().stage("season", f);
         },
-        [&](double day, SnowState& s) {
-          throwIfStopRequested();
-          if (tilesOnRanks) {  // each rank its tiles, from its own copy (FrameWriter writes in place: it calls MPI)
-            dist::refreshHalos(comm, d, s);
-            frames.write(day, s);
-            if (comm.rank() == 0) progress().event("season", "frame", {{"day", jsonNumber(day)}});
-            return;
-          }
-          SnowState frame = gathered(s);
-          if (comm.rank() != 0) return;
-          frames.write(day, frame);
-          progress().event("season", "frame", {{"day", jsonNumber(day)}});
-        });
+        [&](double day, SnowState& s) { writeFrameAcrossRanks(comm, d, whole, tilesOnRanks, frames, day, s); });
     frames.join();
     if (noSnow) report.noSnowRemovedM3 = noSnowRemovedM3;
     if (tilesOnRanks) {  // each rank writes the tiles of its local grid
       dist::refreshHalos(comm, d, mine);
       state = std::move(mine);
-    } else if (SnowState final = gathered(mine); comm.rank() == 0) {
+    } else if (SnowState final = gatheredOnRankZero(comm, d, mine, whole); comm.rank() == 0) {
       state = std::move(final);
     }
     // Ranks that write their tiles exchange each layer's range and then their lists of files
