@@ -380,6 +380,7 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
   backend_.avalancheRelease(moving, args_);
   liveFrom_ = 2, liveSteps_ = 0;
+  staticFieldsSeen_ = backend_.staticFieldsVersion();
   backend_.beforeNextWrite([this] { onOutsideWrite(); });
   unionBox_ = args_;
   record_.released = true;
@@ -446,7 +447,12 @@ bool AvalancheRun::step() {
   a.spanY0 = spans ? args_.y0 : 0;
   a.spanY1 = spans ? args_.y1 : 0;
   a.statsIn = record_.steps % 2;
-  // With one substep a step, the last two steps' touched columns bound the passes too.
+  // With one substep a step, the last two steps' touched columns bound the passes too; not for two
+  // steps after a day's static fields came (the friction reads the temperature of every cell).
+  if (backend_.staticFieldsVersion() != staticFieldsSeen_) {
+    staticFieldsSeen_ = backend_.staticFieldsVersion();
+    liveFrom_ = std::max(liveFrom_, record_.steps + 2);
+  }
   a.live = spans && substeps == 1 && record_.steps >= liveFrom_ && liveSpans_;
   liveSteps_ += a.live;
   for (int set = 0; set < 2; ++set) a.liveY0[set] = statsY0_[set], a.liveY1[set] = statsY1_[set];

@@ -194,6 +194,7 @@ class AvalancheRun {
   // that may use them (two after the release or after anything else wrote the state).
   int statsY0_[2] = {0, 0}, statsY1_[2] = {0, 0};
   int liveFrom_ = 2, liveSteps_ = 0;
+  uint64_t staticFieldsSeen_ = 0;  // the backend's staticFieldsVersion at release or the last change
   void onOutsideWrite();
   AvalancheRecord record_;
   bool active_ = false, atRest_ = false;

@@ -100,6 +100,9 @@ class SnowBackend {
   virtual uint64_t stateVersion() const = 0;
   // Replaces the static fields (exposure, temperature base, wind) only.
   virtual void uploadStaticFields(const SnowState& state) = 0;
+  // Counts the uploads of static fields (a day's temperature may come while an avalanche runs:
+  // its friction reads the temperature, AvalancheRun's live spans watch this).
+  uint64_t staticFieldsVersion() const { return staticFieldsVersion_; }
 
   // Each step returns the snow volume it added (positive) or removed (negative), in m^3.
   virtual double snowfall(const SnowfallArgs& args) = 0;
@@ -181,9 +184,11 @@ class SnowBackend {
   }
 
   std::function<void()> afterPowderSubstep_;
+  void staticFieldsUploaded() { ++staticFieldsVersion_; }
 
  private:
   std::function<void()> beforeWrite_;
+  uint64_t staticFieldsVersion_ = 0;
 };
 
 }  // namespace snow

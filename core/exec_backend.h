@@ -38,6 +38,7 @@ class ExecBackend final : public SnowBackend {
   // Static fields, and the art-direction ones the scene paints (empty buffers otherwise: null in
   // the kernels).
   void uploadStaticFields(const SnowState& s) override {
+    staticFieldsUploaded();
 #define SNOW_UPLOAD_STATIC(member, view, Element, role, access, fill) \
   if constexpr (uploadedWithStaticFields(FieldRole::role)) uploadField<FieldRole::role>(member##_, s.member);
     SNOW_STATE_FIELDS(SNOW_UPLOAD_STATIC)

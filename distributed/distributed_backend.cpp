@@ -119,6 +119,7 @@ SnowBackend& DistributedBackend::replicaUpToDate(const char* what) {
 }
 
 void DistributedBackend::uploadStaticFields(const SnowState& s) {
+  staticFieldsUploaded();
   local_->uploadStaticFields(s);
   if (replica_ && replicaUploaded_) replica_->uploadStaticFields(*whole_);
 }

@@ -517,11 +517,11 @@ TEST(Avalanche, RowSpansGiveTheSameBytesAsTheWholeBox) {
 }
 
 // The live spans (AvalancheArgs::live: the passes also kept to the cells a pipe touched in the
-// last two steps) give the source spans' bytes, on the diagonal band and in a bowl whose
-// deposit rests thick behind its front; and so does an edit between the avalanche's steps that
-// raises every other block of cells, which sets cells no pipe touched flowing (the next two
-// steps keep to the source spans).
-TEST(Avalanche, LiveSpansGiveTheSourceSpansBytesAlsoWhenTheStateIsEditedMidRun) {
+// last two steps) give the source spans' bytes on four slopes (a diagonal band, a bowl, a runout
+// where the deposit rests thick behind its front, a V valley); and so do an edit between the
+// avalanche's steps that raises every other block of cells and a warm day's static fields, which
+// set cells no pipe touched flowing (the next two steps keep to the source spans).
+TEST(Avalanche, LiveSpansGiveTheSourceSpansBytesAlsoWhenTheStateIsEditedOrWarmedMidRun) {
   SnowState band = test::terrainFrom(96, 96, 5.0, -20.f, [](double x, double y) {
     return 2000.0 - 0.6 * (x + y) + 0.4 * std::sin(0.37 * x) * std::cos(0.29 * y);
   });
@@ -543,44 +543,50 @@ TEST(Avalanche, LiveSpansGiveTheSourceSpansBytesAlsoWhenTheStateIsEditedMidRun) 
   SnowState valley = test::terrainFrom(60, 30, 5.0, -20.f, [](double x, double y) { return 2000.0 + std::abs(x - 150.0) + 0.1 * y; });
   for (int y = 5; y < 25; ++y)
     for (int x = 2; x < 14; ++x) valley.unstableM(x, y) = 2.0f;
-  for (const SnowState* s : {&band, &bowl, &runout, &valley}) {
-    for (int fallAt : {-1, 6, 30}) {
-      auto run = [&](bool live, int& liveSteps) {
-        auto backend = createCpuBackend();
-        backend->upload(*s);
-        const ModelParameters p;
-        AvalancheRun r(*backend, p, *s);
-        r.useLiveSpans(live);
-        const int rx = s == &band ? 6 : (s == &valley ? 8 : 20), ry = s == &band ? 6 : (s == &bowl ? 20 : (s == &valley ? 15 : 10));
-        r.release(rx, ry, 0.0, 0.0, true);
-        for (int step = 0; !r.atRest() && !r.step(); ++step)
-          if (step == fallAt) {  // 10 m of compacted snow on every other 3 x 3 block: steep new slopes
-            std::vector<float> weights(s->spec.cellCount());
-            for (int y = 0; y < s->spec.height; ++y)
-              for (int x = 0; x < s->spec.width; ++x) weights[static_cast<size_t>(y) * s->spec.width + x] = (x / 3 + y / 3) % 2;
-            EditArgs edit;
-            edit.layer = 0;
-            edit.depthM = 10.f;
-            backend->applyEdit(edit, weights);
-          }
-        liveSteps = r.liveSteps();
-        Outcome o{r.settle(), *s};
-        backend->download(o.state);
-        return o;
-      };
-      int liveSteps = 0, none = 0;
-      const Outcome live = run(true, liveSteps), source = run(false, none);
-      ASSERT_TRUE(source.record.released);
-      EXPECT_EQ(none, 0);
-      EXPECT_GT(liveSteps, source.record.steps / 2) << "the live spans were used";
-      test::expectSameBytes(source.state, live.state);
-      EXPECT_EQ(source.state.avalancheScourM.values(), live.state.avalancheScourM.values());
-      EXPECT_EQ(source.state.avalancheDepositM.values(), live.state.avalancheDepositM.values());
-      EXPECT_EQ(source.record.steps, live.record.steps);
-      std::printf("[ measure ] %s, edit after step %d: %d steps, %d with live spans\n", s == &band ? "band" : (s == &bowl ? "bowl" : (s == &runout ? "runout" : "valley")), fallAt,
-                  live.record.steps, liveSteps);
-    }
-  }
+  for (const SnowState* s : {&band, &bowl, &runout, &valley})
+    for (int fallAt : {-1, 6, 30})
+      for (bool warm : {false, true}) {
+        if (fallAt < 0 && warm) continue;
+        auto run = [&](bool live, int& liveSteps) {
+          auto backend = createCpuBackend();
+          backend->upload(*s);
+          const ModelParameters p;
+          AvalancheRun r(*backend, p, *s);
+          r.useLiveSpans(live);
+          const int rx = s == &band ? 6 : (s == &valley ? 8 : 20), ry = s == &band ? 6 : (s == &bowl ? 20 : (s == &valley ? 15 : 10));
+          r.release(rx, ry, 0.0, 0.0, true);
+          for (int step = 0; !r.atRest() && !r.step(); ++step)
+            if (step == fallAt && warm) {  // a day's static fields: +2 C everywhere, wet snow's smaller friction
+              SnowState day = *s;
+              day.temperatureBaseC.fill(2.f);
+              backend->uploadStaticFields(day);
+            } else if (step == fallAt) {  // 10 m of compacted snow on every other 3 x 3 block: steep new slopes
+              std::vector<float> weights(s->spec.cellCount());
+              for (int y = 0; y < s->spec.height; ++y)
+                for (int x = 0; x < s->spec.width; ++x) weights[static_cast<size_t>(y) * s->spec.width + x] = (x / 3 + y / 3) % 2;
+              EditArgs edit;
+              edit.layer = 0;
+              edit.depthM = 10.f;
+              backend->applyEdit(edit, weights);
+            }
+          liveSteps = r.liveSteps();
+          Outcome o{r.settle(), *s};
+          backend->download(o.state);
+          return o;
+        };
+        int liveSteps = 0, none = 0;
+        const Outcome live = run(true, liveSteps), source = run(false, none);
+        ASSERT_TRUE(source.record.released);
+        EXPECT_EQ(none, 0);
+        EXPECT_GT(liveSteps, source.record.steps / 2) << "the live spans were used";
+        test::expectSameBytes(source.state, live.state);
+        EXPECT_EQ(source.state.avalancheScourM.values(), live.state.avalancheScourM.values());
+        EXPECT_EQ(source.state.avalancheDepositM.values(), live.state.avalancheDepositM.values());
+        EXPECT_EQ(source.record.steps, live.record.steps);
+        std::printf("[ measure ] %s, %s after step %d: %d steps, %d with live spans\n",
+                    s == &band ? "band" : (s == &bowl ? "bowl" : (s == &runout ? "runout" : "valley")), warm ? "warm day" : "edit", fallAt,
+                    live.record.steps, liveSteps);
+      }
 }
 
 // The record's box-cell steps (the bench's cost per box cell) sum each step's box: at least a

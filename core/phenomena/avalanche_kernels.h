@@ -36,6 +36,7 @@ struct AvalancheArgs {
 // energy, the first and last column of snow that can flow, the first and last column a pipe
 // touched in the last substep (each -1 when none).
 constexpr int kAvalancheRowStats = 6;
+static_assert(scratchCount(ScratchExtent::AvalancheRows, 0, 1, false) == 2 * kAvalancheRowStats, "rowStats holds two sets a row");
 
 // Row y's statistics of set `set` (AvalancheRowStatsKernel).
 SNOW_HD SNOW_INLINE float* avalancheRowStats(const SnowFieldsView& v, int y, int set) {
@@ -43,11 +44,12 @@ SNOW_HD SNOW_INLINE float* avalancheRowStats(const SnowFieldsView& v, int y, int
 }
 
 // Why the live spans give the box's bytes: a pipe's flow in a substep is a function of its own
-// moved flow and its two end cells' state (surface, moving snow, flowing flag), nothing else. If
-// no pipe touched either end in the last two substeps, the pipe was zero in the last one and its
-// inputs are now what they were then, so it is zero again. Every pipe that can flow at substep k
-// of a step therefore has an end within k - 1 cells of a cell touched in the last two substeps
-// of the previous step, and every cell a pass would change is within k of one.
+// moved flow and its two end cells' state (surface, moving snow, flowing flag, temperature),
+// nothing else. If no pipe touched either end in the last two substeps (and no static field
+// came since: AvalancheRun turns the spans off then), the pipe was zero in the last one and its
+// inputs are now what they were then, so it is zero again. With one substep a step, every pipe
+// that can flow at a step's substep has an end a pipe touched in the last two steps, and every
+// cell a pass would change is within one cell of one.
 SNOW_HD SNOW_INLINE void avalancheLiveSpan(const SnowFieldsView& v, const AvalancheArgs& a, int y, int k, int& lo, int& hi) {
   int l = a.x1, h = a.x0 - 1;
   for (int set = 0; set < 2; ++set) {
@@ -244,7 +246,8 @@ struct AvalancheHeightKernel {
       const float g = moved[4 + d] = movedPipe(v, nx, ny, v.index(nx, ny), d);
       if (g > 0.f) in += g; else out -= g;
     }
-    v.avalancheFlowing[i] = in > 0.0 || out > 0.0;
+    // Touched exactly when the cell changes below (a NaN flow too): the live spans rely on it.
+    v.avalancheFlowing[i] = !(in == 0.0 && out == 0.0);
     if (in == 0.0 && out == 0.0) return;
     const double c = static_cast<double>(v.cellSizeXM) * v.cellSizeYM;
     double u = v.avalancheU[i];
