@@ -126,6 +126,92 @@ void createOutputFolder(const std::string& dir) {
   if (ec) throw InputError(dir + ": cannot create the output folder: " + ec.message());
 }
 
+namespace {
+
+// What the stages after the precompute share, made in runGridBake's order (across ranks, the
+// state may be the rank's local grid).
+struct GridBake {
+  const Scene& scene;
+  const BakeOptions& options;
+  BakeTerrain& terrain;
+  SnowState& state;
+  Precomputed& pre;
+  const std::vector<std::string>& layers;
+  uint8_t needs;
+  std::ostream& log;
+};
+
+// Where every file comes from: the scene, the precompute, the occlusion or season results (filled
+// as those stages run) and the terrain's frame; "file" events as each file is written, a frame's
+// during the season and the rest in the outputs stage.
+OutputSources outputSourcesOf(const GridBake& b, const OcclusionResult& occlusion, const SeasonOutputs& seasonOutputs) {
+  OutputSources sources{.scene = &b.scene,
+                        .outDir = b.options.outDir,
+                        .latitudeDeg = b.terrain.latitudeDeg,
+                        .layers = b.layers,
+                        .wind = &*b.pre.wind,
+                        .exposure = b.pre.exposure ? &*b.pre.exposure : nullptr,
+                        .occlusion = &occlusion.grids,
+                        .routeMap = &seasonOutputs.routeMap,
+                        .skiTrackFactor = b.scene.outputs.skiTrackFactor,
+                        .occluders = &b.terrain.occluders,
+                        .geo = geoFrameOf(b.terrain.info())};
+  sources.fileWritten = [](const std::string& path, double day) { reportFilesWritten({path}, day >= 0.0 ? "season" : "outputs"); };
+  return sources;
+}
+
+// The season on `backend`, its frames written by `writer` as frame_writing and the memory plan
+// say, then what no writer reads freed: the backend, the state's static fields, and the sun's
+// samples unless a layer reads the sun.
+SeasonReport runTheSeason(const GridBake& b, const ArtDirectionPlan& art, FrameTiming planned, bool tilesOnRanks, int threads,
+                          std::unique_ptr<SnowBackend> backend, OutputWriter& writer, SeasonOutputs& seasonOutputs) {
+  SeasonConfig config = makeSeasonConfig(b.scene, b.terrain, art, b.pre, b.layers, seasonOutputs, b.log);
+  seasonOutputs.routeMap = theRanksWindow(std::move(seasonOutputs.routeMap), b.scene, b.terrain.info().spec);
+  // Ranks writing their tiles exchange as they write (each layer's range), from the main thread
+  // alone and all at once: every rank writes its frames in place, whatever timing its own memory
+  // plan chose (the same files).
+  const FrameTiming timing = tilesOnRanks ? FrameTiming::Paused : planned;
+  FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, timing);
+  config.lendFrames = frames.lendsFrames();
+  config.spillFolder = b.options.outDir;
+  SeasonReport report = bakingAcrossRanks()
+                                  ? runSeasonAcrossRanks(b.scene, b.terrain, std::move(backend), b.state, b.pre, b.needs, config, frames, b.log)
+                                  : runSeasonStage(b.scene, *backend, b.state, config, frames, b.log);
+  backend.reset();  // its copies of the state and its scratch, freed before the outputs
+  b.state.releaseFields([](FieldRole r) { return r == FieldRole::Static; });
+  if (b.pre.exposure && !(b.needs & kNeedsSun)) b.pre.exposure->release();
+  frames.writeHeld();  // the frames held through the season (FrameTiming::AfterSeason)
+  return report;
+}
+
+// The outputs of the season's end (or of the occlusion), the contact sheet and each avalanche's
+// maps (of the whole grid; each rank its tiles where the ranks write their tiles).
+void writeEndOfBake(const GridBake& b, OutputWriter& writer, const OcclusionResult& occlusion, const SeasonOutputs& seasonOutputs,
+                    const SeasonReport& report) {
+  writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
+  writer.writeDay(b.state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
+  writer.writeSeasonEncodings();
+  writer.writeContactSheet();
+  writer.writeAvalancheMaps(report.avalanches, b.terrain.info().spec);
+}
+
+// The manifest of every file written (`files`, the resolved scene's and its own added), with the
+// measured memory against `memory`'s prediction.
+void writeGridManifest(const GridBake& b, const ArtDirectionPlan& art, const OcclusionResult& occlusion, const SeasonReport& report,
+                       const OutputSink& files, const MemoryPrediction& memory, const std::string& terrainHash, BakeResult& result) {
+  Manifest manifest = assembleBakeManifest({&b.scene, &b.terrain.terrain, b.terrain.latitudeDeg, programVersion(), result.backendName,
+                                            occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
+                                            b.options.commandLine, terrainHash});
+  manifest.memoryJson =
+      measuredMemoryBreakdown(memory, static_cast<double>(b.terrain.info().spec.cellCount()), "cell", b.options.verbose, b.log);
+  result.files = files.paths;
+  writeTextAtomically(manifestPath(b.options.outDir), manifestToJson(manifest));
+  result.files.push_back(manifestPath(b.options.outDir));
+  reportFilesWritten({result.files.end() - 2, result.files.end()});  // the resolved scene and the manifest (the rest as written)
+}
+
+}  // namespace
+
 BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threads, std::ostream& log, WallClock::time_point tStart) {
   // The budget as the bake starts: the terrain read after it is among the model's owners (and
   // across ranks, the other ranks' terrains on this machine too).
@@ -136,7 +222,6 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   BakeTerrain terrain = loadBakeTerrain(scene, log);  // across ranks, the ranks but 0 free its grids for the season
   const GridMemoryPlan memoryPlan = checkGridMemory(scene, terrain, options.frames, budget, log);
   checkRanksSuitTheGrid(scene, terrain.info().spec);
-  const MemoryPrediction& memory = memoryPlan.prediction;
   progress().stage("terrain", 1.0);
   const bool occlusionMode = scene.mode == SceneMode::Occlusion;
   if (occlusionMode) log << "mode: occlusion (Foldes & Benes 2007): no season\n";
@@ -158,14 +243,16 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   // A constant wind's fields are the state's copy from here on, unless a layer reads the wind
   // (across ranks with parts, each rank's local state's: runSeasonAcrossRanks).
   if (!pre.wind->varies() && !(needs & kNeedsWind) && !pre.partsOnRanks) pre.wind->releaseFields();
+  const GridBake bake{scene, options, terrain, state, pre, layers, needs, log};
 
   // Across ranks, each rank's season runs on the CPU (acrossRanksRefusal refuses run.backend = "cuda").
   std::unique_ptr<SnowBackend> backend = occlusionMode ? nullptr : bakingAcrossRanks() ? createCpuBackend() : chooseBackend(scene.backend, log);
-  const std::string backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
-  if (bakingAcrossRanks()) log << "backend: " << backendName << " on each rank\n";
+  BakeResult result;
+  result.backendName = backend ? backend->name() : "cpu (Embree ray queries; occlusion mode has no season kernels)";
+  if (bakingAcrossRanks()) log << "backend: " << result.backendName << " on each rank\n";
   // Across ranks, rank 0 gathers the whole grid and writes every file, or each rank writes the tiles
   // that start in its subdomain and rank 0 the whole files, one at a time.
-  const bool tilesOnRanks = ranksWriteTheirTiles(scene, terrain.info().spec);
+  const bool tilesOnRanks = ranksWriteTheirTiles(scene, wholeSpec);
   if (writesOutputs() || tilesOnRanks) createOutputFolder(options.outDir);
   // Where every rank writes its tiles, rank 0 too frees the terrain's heights for the season.
   const std::string terrainHash = tilesOnRanks && writesOutputs() ? terrainHashOf(scene, terrain.terrain) : std::string();
@@ -174,65 +261,26 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   const SinkScope filesScope(files);
   OcclusionResult occlusion;
   SeasonOutputs seasonOutputs;
-  OutputSources sources{.scene = &scene,
-                        .outDir = options.outDir,
-                        .latitudeDeg = terrain.latitudeDeg,
-                        .layers = layers,
-                        .wind = &*pre.wind,
-                        .exposure = pre.exposure ? &*pre.exposure : nullptr,
-                        .occlusion = &occlusion.grids,
-                        .routeMap = &seasonOutputs.routeMap,
-                        .skiTrackFactor = scene.outputs.skiTrackFactor,
-                        .occluders = &terrain.occluders,
-                        .geo = geoFrameOf(terrain.info())};
-  // "file" events as each file is written: a frame's during the season, the rest in the outputs stage.
-  sources.fileWritten = [](const std::string& path, double day) { reportFilesWritten({path}, day >= 0.0 ? "season" : "outputs"); };
+  OutputSources sources = outputSourcesOf(bake, occlusion, seasonOutputs);
   Precomputed tilesPre;  // across ranks on the replica: the local grid's cells of the precompute the layers read
-  shareTheRanksTiles(sources, scene, terrain.info().spec, pre, tilesPre);
+  shareTheRanksTiles(sources, scene, wholeSpec, pre, tilesPre);
   OutputWriter writer(sources, log);
-  SeasonReport report;
   if (occlusionMode) {
     stage.emplace("occlusion");
     progress().stage("occlusion", 0.0);
     runOcclusion(scene, terrain, state, occlusion, log);
     progress().stage("occlusion", 1.0);
-    report = occlusion.report;
+    result.season = occlusion.report;
   } else {
     stage.emplace("season");
-    SeasonConfig config = makeSeasonConfig(scene, terrain, art, pre, layers, seasonOutputs, log);
-    seasonOutputs.routeMap = theRanksWindow(std::move(seasonOutputs.routeMap), scene, terrain.info().spec);
-    // Ranks writing their tiles exchange as they write (each layer's range), from the main thread
-    // alone and all at once: every rank writes its frames in place, whatever timing its own memory
-    // plan chose (the same files).
-    const FrameTiming timing = tilesOnRanks ? FrameTiming::Paused : memoryPlan.timing;
-    FrameWriter frames(writer, seasonOutputs.skiTracks ? &*seasonOutputs.skiTracks : nullptr, threads, timing);
-    config.lendFrames = frames.lendsFrames();
-    config.spillFolder = options.outDir;
-    report = bakingAcrossRanks() ? runSeasonAcrossRanks(scene, terrain, std::move(backend), state, pre, needs, config, frames, log)
-                                 : runSeasonStage(scene, *backend, state, config, frames, log);
-    backend.reset();  // its copies of the state and its scratch, freed before the outputs
-    // No writer reads the state's static fields, nor the exposure samples unless a layer reads the sun.
-    state.releaseFields([](FieldRole r) { return r == FieldRole::Static; });
-    if (pre.exposure && !(needs & kNeedsSun)) pre.exposure->release();
-    frames.writeHeld();  // the frames held through the season (FrameTiming::AfterSeason)
+    result.season = runTheSeason(bake, art, memoryPlan.timing, tilesOnRanks, threads, std::move(backend), writer, seasonOutputs);
   }
-
-  BakeResult result;
-  result.season = report;
-  result.backendName = backendName;
   if (!writesOutputs() && !tilesOnRanks) return result;  // rank 0 writes a bake across ranks
 
-  // Outputs of the season's end, the contact sheet, each avalanche's maps, then the manifest.
   stage.emplace("outputs");
   const auto t0 = WallClock::now();
   progress().stage("outputs", 0.0);
-  writer.setSnowMesh(occlusion.snowMesh ? &*occlusion.snowMesh : nullptr);
-  writer.writeDay(state, -1.0, seasonOutputs.skiTracks ? &seasonOutputs.skiTracks->depth() : nullptr);
-  writer.writeSeasonEncodings();
-  writer.writeContactSheet();
-  // The whole grid's maps (the state may be this rank's local grid), each rank its tiles where
-  // the ranks write their tiles.
-  writer.writeAvalancheMaps(report.avalanches, terrain.info().spec);
+  writeEndOfBake(bake, writer, occlusion, seasonOutputs, result.season);
   if (tilesOnRanks) {  // each rank wrote its tiles; rank 0 lists every rank's
     mergeTheRanksFiles(files);
     if (!writesOutputs()) return result;
@@ -241,14 +289,7 @@ BakeResult runGridBake(const Scene& scene, const BakeOptions& options, int threa
   progress().stage("outputs", 1.0);
   stage.emplace("manifest");  // the outputs stage's memory noted: every owner has had its peak
   progress().stage("manifest", 0.0);
-  Manifest manifest = assembleBakeManifest({&scene, &terrain.terrain, terrain.latitudeDeg, programVersion(), backendName,
-                                            occlusion.manifest, &report, art.rasters, art.editRecords, files.files,
-                                            options.commandLine, terrainHash});
-  manifest.memoryJson = measuredMemoryBreakdown(memory, static_cast<double>(terrain.info().spec.cellCount()), "cell", options.verbose, log);
-  result.files = files.paths;
-  writeTextAtomically(manifestPath(options.outDir), manifestToJson(manifest));
-  result.files.push_back(manifestPath(options.outDir));
-  reportFilesWritten({result.files.end() - 2, result.files.end()});  // the resolved scene and the manifest (the rest as written)
+  writeGridManifest(bake, art, occlusion, result.season, files, memoryPlan.prediction, terrainHash, result);
   progress().stage("manifest", 1.0);
   log << writer.occluderNotes();
   log << "outputs: " << result.files.size() << " files in " << options.outDir << " (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
