@@ -161,6 +161,12 @@ class OutputWriter {
   // The splat map and the snow surface's normal map (output_engine_maps.cpp).
   void writeSplatMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
   void writeNormalMap(const Day& d, const RasterSet& set, const LayerInfo& layer);
+  // One per-avalanche map (output_avalanches.cpp): the image, each raster set's files of it, one file.
+  struct AvalancheMapImage;
+  void writeAvalancheMap(const std::string& rel, const std::string& tag, const AvalancheMapImage& image, const std::string& content,
+                         const std::string& unit, double day, const GridSpec& spec);
+  void writeAvalancheMapFile(const std::string& base, const Grid<float>& image, const std::string& what, const std::string& unit, double day,
+                             const TileLayout& l, int col, int row, int width, int height, bool tile);
   // The tile fields of the file just listed.
   void noteTile(const TileLayout& l, int column, int row, int imageWidth, int imageHeight) const;
   void writeEncodings(const Day& d, const RasterSet& set, const LayerInfo& layer, const Grid<float>& grid, const Grid<uint8_t>* valid, const std::string& content,
