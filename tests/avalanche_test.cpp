@@ -34,17 +34,17 @@ double totalSnow(const SnowState& s) {
   return t * s.spec.cellAreaM2();
 }
 
-struct Outcome {
+struct AvalancheOutcome {
   AvalancheRecord record;
   SnowState state;
 };
 
-Outcome runAvalanche(SnowState s, int x, int y, const ModelParameters& p = ModelParameters{},
+AvalancheOutcome runAvalanche(SnowState s, int x, int y, const ModelParameters& p = ModelParameters{},
                      std::unique_ptr<SnowBackend> backend = createCpuBackend(), bool rowSpans = true) {
   backend->upload(s);
   AvalancheRun run(*backend, p, s);
   run.useRowSpans(rowSpans);
-  Outcome o;
+  AvalancheOutcome o;
   run.release(x, y, 0.0, 0.0, true);
   o.record = run.runToRest();
   backend->download(s);
@@ -85,7 +85,7 @@ TEST(Avalanche, DryConeSettlesToTheRestAngle) {
   const double before = totalSnow(s);
   ModelParameters p;
   p.avalancheReachMPerM = 100.0;
-  const Outcome o = runAvalanche(s, 30, 30, p);
+  const AvalancheOutcome o = runAvalanche(s, 30, 30, p);
   ASSERT_TRUE(o.record.released) << o.record.why;
   std::printf("[ measure ] cone: %d steps, %.1f s simulated, %s; max slope %.3f (tan 30 = %.3f), mass %.3e relative\n",
               o.record.steps, o.record.simulatedS, o.record.why.c_str(), maxSnowSlope(o.state), kTan30,
@@ -105,7 +105,7 @@ TEST(Avalanche, InclinedPlaneFlowsOnlyAboveTheRestAngle) {
     for (int y = slope < kTan30 ? 0 : 10; y < (slope < kTan30 ? 120 : 40); ++y)
       for (int x = slope < kTan30 ? 0 : 10; x < (slope < kTan30 ? 40 : 30); ++x) s.unstableM(x, y) = 1.f;
     const SnowState start = s;
-    const Outcome o = runAvalanche(s, 20, 25);
+    const AvalancheOutcome o = runAvalanche(s, 20, 25);
     ASSERT_TRUE(o.record.released);
     double moved = 0, left = 0;
     for (int y = 0; y < 120; ++y)
@@ -135,7 +135,7 @@ TEST(Avalanche, MovingSnowNoThickerThanTheStopThicknessDoesNotFlow) {
     const SnowState start = s;
     ModelParameters p;
     p.avalancheStopThicknessM = stop;  // (the default reach releases 7.5 m around the rupture point)
-    const Outcome o = runAvalanche(s, 20, 25, p);
+    const AvalancheOutcome o = runAvalanche(s, 20, 25, p);
     ASSERT_TRUE(o.record.released) << o.record.why;
     double moved = 0;
     for (int y = 0; y < 120; ++y)
@@ -159,7 +159,7 @@ TEST(Avalanche, MovingSnowNoThickerThanTheStopThicknessDoesNotFlow) {
 // only loses speed to viscosity and spreads until its surface is nearly flat.
 TEST(Avalanche, WetSnowRunsOutFartherAndThinnerThanDry) {
   auto slope = [](double, double y) { return y < 120.0 ? 2000.0 - 1.0 * y : 2000.0 - 120.0 - 0.05 * (y - 120.0); };
-  Outcome result[2];
+  AvalancheOutcome result[2];
   for (int wet = 0; wet < 2; ++wet) {
     SnowState s = test::terrainFrom(40, 200, 2.0, wet ? 5.f : -20.f, slope);
     for (int y = 5; y < 30; ++y)
@@ -188,7 +188,7 @@ TEST(Avalanche, FlowingSnowCrossesSlopesBetweenTheDynamicAndTheRestAngle) {
       for (int x = 12; x < 28; ++x) s.unstableM(x, y) = 1.f;
     ModelParameters p;
     if (oneAngle) p.avalancheDynamicFrictionDeg = p.avalancheRestAngleDeg;
-    const Outcome o = runAvalanche(s, 20, 15, p);
+    const AvalancheOutcome o = runAvalanche(s, 20, 15, p);
     for (int y = 0; y < 200; ++y)
       for (int x = 0; x < 40; ++x)
         if (o.state.stableM(x, y) > 0.01f) reach[oneAngle] = std::max(reach[oneAngle], 2.0 * y);
@@ -346,7 +346,7 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
     p.avalancheReachMPerM = draw(4, 0.0, 10000.0);
     p.avalancheStopSpeedMps = draw(5, 1e-4, 1.0);
     if (k % 2) p.avalancheDryTemperatureC = 50.0, p.avalancheWetTemperatureC = 60.0;  // all wet
-    const Outcome o = runAvalanche(s, rx, ry, p);
+    const AvalancheOutcome o = runAvalanche(s, rx, ry, p);
     EXPECT_TRUE(o.record.released) << k << ": " << o.record.why;  // 1-3 m of unstable snow at every valid cell
     EXPECT_GT(o.record.releasedM3, 0.0) << k;
     expectFiniteNonNegative(o.state);
@@ -364,7 +364,7 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
   for (int y = 0; y < 20; ++y)
     for (int x = 5; x < 25; ++x) cliff.unstableM(x, y) = 1.f;
   const double before = totalSnow(cliff);
-  const Outcome o = runAvalanche(cliff, 15, 18);
+  const AvalancheOutcome o = runAvalanche(cliff, 15, 18);
   ASSERT_TRUE(o.record.released) << o.record.why;
   expectFiniteNonNegative(o.state);
   EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before);
@@ -381,11 +381,11 @@ TEST(Avalanche, SameBytesSerialAndOnOneAndTwoThreads) {
       if (s.validCell(x, y)) s.unstableM(x, y) = 1.5f;
   int rx = 30, ry = 25;
   while (!s.validCell(rx, ry)) ++rx;
-  const Outcome a = runAvalanche(s, rx, ry, ModelParameters{}, createSerialBackend());
+  const AvalancheOutcome a = runAvalanche(s, rx, ry, ModelParameters{}, createSerialBackend());
   ASSERT_GT(a.record.steps, 1);
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-    const Outcome b = runAvalanche(s, rx, ry, ModelParameters{}, createCpuBackend());
+    const AvalancheOutcome b = runAvalanche(s, rx, ry, ModelParameters{}, createCpuBackend());
     test::expectSameBytes(a.state, b.state);
     EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float))) << threads;
   }
@@ -408,17 +408,17 @@ TEST(Avalanche, ABoxLargeEnoughToShareAmongThreadsGivesTheSerialBytes) {
     backend->upload(t);
     AvalancheRun r(*backend, p, t);
     EXPECT_TRUE(r.releaseZone(zone, 0.0, 0.0, true));
-    Outcome o;
+    AvalancheOutcome o;
     o.record = r.runToRest();
     backend->download(t);
     o.state = std::move(t);
     return o;
   };
-  const Outcome serial = run(createSerialBackend());
+  const AvalancheOutcome serial = run(createSerialBackend());
   ASSERT_GE(serial.record.boxCellsMax, 1 << 17);
   ASSERT_GE(serial.record.steps, 3);
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-  const Outcome shared = run(createCpuBackend());
+  const AvalancheOutcome shared = run(createCpuBackend());
   test::expectSameBytes(serial.state, shared.state);
 }
 
@@ -444,12 +444,12 @@ TEST(Avalanche, RowPathsGiveThePerCellBodiesBytesDryWetAndWithDrag) {
   const std::pair<const char*, ModelParameters> cases[] = {
       {"defaults", ModelParameters{}}, {"T_dry = T_wet", wetIsDry}, {"no drag", noDrag}, {"no stop thickness", noStop}};
   for (const auto& [name, p] : cases) {
-    const Outcome serial = runAvalanche(s, rx, ry, p, createSerialBackend());
+    const AvalancheOutcome serial = runAvalanche(s, rx, ry, p, createSerialBackend());
     ASSERT_GT(serial.record.steps, 5) << name;
     for (const bool avx2 : {true, false}) {
       SCOPED_TRACE(std::string(name) + (avx2 ? ", AVX2 allowed" : ", SSE2 alone"));
       lanesAvx2Allowed() = avx2;
-      const Outcome rows = runAvalanche(s, rx, ry, p, createCpuBackend());
+      const AvalancheOutcome rows = runAvalanche(s, rx, ry, p, createCpuBackend());
       lanesAvx2Allowed() = true;
       test::expectSameBytes(serial.state, rows.state);
       EXPECT_EQ(serial.state.avalancheDepositM.values(), rows.state.avalancheDepositM.values());
@@ -501,8 +501,8 @@ TEST(Avalanche, RowSpansGiveTheSameBytesAsTheWholeBox) {
   for (int y = 0; y < 96; ++y)
     for (int x = 0; x < 96; ++x)
       if (std::abs(x - y) < 4) s.unstableM(x, y) = 1.2f, ++band;
-  const Outcome spans = runAvalanche(s, 6, 6);
-  const Outcome box = runAvalanche(s, 6, 6, ModelParameters{}, createCpuBackend(), false);
+  const AvalancheOutcome spans = runAvalanche(s, 6, 6);
+  const AvalancheOutcome box = runAvalanche(s, 6, 6, ModelParameters{}, createCpuBackend(), false);
   ASSERT_TRUE(spans.record.released);
   ASSERT_GT(spans.record.steps, 5);
   // The spans leave out most of the box: the snow's band is a small share of it.
@@ -570,12 +570,12 @@ TEST(Avalanche, LiveSpansGiveTheSourceSpansBytesAlsoWhenTheStateIsEditedOrWarmed
               backend->applyEdit(edit, weights);
             }
           liveSteps = r.liveSteps();
-          Outcome o{r.settle(), *s};
+          AvalancheOutcome o{r.settle(), *s};
           backend->download(o.state);
           return o;
         };
         int liveSteps = 0, none = 0;
-        const Outcome live = run(true, liveSteps), source = run(false, none);
+        const AvalancheOutcome live = run(true, liveSteps), source = run(false, none);
         ASSERT_TRUE(source.record.released);
         EXPECT_EQ(none, 0);
         EXPECT_GT(liveSteps, source.record.steps / 2) << "the live spans were used";
@@ -596,7 +596,7 @@ TEST(Avalanche, BoxCellStepsSumEveryStepsBoxBetweenOneCellAndTheLargest) {
   SnowState s = test::terrainFrom(64, 64, 5.0, -20.f, [](double x, double y) { return 2000.0 - 0.7 * y + 0.1 * x; });
   for (int y = 4; y < 14; ++y)
     for (int x = 20; x < 40; ++x) s.unstableM(x, y) = 1.5f;
-  const Outcome o = runAvalanche(s, 30, 8);
+  const AvalancheOutcome o = runAvalanche(s, 30, 8);
   ASSERT_TRUE(o.record.released);
   ASSERT_GT(o.record.steps, 1);
   EXPECT_GE(o.record.boxCellSteps, o.record.steps);
@@ -607,7 +607,7 @@ TEST(Avalanche, BoxCellStepsSumEveryStepsBoxBetweenOneCellAndTheLargest) {
 // No unstable snow at the rupture point: nothing is released and the record says why.
 TEST(Avalanche, NoUnstableSnowNoRelease) {
   SnowState s = test::terrainFrom(10, 10, 5.0, -20.f, [](double, double y) { return 1000.0 - y; });
-  const Outcome o = runAvalanche(s, 5, 5);
+  const AvalancheOutcome o = runAvalanche(s, 5, 5);
   EXPECT_FALSE(o.record.released);
   EXPECT_NE(o.record.why.find("no unstable snow"), std::string::npos);
 }

@@ -24,7 +24,7 @@ namespace {
 using snow::test::ProcessResult;
 using snow::test::snowbake;
 
-fs::path workDir() {
+fs::path cliWorkDir() {
   return snow::test::uniqueTestDir("cli");
 }
 
@@ -55,7 +55,7 @@ const std::string kSmall = "--set terrain.size=96 --set terrain.cell_size_m=20 -
 }  // namespace
 
 TEST(Cli, SameSeedSameBytesAndThreadCountDoesNotMatter) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   ASSERT_EQ(snowbake(dir, "bake preset:default --backend cpu --threads 1 --seed 5 --out " + (dir / "a").string() + " " + kSmall).status, 0);
   ASSERT_EQ(snowbake(dir, "bake preset:default --backend cpu --threads 2 --seed 5 --out " + (dir / "b").string() + " " + kSmall).status, 0);
   ASSERT_EQ(snowbake(dir, "bake preset:default --backend cpu --threads 2 --seed 6 --out " + (dir / "c").string() + " " + kSmall).status, 0);
@@ -77,7 +77,7 @@ TEST(Cli, SameSeedSameBytesAndThreadCountDoesNotMatter) {
 // copies held through it, or while the season waits with its fields lent to the writers: the same
 // files and manifest as writing them in place, with three frames (one in flight at a time) and skiers.
 TEST(Cli, FramesWrittenBesideAfterOrPausingTheSeasonEqualFramesWrittenInPlace) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   std::map<std::string, std::string> files[4];
   const snow::FrameTiming timings[4] = {snow::FrameTiming::InPlace, snow::FrameTiming::Beside, snow::FrameTiming::AfterSeason,
                                         snow::FrameTiming::Paused};
@@ -111,7 +111,7 @@ TEST(Cli, FramesWrittenBesideAfterOrPausingTheSeasonEqualFramesWrittenInPlace) {
 }
 
 TEST(Cli, ManifestListsEveryFileWritten) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const ProcessResult r = snowbake(dir, "bake preset:default --backend cpu --out " + (dir / "o").string() + " " + kSmall);
   ASSERT_EQ(r.status, 0) << r.err;
   const auto files = filesIn(dir / "o");
@@ -126,7 +126,7 @@ TEST(Cli, ManifestListsEveryFileWritten) {
 }
 
 TEST(Cli, BadSceneExitsTwoWithOneLineNamingFileAndKey) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const std::string scene = (dir / "bad.toml").string();
   std::ofstream(scene) << "[terrain]\nbuiltin = \"ridged\"\n[season]\ndays = -4\n";
   fs::create_directories(dir / "out");
@@ -144,7 +144,7 @@ TEST(Cli, BadSceneExitsTwoWithOneLineNamingFileAndKey) {
 }
 
 TEST(Cli, UsageErrorsExitTwoAndHelpExitsZero) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   EXPECT_EQ(snowbake(dir, "bake").status, 2);
   EXPECT_EQ(snowbake(dir, "frobnicate").status, 2);
   EXPECT_EQ(snowbake(dir, "bake preset:default --backend gpu").status, 2);
@@ -164,7 +164,7 @@ TEST(Cli, UsageErrorsExitTwoAndHelpExitsZero) {
 // refused by each process with exit 2 before any work, naming the key, and so is every command
 // but bake, info and help (each would run N times over). The bakes it runs: distributed tests.
 TEST(Cli, LaunchOfSeveralProcessesRefusesWhatCannotRunAcrossRanksBeforeWritingAnything) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   setenv("OMPI_COMM_WORLD_SIZE", "2", 1);
   const ProcessResult r = snowbake(dir, "bake preset:default --set terrain.size=64 --set 'run.backend=\"cuda\"' --out " + (dir / "out").string());
   const ProcessResult info = snowbake(dir, "help scene");
@@ -196,7 +196,7 @@ TEST(Cli, LaunchOfSeveralProcessesRefusesWhatCannotRunAcrossRanksBeforeWritingAn
 }
 
 TEST(Cli, InfoReportsTheTerrainAsJson) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const ProcessResult r = snowbake(dir, "info builtin:ridged --json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("\"width\": 512"), std::string::npos) << r.out;
@@ -207,7 +207,7 @@ TEST(Cli, InfoReportsTheTerrainAsJson) {
 }
 
 TEST(Cli, AutoBackendSaysWhichItPicked) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const ProcessResult r = snowbake(dir, "bake preset:default --backend auto --out " + (dir / "o").string() + " " + kSmall);
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("backend: "), std::string::npos) << r.err;
@@ -246,7 +246,7 @@ std::string sceneFor(const fs::path& dir, const std::string& terrainTable) {
 }  // namespace
 
 TEST(Cli, BadTerrainInputIsRefusedBeforeAnythingIsWritten) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const std::string garbage = (dir / "garbage.tif").string();
   std::ofstream(garbage) << "not a GeoTIFF at all";
   expectRefused(dir, sceneFor(dir, "file = \"garbage.tif\""), {garbage, "cannot read"});
@@ -283,7 +283,7 @@ TEST(Cli, BadTerrainInputIsRefusedBeforeAnythingIsWritten) {
 }
 
 TEST(Cli, InfoJsonReportsWhatTheSimulationWillUse) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   // A 12 x 10 float heightmap at 2.5 m, resampled to 5 m.
   const std::string r32 = (dir / "hm.r32").string();
   {
@@ -315,7 +315,7 @@ TEST(Cli, InfoJsonReportsWhatTheSimulationWillUse) {
 TEST(Cli, TerrainFlagBakesARealDemOnThePresetReplacingItsTerrainTable) {
   const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaKot_5m.asc";
   if (!fs::exists(dem)) GTEST_SKIP() << "shared data not found: " << dem;
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const ProcessResult r = snowbake(dir, "bake preset:default --terrain " + dem + " --set season.days=10 --set outputs.frames_days=[5] --no-cache --out " + (dir / "o").string());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("439 x 517 cells of 5.00 x 5.00 m"), std::string::npos) << r.err;
@@ -352,7 +352,7 @@ TEST(Cli, TerrainFlagBakesOrRefusesByLineEveryRealDemOnEveryPreset) {
       {presets + "bedforms.toml", "bedforms.toml", "--set season.days=1 --set 'outputs.frames_days=[]'", 2},
       // masks painted square without a georeference: only the square Front Range grid
       {presets + "art_direction.toml", "art_direction.toml", "", 1}};
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   int run = 0;
   for (const Preset& p : all) {
     int baked = 0;
@@ -383,7 +383,7 @@ TEST(Cli, TerrainFlagBakesOrRefusesByLineEveryRealDemOnEveryPreset) {
 TEST(Cli, RealDemWithNodataBakesWithAMaskAndNoSnowInTheHoles) {
   const std::string dem = std::string(SNOWBAKE_SHARED_DATA_DIR) + "/dem/tyrol_avaWog_5m.asc";
   if (!fs::exists(dem)) GTEST_SKIP() << "shared data not found: " << dem;
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const std::string scene = (dir / "tyrol.toml").string();
   std::ofstream(scene) << "[terrain]\nfile = \"" << dem << "\"\n[site]\nlatitude_deg = 47.2\n[season]\ndays = 60\n"
                        << "[[weather.keyframe]]\nday = 0\nsea_level_temperature_c = 2.0\n"
@@ -409,7 +409,7 @@ TEST(Cli, RealDemWithNodataBakesWithAMaskAndNoSnowInTheHoles) {
 }
 
 TEST(Cli, PrecomputeCacheIsReusedAndGivesTheSameBytes) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const std::string cache = (dir / "cache").string();
   const std::string common = "bake preset:default --backend cpu --quiet --set terrain.size=64 --set season.days=20 "
                              "--set outputs.frames_days=[] --set 'outputs.layers=[\"depth\",\"sun_exposure\",\"wind_shadow_depth\"]' "
@@ -434,7 +434,7 @@ TEST(Cli, PrecomputeCacheIsReusedAndGivesTheSameBytes) {
 }
 
 TEST(Cli, SunOffSkipsTheExposure) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const ProcessResult r = snowbake(dir, "bake preset:default --backend cpu --no-cache --set precompute.sun=false " + kSmall +
                                             " --out " + (dir / "o").string());
   ASSERT_EQ(r.status, 0) << r.err;
@@ -445,7 +445,7 @@ TEST(Cli, SunOffSkipsTheExposure) {
 // Avalanche events that cannot be honoured are refused with the scene file, its line and why;
 // the earlier bake's files stay.
 TEST(Cli, BadAvalancheEventsAreRefusedWithFileLineAndReason) {
-  const fs::path dir = workDir();
+  const fs::path dir = cliWorkDir();
   const std::string scene = (dir / "scene.toml").string();
   auto write = [&](const std::string& event) {
     std::ofstream(scene) << "[terrain]\nbuiltin = \"ridged\"\nsize = 64\n[season]\ndays = 5\n[[events]]\ntype = \"avalanche\"\nday = 2\n"

@@ -15,14 +15,14 @@ using namespace snow;
 
 namespace {
 
-struct Field {
+struct ExposureField {
   Grid<float> heights;
   Grid<uint8_t> valid;
   GridSpec spec;
 };
 
-Field makeField(int w, int h, double cell, const std::function<double(double, double)>& z) {
-  Field f;
+ExposureField makeField(int w, int h, double cell, const std::function<double(double, double)>& z) {
+  ExposureField f;
   f.spec.width = w;
   f.spec.height = h;
   f.spec.cellSizeXM = f.spec.cellSizeYM = cell;
@@ -76,7 +76,7 @@ TEST(Solar, SolsticesAndTheDayArc) {
 }
 
 TEST(Exposure, FlatPlaneDirectIsTheAnalyticSumAndSkyIsKSkyPi) {
-  const Field f = makeField(24, 20, 10.0, [](double, double) { return 500.0; });
+  const ExposureField f = makeField(24, 20, 10.0, [](double, double) { return 500.0; });
   const RayScene scene(f.heights, f.spec);
   ModelParameters p;
   for (int doy : {355, 80, 172}) {
@@ -97,7 +97,7 @@ TEST(Exposure, TiltedPlanesTowardAndAwayFromTheSun) {
   ModelParameters p;
   for (double sign : {1.0, -1.0}) {  // +1: facing south (toward the winter sun), -1: facing north
     // Height falls toward the south for a south-facing slope: z = -sign * tan(tilt) * (y - y0).
-    const Field f = makeField(30, 30, 10.0, [&](double, double y) { return 2000.0 + sign * std::tan(tilt) * (y - 150.0); });
+    const ExposureField f = makeField(30, 30, 10.0, [&](double, double y) { return 2000.0 + sign * std::tan(tilt) * (y - 150.0); });
     const RayScene scene(f.heights, f.spec);
     const Grid<float> sun = computeDirectSun(scene, f.heights, f.valid, f.spec, 46.5, 355, 0.25, p.directSunWeightHours);
     const std::array<double, 3> n{0.0, -sign * std::sin(tilt), std::cos(tilt)};
@@ -115,7 +115,7 @@ TEST(Exposure, TiltedPlanesTowardAndAwayFromTheSun) {
 TEST(Exposure, WallCastsTheAnalyticShadow) {
   const double H = 40.0, cell = 1.0;
   const int w = 200, h = 300, edge = 60;  // cells i < edge are on the plateau
-  Field f = makeField(w, h, cell, [&](double x, double) { return x < edge * cell ? H : 0.0; });
+  ExposureField f = makeField(w, h, cell, [&](double x, double) { return x < edge * cell ? H : 0.0; });
   const RayScene scene(f.heights, f.spec);
   const SunPosition s = sunPosition(46.5, 80, 15.5);
   ASSERT_LT(s.direction[0], 0.0);  // the sun is to the west
@@ -137,7 +137,7 @@ TEST(Exposure, WallCastsTheAnalyticShadow) {
 TEST(Exposure, VValleyHorizonAndSky) {
   const double s = 0.8, cell = 2.0;
   const int w = 101, h = 301;
-  const Field f = makeField(w, h, cell, [&](double x, double) { return 1000.0 + s * std::abs(x - 50.5 * cell); });
+  const ExposureField f = makeField(w, h, cell, [&](double x, double) { return 1000.0 + s * std::abs(x - 50.5 * cell); });
   const RayScene scene(f.heights, f.spec);
   std::vector<Grid<float>> horizons;
   const int azimuths = 16;
@@ -164,7 +164,7 @@ TEST(Exposure, ConicalPitHorizonAndSky) {
   const double s = 1.0, cell = 1.0, r0 = 10.0, rim = 50.0;
   const int n = 121;
   const double c = 60.5 * cell;
-  const Field f = makeField(n, n, cell, [&](double x, double y) {
+  const ExposureField f = makeField(n, n, cell, [&](double x, double y) {
     const double r = std::hypot(x - c, y - c);
     return 500.0 + s * std::clamp(r - r0, 0.0, rim - r0);
   });
@@ -178,7 +178,7 @@ TEST(Exposure, ConicalPitHorizonAndSky) {
 }
 
 TEST(Exposure, TiledGridGivesTheSameRays) {
-  const Field f = makeField(50, 37, 5.0, [](double x, double y) { return 100.0 + 20.0 * std::sin(x * 0.05) * std::cos(y * 0.07); });
+  const ExposureField f = makeField(50, 37, 5.0, [](double x, double y) { return 100.0 + 20.0 * std::sin(x * 0.05) * std::cos(y * 0.07); });
   const RayScene whole(f.heights, f.spec), tiled(f.heights, f.spec, {}, 8);
   EXPECT_EQ(whole.tileCount(), 1);
   EXPECT_EQ(tiled.tileCount(), 7 * 6);  // tiles of 8 vertices share one: ceil(49 / 7) x ceil(36 / 7)
@@ -197,7 +197,7 @@ TEST(Exposure, TiledGridGivesTheSameRays) {
 }
 
 TEST(Exposure, SeasonSamplesInterpolateBetweenDays) {
-  const Field f = makeField(16, 16, 10.0, [](double, double) { return 800.0; });
+  const ExposureField f = makeField(16, 16, 10.0, [](double, double) { return 800.0; });
   const RayScene scene(f.heights, f.spec);
   ExposureSettings s;
   s.latitudeDeg = 46.5;
@@ -216,7 +216,7 @@ TEST(Exposure, SeasonSamplesInterpolateBetweenDays) {
 // A rank's window of the exposure samples (a bake across ranks): every season day's total is the
 // whole's cells, byte for byte, folded or not.
 TEST(Exposure, AWindowGivesItsCellsOfTheWholeTotalOnEveryDay) {
-  const Field f = makeField(24, 20, 10.0, [](double x, double y) { return 800.0 + 3.0 * x + 40.0 * std::sin(y / 30.0); });
+  const ExposureField f = makeField(24, 20, 10.0, [](double x, double y) { return 800.0 + 3.0 * x + 40.0 * std::sin(y / 30.0); });
   ExposureSettings s;
   s.seasonDays = 120;
   Exposure whole = computeExposure(nullptr, f.heights, f.valid, f.spec, ModelParameters{}, s);
@@ -236,7 +236,7 @@ TEST(Exposure, AWindowGivesItsCellsOfTheWholeTotalOnEveryDay) {
 // corner, one cell wide, and the whole grid; with and without the indirect term, on a grid whose
 // cells are not square.
 TEST(Exposure, CellsComputedAloneAreTheWholeGridsCutBitForBit) {
-  Field f = makeField(61, 47, 10.0, [](double x, double y) {
+  ExposureField f = makeField(61, 47, 10.0, [](double x, double y) {
     return 1500.0 + 300.0 * std::sin(x / 90.0) * std::cos(y / 70.0) + 0.4 * x + 40.0 * std::sin(0.37 * x + 0.23 * y);
   });
   f.spec.cellSizeYM = 12.5;
@@ -282,12 +282,12 @@ TEST(Exposure, IndirectComesFromFacingSlopesAndNotFromBehind) {
   const double cell = 5.0;
   const int w = 81, h = 21;
   // A V valley along y, walls of slope 0.5: both walls face each other.
-  const Field v = makeField(w, h, cell, [&](double x, double) { return 1000.0 + 0.5 * std::abs(x - 40.5 * cell); });
+  const ExposureField v = makeField(w, h, cell, [&](double x, double) { return 1000.0 + 0.5 * std::abs(x - 40.5 * cell); });
   const Grid<float> lit(w, h, 4.f);
   const Grid<float> ind = computeIndirectSun(lit, v.heights, v.valid, v.spec, 32, 16, 200.0, 1.0);
   EXPECT_GT(ind(30, 10), 0.05f);  // on the west wall, lit by the east wall
   // A ridge (the V upside down): from the east side, the west side faces away.
-  const Field r = makeField(w, h, cell, [&](double x, double) { return 1000.0 - 0.5 * std::abs(x - 40.5 * cell); });
+  const ExposureField r = makeField(w, h, cell, [&](double x, double) { return 1000.0 - 0.5 * std::abs(x - 40.5 * cell); });
   const Grid<float> westOnly = [&] {
     Grid<float> g(w, h, 0.f);
     for (int j = 0; j < h; ++j)
@@ -301,7 +301,7 @@ TEST(Exposure, IndirectComesFromFacingSlopesAndNotFromBehind) {
 // A term whose weight is zero is not computed (no sky rays when k_sky = 0), and the zeros put in
 // its place are the bytes computing it with that weight gives, on both paths.
 TEST(Exposure, ATermOfZeroWeightIsSkippedAndIsTheBytesComputingItWouldGive) {
-  const Field f = makeField(24, 20, 10.0, [](double x, double y) { return 900.0 + 80.0 * std::sin(x / 60.0) * std::cos(y / 45.0); });
+  const ExposureField f = makeField(24, 20, 10.0, [](double x, double y) { return 900.0 + 80.0 * std::sin(x / 60.0) * std::cos(y / 45.0); });
   const RayScene scene(f.heights, f.spec);
   auto same = [](const Grid<float>& a, const Grid<float>& b) {
     return a.size() == b.size() && std::equal(a.values().begin(), a.values().end(), b.values().begin(),

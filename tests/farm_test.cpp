@@ -29,7 +29,7 @@ namespace {
 
 using snow::test::slurp;
 
-fs::path workDir() {
+fs::path farmWorkDir() {
   const fs::path p = fs::temp_directory_path() /
                      ("snowbake_farm_" + std::to_string(::getpid()) + "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
   fs::remove_all(p);
@@ -99,7 +99,7 @@ void writeBytes(const fs::path& p, size_t n) { std::ofstream(p, std::ios::binary
 }  // namespace
 
 TEST(SceneList, LevelsAreReadWithTheirScenesBesideTheListAndTheirOverrides) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   std::ofstream(dir / "levels.txt") << "# nightly levels\n\nnorth  preset:default terrain.size=64 season.days=10\r\n"
                                        "  south levels/south.toml\n";
   const auto levels = snow::readSceneList((dir / "levels.txt").string());
@@ -114,7 +114,7 @@ TEST(SceneList, LevelsAreReadWithTheirScenesBesideTheListAndTheirOverrides) {
 }
 
 TEST(SceneList, BadLinesAndOutOfRangeIndicesNameTheFileAndLine) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   const std::string list = (dir / "levels.txt").string();
   auto refusal = [&](const std::string& text, long long index) -> std::string {
     std::ofstream(list) << text;
@@ -139,7 +139,7 @@ TEST(SceneList, BadLinesAndOutOfRangeIndicesNameTheFileAndLine) {
 }
 
 TEST(SceneList, BakeOfAnIndexWritesThatLevelIntoItsFolderAndABadIndexExits2WritingNothing) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   std::ofstream(dir / "levels.txt") << "small preset:default terrain.size=48 season.days=3 outputs.frames_days=[]\n"
                                        "other preset:default terrain.size=40 season.days=3 outputs.frames_days=[]\n";
   const std::string args = "bake --scene-list '" + (dir / "levels.txt").string() + "' --quiet --no-cache --out '" + (dir / "out").string() + "'";
@@ -167,7 +167,7 @@ TEST(SceneList, BakeOfAnIndexWritesThatLevelIntoItsFolderAndABadIndexExits2Writi
 // the same keys while the others read them. Every bake equals the uncached one, and the folder
 // holds exactly the valid entries, no torn or left-over file.
 TEST(FarmCache, EightProcessesBakingOneKeyAtOnceAllEqualTheUncachedBakeAndLeaveValidEntries) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   ASSERT_EQ(shell(snowbake(kLevel + "--no-cache --out '" + (dir / "uncached").string() + "' 2>/dev/null")), 0);
   std::string script = "pids=''\n";
   for (int i = 0; i < 8; ++i)
@@ -200,7 +200,7 @@ TEST(FarmCache, EightProcessesBakingOneKeyAtOnceAllEqualTheUncachedBakeAndLeaveV
 // Within one process too: eight threads store one key while a reader loads it over and over;
 // every load either misses (before the first rename) or returns the whole, right grids.
 TEST(FarmCache, ConcurrentStoresOfOneKeyNeverShowAReaderATornEntry) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   std::ostringstream log;  // hears of any damaged entry a load finds, or a store that failed
   const snow::PrecomputeCache cache(dir.string(), true, &log);
   snow::Grid<float> a(300, 200), b(300, 200);
@@ -234,7 +234,7 @@ TEST(FarmCache, ConcurrentStoresOfOneKeyNeverShowAReaderATornEntry) {
 // A truncated entry and one with a flipped bit are both found by the reader, said so in the log,
 // recomputed and stored again; the bake's bytes do not change.
 TEST(FarmCache, TruncatedAndBitFlippedEntriesAreDetectedRecomputedAndRewritten) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   const std::string cacheArg = "--cache-dir '" + (dir / "cache").string() + "' ";
   ASSERT_EQ(shell(snowbake(kLevel + cacheArg + "--out '" + (dir / "first").string() + "' 2>/dev/null")), 0);
   fs::path exposure, wind;
@@ -264,7 +264,7 @@ TEST(FarmCache, TruncatedAndBitFlippedEntriesAreDetectedRecomputedAndRewritten) 
 }
 
 TEST(CachePrune, RemovesEntriesUnusedForLongerThanTheAgeThenTheLeastRecentlyUsedBeyondTheSize) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   const std::map<std::string, std::pair<size_t, double>> files = {  // name -> bytes, days since last use
       {"exposure-00000000000000a1.bin", {1000, 40.0}}, {"wind-00000000000000a2.bin", {2000, 10.0}},
       {"wind-00000000000000a3.bin", {3000, 5.0}},      {"exposure-00000000000000a4.bin", {4000, 1.0}},
@@ -304,7 +304,7 @@ TEST(CachePrune, RemovesEntriesUnusedForLongerThanTheAgeThenTheLeastRecentlyUsed
 }
 
 TEST(CachePrune, CommandLineRefusesMissingOptionsWithExit2AndPrunesByDaysAndGb) {
-  const fs::path dir = workDir();
+  const fs::path dir = farmWorkDir();
   writeBytes(dir / "wind-00000000000000b1.bin", 100);
   setAgeDays(dir / "wind-00000000000000b1.bin", 3.0);
   writeBytes(dir / "wind-00000000000000b2.bin", 100);

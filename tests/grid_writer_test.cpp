@@ -24,7 +24,7 @@ using namespace snow;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path tempDir() {
+fs::path gridWriterTempDir() {
   return snow::test::uniqueTestDir("writer");
 }
 std::string bytesOf(const std::string& path) {
@@ -42,7 +42,7 @@ Grid<float> ramp() {
 }  // namespace
 
 TEST(GridWriter, FloatImagesReadBackExactly) {
-  const fs::path dir = tempDir();
+  const fs::path dir = gridWriterTempDir();
   const Grid<float> g = ramp();
   for (const char* format : {"exr", "tiff"}) {
     const WrittenImage img = writeFloatImage((dir / "layer").string(), format, g, "powder");
@@ -56,7 +56,7 @@ TEST(GridWriter, FloatImagesReadBackExactly) {
 // outputs.compression_level: every level reads back the same values; level 0 writes EXR
 // uncompressed and PNG stored, higher levels write smaller files of a compressible grid.
 TEST(GridWriter, CompressionLevelsKeepTheValuesAndChangeTheSize) {
-  const fs::path dir = tempDir();
+  const fs::path dir = gridWriterTempDir();
   Grid<float> g(256, 128);
   for (int y = 0; y < 128; ++y)
     for (int x = 0; x < 256; ++x) g(x, y) = static_cast<float>((x / 16) * 0.25 + (y / 32));  // plateaus: compressible
@@ -88,7 +88,7 @@ TEST(GridWriter, CompressionLevelsKeepTheValuesAndChangeTheSize) {
 
 // No time stamps in the files: a bake repeated a second later gives the same bytes.
 TEST(GridWriter, SameGridSameBytesAcrossTime) {
-  const fs::path dir = tempDir();
+  const fs::path dir = gridWriterTempDir();
   for (const char* format : {"exr", "tiff"}) {
     const std::string a = writeFloatImage((dir / "a").string(), format, ramp(), "depth").path;
     std::this_thread::sleep_for(std::chrono::milliseconds(1100));
@@ -99,7 +99,7 @@ TEST(GridWriter, SameGridSameBytesAcrossTime) {
 }
 
 TEST(AtomicFile, FailedWriteLeavesTheOldFileAndNoTemporary) {
-  const fs::path dir = tempDir();
+  const fs::path dir = gridWriterTempDir();
   const std::string path = (dir / "manifest.json").string();
   writeTextAtomically(path, "old");
   EXPECT_THROW(writeAtomically(path,
@@ -135,7 +135,7 @@ TEST(AtomicFile, EveryCallHasItsOwnTemporaryNameWithTheFinalExtension) {
 }
 
 TEST(AtomicFile, EightThreadsWritingOneFileDurablyLeaveOneWholeVersionAndNoTemporary) {
-  const fs::path dir = tempDir();
+  const fs::path dir = gridWriterTempDir();
   const std::string path = (dir / "entry.bin").string();
   std::vector<std::thread> writers;
   for (int i = 0; i < 8; ++i)  // one file from eight threads at once: one whole version wins

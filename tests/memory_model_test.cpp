@@ -30,28 +30,28 @@ namespace {
 using snow::test::slurp;
 
 #if defined(__SANITIZE_ADDRESS__)
-constexpr bool kSanitized = true;  // ASan's shadow memory makes resident sets and address limits meaningless
+constexpr bool kSanitizedBuild = true;  // ASan's shadow memory makes resident sets and address limits meaningless
 #else
-constexpr bool kSanitized = false;
+constexpr bool kSanitizedBuild = false;
 #endif
 
-struct Outcome {
+struct BakeOutcome {
   int status;
   std::string err, out;
 };
 
-fs::path workDir() {
+fs::path memoryWorkDir() {
   return snow::test::uniqueTestDir("memory");
 }
 
-Outcome shell(const fs::path& dir, const std::string& cmd) {
+BakeOutcome shellIn(const fs::path& dir, const std::string& cmd) {
   const std::string err = (dir / "stderr.txt").string(), out = (dir / "stdout.txt").string();
   const int raw = std::system((cmd + " >'" + out + "' 2>'" + err + "' </dev/null").c_str());
   return {WIFEXITED(raw) ? WEXITSTATUS(raw) : -1, slurp(err), slurp(out)};
 }
 
-Outcome bake(const fs::path& dir, const std::string& args, const std::string& prefix = "") {
-  return shell(dir, prefix + "'"s + SNOWBAKE_BINARY + "' bake " + args + " --quiet --no-cache --out '" + (dir / "out").string() + "'");
+BakeOutcome bakeIn(const fs::path& dir, const std::string& args, const std::string& prefix = "") {
+  return shellIn(dir, prefix + "'"s + SNOWBAKE_BINARY + "' bake " + args + " --quiet --no-cache --out '" + (dir / "out").string() + "'");
 }
 
 bool wroteNothing(const fs::path& dir) { return !fs::exists(dir / "out") || fs::is_empty(dir / "out"); }
@@ -59,10 +59,10 @@ bool wroteNothing(const fs::path& dir) { return !fs::exists(dir / "out") || fs::
 }  // namespace
 
 TEST(MemoryModel, SmallScenesPredictTheMeasuredPeakWithin25Percent) {
-  if (kSanitized) GTEST_SKIP() << "the sanitizer build's resident set is not the bake's";
+  if (kSanitizedBuild) GTEST_SKIP() << "the sanitizer build's resident set is not the bake's";
   if (!fs::exists("/usr/bin/time")) GTEST_SKIP() << "/usr/bin/time is absent (Debian's package time; tools/setup-debian.sh installs it)";
-  const fs::path dir = workDir();
-  const Outcome r = shell(dir, "bash '"s + SNOWBAKE_SOURCE_DIR + "/tools/measure-memory.sh' --small --csv '" + SNOWBAKE_BINARY + "'");
+  const fs::path dir = memoryWorkDir();
+  const BakeOutcome r = shellIn(dir, "bash '"s + SNOWBAKE_SOURCE_DIR + "/tools/measure-memory.sh' --small --csv '" + SNOWBAKE_BINARY + "'");
   ASSERT_EQ(r.status, 0) << r.err;
   std::istringstream table(r.out);
   std::string line;
@@ -83,8 +83,8 @@ TEST(MemoryModel, SmallScenesPredictTheMeasuredPeakWithin25Percent) {
 }
 
 TEST(MemoryModel, AboveTheBudgetIsRefusedNamingTheOwnerAndKeyBeforeAnyWork) {
-  const fs::path dir = workDir();
-  const Outcome r = bake(dir, "preset:default --set run.max_memory_gb=0.05");
+  const fs::path dir = memoryWorkDir();
+  const BakeOutcome r = bakeIn(dir, "preset:default --set run.max_memory_gb=0.05");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("the budget is 0.05 GiB (run.max_memory_gb)"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("terrain.size"), std::string::npos) << r.err;
@@ -95,9 +95,9 @@ TEST(MemoryModel, The16384SquaredBuiltinTerrainIsRefusedUpFront) {
   // About 50 GiB by the model (12000², which once died of bad_alloc mid-bake, is now 27 GiB):
   // above 80 % of what this suite's machines have, refused before the terrain is generated (in
   // well under a second).
-  const fs::path dir = workDir();
+  const fs::path dir = memoryWorkDir();
   const auto t0 = std::chrono::steady_clock::now();
-  const Outcome r = bake(dir, "preset:default --set terrain.size=16384");
+  const BakeOutcome r = bakeIn(dir, "preset:default --set terrain.size=16384");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("--set terrain.size=16384:1: terrain.size: the bake needs about"), std::string::npos) << r.err;
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
@@ -106,53 +106,53 @@ TEST(MemoryModel, The16384SquaredBuiltinTerrainIsRefusedUpFront) {
 
 TEST(MemoryModel, TheSkiTrackTextureFactorCountsInTheBudget) {
   // 2048^2 cells at factor 16: a texture of 4 GiB, which 3 GiB cannot hold; factor 1 fits.
-  const fs::path dir = workDir();
+  const fs::path dir = memoryWorkDir();
   const std::string scene = "preset:default --set terrain.size=2048 --set 'outputs.layers=[\"depth\",\"ski_tracks\"]' --set run.max_memory_gb=3 ";
-  const Outcome r = bake(dir, scene + "--set outputs.ski_track_factor=16");
+  const BakeOutcome r = bakeIn(dir, scene + "--set outputs.ski_track_factor=16");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("outputs.ski_track_factor"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("ski-track texture"), std::string::npos) << r.err;
 }
 
 TEST(MemoryModel, SizesBeyondTheModelAreSceneErrorsWithTheirLine) {
-  const fs::path dir = workDir();
+  const fs::path dir = memoryWorkDir();
   std::ofstream(dir / "scene.toml") << "[terrain]\nbuiltin = \"ridged\"\nsize = 64\n[outputs]\nvdb = true\nvdb_voxel_size_m = 0.01\n";
-  Outcome r = bake(dir, (dir / "scene.toml").string());
+  BakeOutcome r = bakeIn(dir, (dir / "scene.toml").string());
   EXPECT_EQ(r.status, 2) << r.err;  // it aborted with 134 before the model
   EXPECT_NE(r.err.find("scene.toml:6: outputs.vdb_voxel_size_m: voxels of 0.01 m make 64000 x 64000 columns"), std::string::npos) << r.err;
   EXPECT_TRUE(wroteNothing(dir));
   std::ofstream(dir / "scene.toml") << "[terrain]\nbuiltin = \"ridged\"\nsize = 64\n[outputs]\ndisplacement_size = [65536, 65536]\n";
-  r = bake(dir, (dir / "scene.toml").string());
+  r = bakeIn(dir, (dir / "scene.toml").string());
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("scene.toml:5: outputs.displacement_size: 65536 x 65536 pixels is more than 2^31"), std::string::npos) << r.err;
   EXPECT_TRUE(wroteNothing(dir));
 }
 
 TEST(MemoryModel, ADisplacementMapCountsInTheBudget) {
-  const fs::path dir = workDir();
-  const Outcome r = bake(dir, "preset:default --set terrain.size=64 --set 'outputs.displacement_size=[40000,40000]' --set run.max_memory_gb=4");
+  const fs::path dir = memoryWorkDir();
+  const BakeOutcome r = bakeIn(dir, "preset:default --set terrain.size=64 --set 'outputs.displacement_size=[40000,40000]' --set run.max_memory_gb=4");
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("displacement map"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("outputs.displacement_size"), std::string::npos) << r.err;
 }
 
 TEST(MemoryModel, TheMeshModesLatticeCountsInTheBudget) {
-  const fs::path dir = workDir();
+  const fs::path dir = memoryWorkDir();
   std::ofstream(dir / "plane.obj") << "v 0 0 0\nv 100 0 0\nv 100 100 0\nv 0 100 0\nf 1 2 3\nf 1 3 4\n";
   std::ofstream(dir / "scene.toml") << "mode = \"mesh\"\n[terrain]\nfile = \"plane.obj\"\n[mesh_snow]\nsite_spacing_m = 0.001\n[outputs]\nvdb = true\n[run]\nmax_memory_gb = 8\n";
-  const Outcome r = bake(dir, (dir / "scene.toml").string());
+  const BakeOutcome r = bakeIn(dir, (dir / "scene.toml").string());
   EXPECT_EQ(r.status, 2) << r.err;
   EXPECT_NE(r.err.find("scene.toml:5: mesh_snow.site_spacing_m"), std::string::npos) << r.err;
   EXPECT_TRUE(wroteNothing(dir));
 }
 
 TEST(MemoryModel, AnAllocationThatFailsAnywayIsExit1NamingTheStage) {
-  if (kSanitized) GTEST_SKIP() << "ASan reserves terabytes of address space: prlimit --as cannot run it";
+  if (kSanitizedBuild) GTEST_SKIP() << "ASan reserves terabytes of address space: prlimit --as cannot run it";
   if (!fs::exists("/usr/bin/prlimit")) GTEST_SKIP() << "/usr/bin/prlimit is absent (util-linux)";
   // The budget is raised past what 700 MB of address space holds, so the model lets the bake
   // start (it predicts 2.5 GB) and an allocation fails.
-  const fs::path dir = workDir();
-  const Outcome r = bake(dir, "preset:default --set terrain.size=2048 --set run.max_memory_gb=100", "/usr/bin/prlimit --as=700000000 ");
+  const fs::path dir = memoryWorkDir();
+  const BakeOutcome r = bakeIn(dir, "preset:default --set terrain.size=2048 --set run.max_memory_gb=100", "/usr/bin/prlimit --as=700000000 ");
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("snowbake: failed: out of memory during the "), std::string::npos) << r.err;
 }
@@ -178,8 +178,8 @@ TEST(MemoryModel, PeakIsTheLargestPhasePlusTheLibraries) {
 // `bake --verbose` prints the breakdown by group against the measured peak; the manifest holds
 // the same on its one "memory" line (valid JSON where it sits), the peak above the libraries.
 TEST(MemoryModel, VerboseBakePrintsTheBreakdownByGroupAndTheManifestHoldsItOnOneLine) {
-  const fs::path dir = workDir();
-  const Outcome r = bake(dir, "preset:default --set terrain.size=96 --set season.days=4 --set 'outputs.frames_days=[2]' --verbose");
+  const fs::path dir = memoryWorkDir();
+  const BakeOutcome r = bakeIn(dir, "preset:default --set terrain.size=96 --set season.days=4 --set 'outputs.frames_days=[2]' --verbose");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("memory: measured peak "), std::string::npos) << r.err;
   for (const auto& g : snow::memoryGroups()) EXPECT_NE(r.err.find("\n  "s + g.name + " "), std::string::npos) << g.name << "\n" << r.err;
@@ -202,7 +202,7 @@ TEST(MemoryModel, VerboseBakePrintsTheBreakdownByGroupAndTheManifestHoldsItOnOne
 // Mesh mode too: the breakdown per launch site in the log and on the manifest's "memory" line
 // (valid JSON), with the stage its peak was reached by.
 TEST(MemoryModel, MeshBakePrintsTheBreakdownPerSiteAndItsManifestHoldsIt) {
-  const fs::path dir = workDir();
+  const fs::path dir = memoryWorkDir();
   {
     std::ofstream obj(dir / "box.obj");
     obj << "v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0.5 0.5 1\nv 1.5 0.5 1\nv 1.5 1.5 1\nv 0.5 1.5 1\n"
@@ -210,7 +210,7 @@ TEST(MemoryModel, MeshBakePrintsTheBreakdownPerSiteAndItsManifestHoldsIt) {
     std::ofstream toml(dir / "mesh.toml");
     toml << "mode = \"mesh\"\n[terrain]\nfile = \"box.obj\"\n[mesh_snow]\nsite_spacing_m = 0.1\n[outputs]\nmeshes = [\"obj\"]\n";
   }
-  const Outcome r = bake(dir, "'" + (dir / "mesh.toml").string() + "' --verbose");
+  const BakeOutcome r = bakeIn(dir, "'" + (dir / "mesh.toml").string() + "' --verbose");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("memory: measured peak "), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(" B/site\n"), std::string::npos) << r.err;

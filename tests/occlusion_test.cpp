@@ -30,7 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Field {
+struct OcclusionField {
   Grid<float> heights;
   Grid<uint8_t> valid;
   GridSpec spec;
@@ -38,8 +38,8 @@ struct Field {
 
 // Heights f(x_m, y_m), metres east and south of the north-west corner.
 template <class F>
-Field field(int w, int h, double cell, F f) {
-  Field t;
+OcclusionField field(int w, int h, double cell, F f) {
+  OcclusionField t;
   t.spec.width = w, t.spec.height = h, t.spec.cellSizeXM = t.spec.cellSizeYM = cell;
   t.heights = Grid<float>(w, h, 0.f);
   t.valid = Grid<uint8_t>(w, h, 1);
@@ -48,12 +48,12 @@ Field field(int w, int h, double cell, F f) {
   return t;
 }
 
-OcclusionSnow run(const Field& t, const OcclusionSettings& s) {
+OcclusionSnow run(const OcclusionField& t, const OcclusionSettings& s) {
   const RayScene scene(t.heights, t.spec);
   return computeOcclusionSnowOnTerrain(scene, t.heights, t.valid, t.spec, s);
 }
 
-size_t at(const Field& t, int x, int y) { return static_cast<size_t>(y) * t.spec.width + x; }
+size_t at(const OcclusionField& t, int x, int y) { return static_cast<size_t>(y) * t.spec.width + x; }
 
 OcclusionSettings winter45() {
   OcclusionSettings s;
@@ -63,7 +63,7 @@ OcclusionSettings winter45() {
 }
 
 TEST(Occlusion, FlatOpenPlaneGetsEquationOneEverywhere) {
-  const Field t = field(48, 48, 10.0, [](double, double) { return 1000.0; });
+  const OcclusionField t = field(48, 48, 10.0, [](double, double) { return 1000.0; });
   OcclusionSettings s = winter45();
   s.tauSun = 1.0;  // no dissipation: Eq. 1 alone
   const OcclusionSnow o = run(t, s);
@@ -82,7 +82,7 @@ TEST(Occlusion, FlatOpenPlaneGetsEquationOneEverywhere) {
 
 TEST(Occlusion, InclinedOpenPlaneScalesWithCosTheta) {
   const double slope = std::tan(30.0 * kPi / 180.0);
-  const Field t = field(48, 48, 10.0, [&](double x, double) { return 1000.0 + slope * x; });
+  const OcclusionField t = field(48, 48, 10.0, [&](double x, double) { return 1000.0 + slope * x; });
   OcclusionSettings s = winter45();
   s.tauSun = 1.0;
   const OcclusionSnow o = run(t, s);
@@ -95,14 +95,14 @@ TEST(Occlusion, InclinedOpenPlaneScalesWithCosTheta) {
 }
 
 // A flat plane at 1000 m with a square pit 60 m wide and 20 m deep in the middle.
-Field pitField() {
+OcclusionField pitField() {
   return field(64, 64, 5.0, [](double x, double y) {
     return std::abs(x - 160.0) < 30.0 && std::abs(y - 160.0) < 30.0 ? 980.0 : 1000.0;
   });
 }
 
 TEST(Occlusion, PitGetsMoreSnowThanTheOpenPlaneAroundIt) {
-  const Field t = pitField();
+  const OcclusionField t = pitField();
   const OcclusionSettings s = winter45();
   const OcclusionSnow o = run(t, s);
   const size_t pit = at(t, 32, 32), open = at(t, 4, 60);
@@ -111,13 +111,13 @@ TEST(Occlusion, PitGetsMoreSnowThanTheOpenPlaneAroundIt) {
   EXPECT_GT(o.accumulationM[pit], o.accumulationM[open] + 0.1);
   EXPECT_GT(o.snowM[pit], o.snowM[open] + 0.1);
   // A ditch: a long east-west trench 20 m wide, 10 m deep.
-  const Field d = field(96, 48, 5.0, [](double, double y) { return std::abs(y - 120.0) < 10.0 ? 990.0 : 1000.0; });
+  const OcclusionField d = field(96, 48, 5.0, [](double, double y) { return std::abs(y - 120.0) < 10.0 ? 990.0 : 1000.0; });
   const OcclusionSnow od = run(d, s);
   EXPECT_GT(od.snowM[at(d, 48, 24)], od.snowM[at(d, 48, 4)] + 0.1);
 }
 
 TEST(Occlusion, PointsAtOrAboveTheThresholdGetNoSnow) {
-  const Field t = pitField();
+  const OcclusionField t = pitField();
   OcclusionSettings s = winter45();
   s.tauAmbient = 0.9;
   s.tauSun = 1.0;
@@ -140,7 +140,7 @@ TEST(Occlusion, PointsAtOrAboveTheThresholdGetNoSnow) {
 TEST(Occlusion, WallShadesTheSnowBehindItFromTheSun) {
   // An east-west wall 40 m high and 10 m thick across a plane, latitude 45 N in December: the
   // noon sun stands 21.6 deg high, so the wall's shadow reaches ~100 m north of it.
-  const Field t = field(64, 96, 5.0, [](double, double y) { return std::abs(y - 240.0) <= 5.0 ? 1040.0 : 1000.0; });
+  const OcclusionField t = field(64, 96, 5.0, [](double, double y) { return std::abs(y - 240.0) <= 5.0 ? 1040.0 : 1000.0; });
   const OcclusionSettings s = winter45();
   const OcclusionSnow o = run(t, s);
   const size_t north = at(t, 32, 40), south = at(t, 32, 56);  // 35 m either side of the wall's middle
@@ -157,7 +157,7 @@ TEST(Occlusion, WallShadesTheSnowBehindItFromTheSun) {
 
 TEST(Occlusion, ThresholdsSweepMonotonically) {
   // The paper's Figure 3: more tau, more snow; the same for tau_sun (less dissipation).
-  const Field t = field(64, 64, 20.0, [](double x, double y) {
+  const OcclusionField t = field(64, 64, 20.0, [](double x, double y) {
     return 1500.0 + 300.0 * std::sin(x / 150.0) * std::cos(y / 200.0) + 120.0 * std::sin((x + 2 * y) / 60.0);
   });
   const RayScene scene(t.heights, t.spec);
@@ -184,7 +184,7 @@ TEST(Occlusion, AmbientOcclusionMatchesTheCanyonSkyViewFactor) {
   // The middle of a long trench's flat floor, walls H high and W apart: the sky-view factor of a
   // horizontal point at the centre of an infinite canyon is cos(atan(2H / W)) (Oke 1981).
   const double W = 100.0, H = 50.0, cell = 2.0;
-  const Field t = field(600, 120, cell, [&](double, double y) { return std::abs(y - 120.0) < W / 2 ? 1000.0 : 1000.0 + H; });
+  const OcclusionField t = field(600, 120, cell, [&](double, double y) { return std::abs(y - 120.0) < W / 2 ? 1000.0 : 1000.0 + H; });
   OcclusionSettings s = winter45();
   s.aoRays = 1024;
   const OcclusionSnow o = run(t, s);
@@ -231,7 +231,7 @@ TEST(Occlusion, SunTrajectoryWeightsFollowEquationsTwoAndThree) {
 }
 
 TEST(Occlusion, SameResultsWhateverTheThreadCount) {
-  const Field t = pitField();
+  const OcclusionField t = pitField();
   const OcclusionSettings s = winter45();
   OcclusionSnow one, two;
   {

@@ -20,17 +20,17 @@ namespace {
 
 using snow::test::slurp;
 
-fs::path workDir() {
+fs::path resolvedSceneWorkDir() {
   return snow::test::uniqueTestDir("resolved");
 }
 
-int bake(const std::string& args, const fs::path& log) {
+int bakeLogged(const std::string& args, const fs::path& log) {
   const std::string cmd = "'"s + SNOWBAKE_BINARY + "' bake " + args + " --quiet --no-cache --backend cpu >'" + log.string() + "' 2>&1 </dev/null";
   const int raw = std::system(cmd.c_str());
   return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
 }
 
-std::map<std::string, std::string> filesIn(const fs::path& dir) {
+std::map<std::string, std::string> resolvedFilesIn(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& e : fs::recursive_directory_iterator(dir))
     if (e.is_regular_file()) files[fs::relative(e.path(), dir).string()] = slurp(e.path());
@@ -61,13 +61,13 @@ std::string withoutHeader(const std::string& toml) { return toml.substr(toml.fin
 // Bakes SCENE with ARGS, then the scene.resolved.toml it wrote (from another folder, with no
 // overrides), and compares every file.
 void expectResolvedSceneReproducesTheBake(const std::string& scene, const std::string& args) {
-  const fs::path dir = workDir();
-  ASSERT_EQ(bake(scene + " " + args + " --out '" + (dir / "a").string() + "'", dir / "a.log"), 0) << slurp(dir / "a.log");
+  const fs::path dir = resolvedSceneWorkDir();
+  ASSERT_EQ(bakeLogged(scene + " " + args + " --out '" + (dir / "a").string() + "'", dir / "a.log"), 0) << slurp(dir / "a.log");
   const fs::path resolved = dir / "a" / "scene.resolved.toml";
   ASSERT_TRUE(fs::exists(resolved));
   fs::copy_file(resolved, dir / "copy.toml");
-  ASSERT_EQ(bake("'" + (dir / "copy.toml").string() + "' --out '" + (dir / "b").string() + "'", dir / "b.log"), 0) << slurp(dir / "b.log");
-  const auto a = filesIn(dir / "a"), b = filesIn(dir / "b");
+  ASSERT_EQ(bakeLogged("'" + (dir / "copy.toml").string() + "' --out '" + (dir / "b").string() + "'", dir / "b.log"), 0) << slurp(dir / "b.log");
+  const auto a = resolvedFilesIn(dir / "a"), b = resolvedFilesIn(dir / "b");
   ASSERT_EQ(a.size(), b.size());
   for (const auto& [name, bytes] : a) {
     ASSERT_TRUE(b.count(name)) << name;
@@ -95,8 +95,8 @@ TEST(ResolvedScene, BakingItGivesTheSameBytesWithMasksGivenByRelativePaths) {
 }
 
 TEST(ResolvedScene, HasEveryKeyTheSceneLeftOutAtItsDefaultAndTheCommandLineInTheManifest) {
-  const fs::path dir = workDir();
-  ASSERT_EQ(bake("preset:default --set terrain.size=64 --set season.days=5 --set outputs.frames_days=[] --out '" + (dir / "a").string() + "'", dir / "a.log"), 0)
+  const fs::path dir = resolvedSceneWorkDir();
+  ASSERT_EQ(bakeLogged("preset:default --set terrain.size=64 --set season.days=5 --set outputs.frames_days=[] --out '" + (dir / "a").string() + "'", dir / "a.log"), 0)
       << slurp(dir / "a.log");
   const std::string resolved = slurp(dir / "a" / "scene.resolved.toml");
   EXPECT_NE(resolved.find("days = 5"), std::string::npos) << "the --set override";

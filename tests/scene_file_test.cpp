@@ -12,12 +12,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct TempDir {
+struct SceneTempDir {
   fs::path path;
-  TempDir() {
+  SceneTempDir() {
     path = snow::test::uniqueTestDir("scene_test");
   }
-  ~TempDir() { fs::remove_all(path); }
+  ~SceneTempDir() { fs::remove_all(path); }
   std::string write(const std::string& name, const std::string& text) const {
     std::ofstream(path / name) << text;
     return (path / name).string();
@@ -61,7 +61,7 @@ backend = "cpu"
 )";
 
 // Loads `text` expecting an InputError; returns its message.
-std::string errorOf(const TempDir& dir, const std::string& text, const std::vector<std::string>& sets = {}) {
+std::string errorOf(const SceneTempDir& dir, const std::string& text, const std::vector<std::string>& sets = {}) {
   const std::string path = dir.write("scene.toml", text);
   try {
     loadSceneFile(path, sets);
@@ -81,7 +81,7 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 }  // namespace
 
 TEST(SceneFile, ValidSceneIsUnderstood) {
-  TempDir dir;
+  SceneTempDir dir;
   const Scene s = loadSceneFile(dir.write("scene.toml", kValid));
   EXPECT_EQ(s.name, "test");
   EXPECT_TRUE(s.terrain.builtin);
@@ -109,7 +109,7 @@ TEST(SceneFile, ValidSceneIsUnderstood) {
 }
 
 TEST(SceneFile, UnknownKeyNamesFileLineAndKeyWithASuggestion) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, replaced(kValid, "days = 90", "dayz = 90"));
   EXPECT_NE(msg.find("scene.toml:10"), std::string::npos) << msg;
   EXPECT_NE(msg.find("season.dayz"), std::string::npos) << msg;
@@ -118,14 +118,14 @@ TEST(SceneFile, UnknownKeyNamesFileLineAndKeyWithASuggestion) {
 }
 
 TEST(SceneFile, UnknownParameterIsAnError) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, replaced(kValid, "rain_snow_limit_m", "rain_snow_limt_m"));
   EXPECT_NE(msg.find("scene.toml:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("parameters.rain_snow_limt_m"), std::string::npos) << msg;
 }
 
 TEST(SceneFile, WrongTypeNamesFileAndKey) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, replaced(kValid, "days = 90", "days = \"ninety\""));
   EXPECT_NE(msg.find("scene.toml:10"), std::string::npos) << msg;
   EXPECT_NE(msg.find("season.days"), std::string::npos) << msg;
@@ -133,7 +133,7 @@ TEST(SceneFile, WrongTypeNamesFileAndKey) {
 }
 
 TEST(SceneFile, OutOfRangeNamesFileKeyAndRange) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, replaced(kValid, "latitude_deg = 46.0", "latitude_deg = 123.0"));
   EXPECT_NE(msg.find("scene.toml:7"), std::string::npos) << msg;
   EXPECT_NE(msg.find("site.latitude_deg"), std::string::npos) << msg;
@@ -144,14 +144,14 @@ TEST(SceneFile, OutOfRangeNamesFileKeyAndRange) {
 }
 
 TEST(SceneFile, BadChoiceListsTheChoices) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, replaced(kValid, "format = \"tiff\"", "format = \"jpeg\""));
   EXPECT_NE(msg.find("outputs.format"), std::string::npos) << msg;
   EXPECT_NE(msg.find("exr, tiff"), std::string::npos) << msg;
 }
 
 TEST(SceneFile, MissingTerrainFileNamesSceneKeyAndPath) {
-  TempDir dir;
+  SceneTempDir dir;
   std::string text = replaced(kValid, "builtin = \"ridged\"\nsize = 64\ncell_size_m = 20.0", "file = \"dems/nowhere.asc\"");
   const std::string msg = errorOf(dir, text);
   EXPECT_NE(msg.find("scene.toml:3"), std::string::npos) << msg;
@@ -161,21 +161,21 @@ TEST(SceneFile, MissingTerrainFileNamesSceneKeyAndPath) {
 }
 
 TEST(SceneFile, TerrainNeedsExactlyOneSource) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, replaced(kValid, "builtin = \"ridged\"", "builtin = \"ridged\"\nfile = \"x.asc\""));
   EXPECT_NE(msg.find("terrain"), std::string::npos) << msg;
   EXPECT_NE(msg.find("exactly one"), std::string::npos) << msg;
 }
 
 TEST(SceneFile, SyntaxErrorNamesFileAndLine) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, replaced(kValid, "days = 90", "days = = 90"));
   EXPECT_NE(msg.find("scene.toml:10"), std::string::npos) << msg;
   EXPECT_NE(msg.find("syntax"), std::string::npos) << msg;
 }
 
 TEST(SceneFile, SetOverridesWithTheSameValidation) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string path = dir.write("scene.toml", kValid);
   const Scene s = loadSceneFile(path, {"season.days=30", "run.backend=auto", "parameters.snowfall_rate_per_day=2e-4",
                                        "outputs.frames_days=[10]"});
@@ -196,7 +196,7 @@ TEST(SceneFile, SetOverridesWithTheSameValidation) {
 }
 
 TEST(SceneFile, FramesAfterTheSeasonAreRefused) {
-  TempDir dir;
+  SceneTempDir dir;
   const std::string msg = errorOf(dir, kValid, {"season.days=20"});
   EXPECT_NE(msg.find("outputs.frames_days"), std::string::npos) << msg;
 }

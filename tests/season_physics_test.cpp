@@ -21,13 +21,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Outcome {
+struct SeasonOutcome {
   double volumeM3 = 0, coveredM2 = 0;
 };
 
 // The embedded range over 5.12 km at a given grid size, a 60-day winter with two fixed storms,
 // wind from the west, powder diffusion, melt and stability: everything the season has.
-Outcome winterAt(int size) {
+SeasonOutcome winterAt(int size) {
   SnowState s = referenceRangeState(size, 5120.0);
   SeasonConfig c = referenceWinter(60);
   c.weather.keyframes[0].state.seaLevelTemperatureC = 8.0;
@@ -42,7 +42,7 @@ Outcome winterAt(int size) {
   computeTemperatureBase(s, c.params);
   auto backend = createCpuBackend();
   runSeason(*backend, s, c);
-  Outcome o;
+  SeasonOutcome o;
   const double area = s.spec.cellAreaM2();
   for (int y = 0; y < s.spec.height; ++y)
     for (int x = 0; x < s.spec.width; ++x) {
@@ -56,7 +56,7 @@ Outcome winterAt(int size) {
 
 // The same terrain at 20 m and 10 m cells: total snow volume within 5 %.
 TEST(SeasonPhysics, TwentyAndTenMetreRunsHoldTheSameSnow) {
-  const Outcome coarse = winterAt(256), fine = winterAt(512);
+  const SeasonOutcome coarse = winterAt(256), fine = winterAt(512);
   std::printf("[ measure ] 20 m: %.4e m^3, %.4e m^2 covered; 10 m: %.4e m^3, %.4e m^2 covered\n", coarse.volumeM3, coarse.coveredM2,
               fine.volumeM3, fine.coveredM2);
   EXPECT_NEAR(fine.volumeM3 / coarse.volumeM3, 1.0, 0.05);

@@ -32,12 +32,12 @@ double hill(double xM, double yFromNorthM) {
 }
 double hillAtCell(int x, int y, double cell = kCell) { return hill((x + 0.5) * cell, (y + 0.5) * cell); }
 
-struct TempDir {
+struct FormatsTempDir {
   fs::path path;
-  TempDir() {
+  FormatsTempDir() {
     path = snow::test::uniqueTestDir("formats");
   }
-  ~TempDir() { fs::remove_all(path); }
+  ~FormatsTempDir() { fs::remove_all(path); }
   std::string operator/(const std::string& name) const { return (path / name).string(); }
 };
 
@@ -100,7 +100,7 @@ void writeRaw(const std::string& path, bool is32, bool big, double lo, double hi
     }
 }
 
-std::string inputErrorOf(const TerrainSource& src) {
+std::string sourceErrorOf(const TerrainSource& src) {
   try {
     loadTerrain(src);
   } catch (const InputError& e) {
@@ -113,7 +113,7 @@ std::string inputErrorOf(const TerrainSource& src) {
 }  // namespace
 
 TEST(TerrainFormats, ProjectedGeoTiffKeepsMetres) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeGeoTiff(dir / "utm.tif", 32632, 650000.0, 5150000.0, kCell, kCell);
   TerrainSource src;
   src.file = dir / "utm.tif";
@@ -126,7 +126,7 @@ TEST(TerrainFormats, ProjectedGeoTiffKeepsMetres) {
 }
 
 TEST(TerrainFormats, GeographicGeoTiffBecomesMetricCells) {
-  TempDir dir;
+  FormatsTempDir dir;
   const double deg = 1.0 / 1200.0;  // 3 arc-seconds
   writeGeoTiff(dir / "wgs84.tif", 4326, 11.0, 47.0, deg, deg);
   TerrainSource src;
@@ -141,7 +141,7 @@ TEST(TerrainFormats, GeographicGeoTiffBecomesMetricCells) {
 }
 
 TEST(TerrainFormats, EsriAsciiCornerAndCentreHeaders) {
-  TempDir dir;
+  FormatsTempDir dir;
   for (const char* kind : {"corner", "center"}) {
     const std::string path = dir / (std::string(kind) + ".asc");
     {
@@ -165,7 +165,7 @@ TEST(TerrainFormats, EsriAsciiCornerAndCentreHeaders) {
 }
 
 TEST(TerrainFormats, SrtmHgtIsGeographicInt16) {
-  TempDir dir;
+  FormatsTempDir dir;
   const std::string path = dir / "N46E011.hgt";
   {
     std::ofstream out(path, std::ios::binary);
@@ -187,7 +187,7 @@ TEST(TerrainFormats, SrtmHgtIsGeographicInt16) {
 }
 
 TEST(TerrainFormats, SixteenBitPngWithHeightRange) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeImage(dir / "hill.png", OIIO::TypeDesc::UINT16, 900.0, 1700.0);
   TerrainSource src;
   src.file = dir / "hill.png";
@@ -199,7 +199,7 @@ TEST(TerrainFormats, SixteenBitPngWithHeightRange) {
 }
 
 TEST(TerrainFormats, FloatTiffAndExrHeightsInMetres) {
-  TempDir dir;
+  FormatsTempDir dir;
   for (const char* name : {"hill.tif", "hill.exr"}) {
     // value = (h - 0) / 1: metres stored directly
     writeImage(dir / name, OIIO::TypeDesc::FLOAT, 0.0, 1.0);
@@ -214,7 +214,7 @@ TEST(TerrainFormats, FloatTiffAndExrHeightsInMetres) {
 }
 
 TEST(TerrainFormats, RawR16BothByteOrdersAndR32) {
-  TempDir dir;
+  FormatsTempDir dir;
   for (bool big : {false, true}) {
     const std::string path = dir / (big ? "big.r16" : "little.r16");
     writeRaw(path, false, big, 900.0, 1700.0);
@@ -239,7 +239,7 @@ TEST(TerrainFormats, RawR16BothByteOrdersAndR32) {
 
 // A square pyramid: base 100 m x 80 m at z = 0, apex 40 m, as an OBJ; rasterised at 1 m.
 TEST(TerrainFormats, MeshPyramidRasterisesToItsAnalyticHeights) {
-  TempDir dir;
+  FormatsTempDir dir;
   for (const char* up : {"z", "y"}) {
     const std::string path = dir / (std::string("pyramid_") + up + ".obj");
     {
@@ -273,7 +273,7 @@ TEST(TerrainFormats, MeshPyramidRasterisesToItsAnalyticHeights) {
 }
 
 TEST(TerrainFormats, MeshWithGapsHasNodataAndOccludersLoad) {
-  TempDir dir;
+  FormatsTempDir dir;
   const std::string path = dir / "two.obj";
   {
     std::ofstream out(path);
@@ -302,7 +302,7 @@ TEST(TerrainFormats, MeshWithGapsHasNodataAndOccludersLoad) {
 }
 
 TEST(TerrainFormats, ResamplingCoarserAndFinerFollowsTheHill) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeGeoTiff(dir / "utm.tif", 32632, 650000.0, 5150000.0, kCell, kCell);
   TerrainSource src;
   src.file = dir / "utm.tif";
@@ -330,7 +330,7 @@ TEST(TerrainFormats, ResamplingCoarserAndFinerFollowsTheHill) {
 }
 
 TEST(TerrainFormats, NodataIsMaskedOrFilled) {
-  TempDir dir;
+  FormatsTempDir dir;
   const std::string path = dir / "holes.asc";
   {
     std::ofstream out(path);
@@ -355,27 +355,27 @@ TEST(TerrainFormats, NodataIsMaskedOrFilled) {
 }
 
 TEST(TerrainFormats, HeightmapsNeedTheirCellSizeAndHeightMapping) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeImage(dir / "hill.png", OIIO::TypeDesc::UINT16, 900.0, 1700.0);
   TerrainSource src;
   src.file = dir / "hill.png";
-  EXPECT_NE(inputErrorOf(src).find("terrain.cell_size_m"), std::string::npos);
+  EXPECT_NE(sourceErrorOf(src).find("terrain.cell_size_m"), std::string::npos);
   src.cellSizeM = 5.0;
-  EXPECT_NE(inputErrorOf(src).find("terrain.height_range_m"), std::string::npos);
+  EXPECT_NE(sourceErrorOf(src).find("terrain.height_range_m"), std::string::npos);
   writeRaw(dir / "hill.r16", false, false, 0, 1);
   TerrainSource raw;
   raw.file = dir / "hill.r16";
   raw.cellSizeM = 5.0;
   raw.heightRangeM = std::array<double, 2>{0.0, 1.0};
-  EXPECT_NE(inputErrorOf(raw).find("terrain.raw_width"), std::string::npos);
+  EXPECT_NE(sourceErrorOf(raw).find("terrain.raw_width"), std::string::npos);
   raw.rawWidth = kW + 1;
   raw.rawHeight = kH;
-  const std::string msg = inputErrorOf(raw);
+  const std::string msg = sourceErrorOf(raw);
   EXPECT_NE(msg.find(raw.file), std::string::npos) << msg;
   EXPECT_NE(msg.find("has " + std::to_string(kW * kH * 2) + " bytes"), std::string::npos) << msg;
   raw.rawWidth = 200000;
   raw.rawHeight = 200000;
-  const std::string huge = inputErrorOf(raw);
+  const std::string huge = sourceErrorOf(raw);
   EXPECT_NE(huge.find("GiB"), std::string::npos) << huge;
 }
 
@@ -406,7 +406,7 @@ void writeScaledGeoTiff(const std::string& path, int bands, double scale, double
 }  // namespace
 
 TEST(TerrainFormats, GdalScaleAndOffsetAreAppliedAndReportedByInfo) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeScaledGeoTiff(dir / "scaled.tif", 1, 0.1, 500.0);
   TerrainSource src;
   src.file = dir / "scaled.tif";
@@ -418,7 +418,7 @@ TEST(TerrainFormats, GdalScaleAndOffsetAreAppliedAndReportedByInfo) {
 }
 
 TEST(TerrainFormats, MultiBandDemNeedsTerrainBandAndReadsThatBand) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeScaledGeoTiff(dir / "bands.tif", 3, 1.0, 0.0);
   TerrainSource src;
   src.file = dir / "bands.tif";
@@ -435,7 +435,7 @@ TEST(TerrainFormats, MultiBandDemNeedsTerrainBandAndReadsThatBand) {
 }
 
 TEST(TerrainFormats, ImageWithoutGeoreferenceIsAHeightmapNeedingACellSize) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeScaledGeoTiff(dir / "plain.tif", 1, 1.0, 0.0, false);
   TerrainSource src;
   src.file = dir / "plain.tif";
@@ -452,7 +452,7 @@ TEST(TerrainFormats, ImageWithoutGeoreferenceIsAHeightmapNeedingACellSize) {
 }
 
 TEST(TerrainFormats, HeightLimitsRefuseAbsurdHeightsAndWiden) {
-  TempDir dir;
+  FormatsTempDir dir;
   writeScaledGeoTiff(dir / "hill.tif", 1, 1.0, 0.0);
   TerrainSource src;
   src.file = dir / "hill.tif";

@@ -15,7 +15,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path tempDir() {
+fs::path terrainTempDir() {
   return snow::test::uniqueTestDir("terrain_test");
 }
 
@@ -45,7 +45,7 @@ const std::string kSharedDem = SNOWBAKE_SHARED_DATA_DIR "/dem/";
 }  // namespace
 
 TEST(TerrainLoader, ProjectedAsciiGridKeepsMetresAndNodata) {
-  const fs::path dir = tempDir();
+  const fs::path dir = terrainTempDir();
   const std::string path =
       writeAsc(dir, "hill.asc", "xllcorner 1000\nyllcorner 2000\ncellsize 5\nNODATA_value -9999\n", 6, 4, [](int x, int y) {
         return x == 0 && y == 0 ? std::string("-9999") : std::to_string(100 + 10 * x + y);
@@ -65,7 +65,7 @@ TEST(TerrainLoader, ProjectedAsciiGridKeepsMetresAndNodata) {
 }
 
 TEST(TerrainLoader, DegreesWithoutCoordinateSystemBecomeMetresAtTheLatitude) {
-  const fs::path dir = tempDir();
+  const fs::path dir = terrainTempDir();
   const std::string path = writeAsc(dir, "geo.asc", "xllcorner -105.7\nyllcorner 40.0\ncellsize 0.000833333\nNODATA_value 0\n", 5,
                                     5, [](int x, int y) { return std::to_string(2000 + x + y); });
   const Terrain t = loadDem(path);
@@ -78,7 +78,7 @@ TEST(TerrainLoader, DegreesWithoutCoordinateSystemBecomeMetresAtTheLatitude) {
 }
 
 TEST(TerrainLoader, BadFilesGiveOneLineErrorsNamingTheFile) {
-  const fs::path dir = tempDir();
+  const fs::path dir = terrainTempDir();
   const std::string missing = (dir / "missing.asc").string();
   EXPECT_NE(inputErrorOf(missing).find(missing), std::string::npos);
   const std::string empty = (dir / "empty.asc").string();

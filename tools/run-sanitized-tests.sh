@@ -21,7 +21,8 @@ launcher=()
 if command -v ccache > /dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 
 start=$(date +%s)
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DSNOWBAKE_SANITIZE=ON -DSNOWBAKE_WITH_CUDA=OFF "${launcher[@]}" "$@"
+# The tests in unity batches (CMakeLists.txt, SNOWBAKE_UNITY_TESTS): this tree is built whole each run.
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DSNOWBAKE_SANITIZE=ON -DSNOWBAKE_WITH_CUDA=OFF -DSNOWBAKE_UNITY_TESTS=ON "${launcher[@]}" "$@"
 cmake --build build-asan -j"$(nproc)" --target snowbake snowbake_tests bench_tests snowbake_fuzz distributed_tests
 echo "sanitized build: $(( $(date +%s) - start )) s"
 
