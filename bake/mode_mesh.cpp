@@ -49,64 +49,65 @@ MeshSnowManifest meshManifest(const Scene& scene, const TriangleMesh& mesh, cons
   return m;
 }
 
-}  // namespace
-
-BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, WallClock::time_point tStart) {
-  BakeResult result;
-  result.backendName = "cpu (Embree ray queries, TBB)";
-  auto t0 = WallClock::now();
-  std::optional<BakeStage> stage(std::in_place, "mesh");
-  progress().stage("terrain", 0.0);
-  const TriangleMesh mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis);
+// The "terrain" stage: the mesh, its bounds, and the memory model's prediction refused above the
+// budget before any work.
+struct MeshTerrain {
+  TriangleMesh mesh;
   float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  for (const auto& p : mesh.positions)
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  MemoryPrediction memory{};
+};
+
+MeshTerrain loadMeshTerrain(const Scene& scene, std::ostream& log) {
+  const auto t0 = WallClock::now();
+  progress().stage("terrain", 0.0);
+  MeshTerrain t{.mesh = loadTriangleMesh(scene.terrain.file, scene.terrain.upAxis)};
+  for (const auto& p : t.mesh.positions)
+    for (int k = 0; k < 3; ++k) t.lo[k] = std::min(t.lo[k], p[k]), t.hi[k] = std::max(t.hi[k], p[k]);
   log << "mode: mesh (Fearing 2000: snow on the mesh itself; no grid, no season)\n";
-  const double extent[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
-  const MemoryPrediction memory = predictMeshBake(scene, mesh.triangles.size(), extent);
-  {
-    const double budget = memoryBudgetBytes(scene);
-    refuseAboveBudget(scene, memory, budget);
-    log << "memory: " << memory.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
-  }
-  log << "mesh: " << mesh.source << ": " << mesh.triangles.size() << " triangles, " << fixed(hi[0] - lo[0], 2) << " x "
-      << fixed(hi[1] - lo[1], 2) << " x " << fixed(hi[2] - lo[2], 2) << " m (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
+  const double extent[3] = {t.hi[0] - t.lo[0], t.hi[1] - t.lo[1], t.hi[2] - t.lo[2]};
+  t.memory = predictMeshBake(scene, t.mesh.triangles.size(), extent);
+  const double budget = memoryBudgetBytes(scene);
+  refuseAboveBudget(scene, t.memory, budget);
+  log << "memory: " << t.memory.summary() << "; budget " << fixed(budget / (1024.0 * 1024.0), 0) << " MiB\n";
+  log << "mesh: " << t.mesh.source << ": " << t.mesh.triangles.size() << " triangles, " << fixed(extent[0], 2) << " x " << fixed(extent[1], 2)
+      << " x " << fixed(extent[2], 2) << " m (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   progress().stage("terrain", 1.0);
+  return t;
+}
+
+// The "placement" stage: the sky's flakes placed on the mesh (Fearing's sites).
+FallenSnow placeSnowOnMesh(const TriangleMesh& mesh, const FallenSnowSettings& placement, std::ostream& log) {
   progress().stage("placement", 0.0);
-  t0 = WallClock::now();
-  FallenSnowSettings placement = scene.meshSnow.placement;
-  placement.seed = scene.seed;
-  stage.emplace("placement");
+  const auto t0 = WallClock::now();
   FallenSnow snow = placeFallenSnow(mesh, placement);
   log << "placement: " << snow.sites.size() << " sites (" << snow.refinedCells << " cells refined), " << snow.flakes << " flakes ("
       << snow.blocked << " blocked, " << snow.leftTheWorld << " left the world), sky " << fixed(snow.skyMassM3, 4) << " m^3, placed "
       << fixed(snow.placedM3, 4) << " m^3 (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   progress().stage("placement", 1.0);
+  return snow;
+}
+
+// The "stability" stage: snow too steep for its sites moved on until it rests.
+FallenSnowStabilityReport stabilizeSnowOnMesh(const TriangleMesh& mesh, FallenSnow& snow, const FallenSnowStability& stability, std::ostream& log) {
   progress().stage("stability", 0.0);
-  t0 = WallClock::now();
-  FallenSnowStability stability = scene.meshSnow.stability;
-  stability.seed = scene.seed;
-  stage.emplace("stability");
+  const auto t0 = WallClock::now();
   const FallenSnowStabilityReport st = stabilizeFallenSnow(mesh, snow, stability);
   log << "stability: " << st.rounds << " rounds, " << st.passes << " passes"
       << (st.unconvergedRounds ? " (" + std::to_string(st.unconvergedRounds) + " rounds hit the pass limit)" : std::string()) << ", "
       << fixed(st.overEdgesM3, 4) << " m^3 over edges, " << fixed(st.leftTheWorldM3, 4) << " m^3 left the world, " << fixed(st.finalM3, 4)
       << " m^3 kept (" << fixed(elapsedSeconds(t0), 2) << " s)\n";
   progress().stage("stability", 1.0);
-  progress().stage("outputs", 0.0);
-  t0 = WallClock::now();
-  createOutputFolder(options.outDir);
-  const MeshSnowBodyOptions& bo = scene.meshSnow.body;
-  const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / kMeshVdbName).string() : std::string();
-  stage.emplace("snow body");
-  const MeshSnowBody body = buildMeshSnowBody(snow, mesh, bo, vdbPath);
-  log << "snow body: " << body.snowVoxels << " voxels of " << fixed(body.voxelSizeM, 4) << " m, " << body.mesh.triangles.size()
-      << " triangles (" << fixed(body.seconds, 2) << " s)\n";
-  MeshSnowManifest manifest = meshManifest(scene, mesh, lo, hi, placement, stability, snow, st, body);
+  return st;
+}
+
+// The snow body's files listed in `manifest` and `result`: the VDB (written with the body, where
+// `vdbPath` is set), each mesh format, and the resolved scene.
+void writeSnowBodyFiles(const Scene& scene, const BakeOptions& options, const MeshSnowBody& body, const std::string& vdbPath,
+                        MeshSnowManifest& manifest, BakeResult& result) {
   if (!vdbPath.empty()) {
     manifest.files.push_back({kMeshVdbName,
-                              "the snow body: snow_sdf (level set, metres) and density (fog volume, kg/m^3 of " + fixed(bo.densityKgPerM3, 0) +
-                                  " inside)",
+                              "the snow body: snow_sdf (level set, metres) and density (fog volume, kg/m^3 of " +
+                                  fixed(scene.meshSnow.body.densityKgPerM3, 0) + " inside)",
                               "m; kg/m^3", "OpenVDB"});
     result.files.push_back(vdbPath);
   }
@@ -117,17 +118,43 @@ BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostr
     manifest.files.push_back({name, "the snow body, closed, in the input mesh's frame", "m", meshFormatDescription(format)});
     result.files.push_back(path);
   }
-  {
-    OutputSink resolved;
-    const SinkScope scope(resolved);
-    result.files.push_back(writeResolvedScene(scene, options.outDir));
-    manifest.files.push_back({"scene.resolved.toml", resolved.files[0].content, "", "TOML"});
-  }
+  OutputSink resolved;
+  const SinkScope scope(resolved);
+  result.files.push_back(writeResolvedScene(scene, options.outDir));
+  manifest.files.push_back({"scene.resolved.toml", resolved.files[0].content, "", "TOML"});
+}
+
+}  // namespace
+
+BakeResult runMeshBake(const Scene& scene, const BakeOptions& options, std::ostream& log, WallClock::time_point tStart) {
+  BakeResult result;
+  result.backendName = "cpu (Embree ray queries, TBB)";
+  std::optional<BakeStage> stage(std::in_place, "mesh");
+  const MeshTerrain terrain = loadMeshTerrain(scene, log);
+  FallenSnowSettings placement = scene.meshSnow.placement;
+  placement.seed = scene.seed;
+  stage.emplace("placement");
+  FallenSnow snow = placeSnowOnMesh(terrain.mesh, placement, log);
+  FallenSnowStability stability = scene.meshSnow.stability;
+  stability.seed = scene.seed;
+  stage.emplace("stability");
+  const FallenSnowStabilityReport st = stabilizeSnowOnMesh(terrain.mesh, snow, stability, log);
+
+  progress().stage("outputs", 0.0);
+  const auto t0 = WallClock::now();
+  createOutputFolder(options.outDir);
+  const std::string vdbPath = scene.outputs.vdb ? (fs::path(options.outDir) / kMeshVdbName).string() : std::string();
+  stage.emplace("snow body");
+  const MeshSnowBody body = buildMeshSnowBody(snow, terrain.mesh, scene.meshSnow.body, vdbPath);
+  log << "snow body: " << body.snowVoxels << " voxels of " << fixed(body.voxelSizeM, 4) << " m, " << body.mesh.triangles.size()
+      << " triangles (" << fixed(body.seconds, 2) << " s)\n";
+  MeshSnowManifest manifest = meshManifest(scene, terrain.mesh, terrain.lo, terrain.hi, placement, stability, snow, st, body);
+  writeSnowBodyFiles(scene, options, body, vdbPath, manifest, result);
   manifest.commandLine = options.commandLine;
   progress().stage("outputs", 1.0);
   stage.emplace("manifest");  // the snow body's and the files' memory noted
   progress().stage("manifest", 0.0);
-  manifest.memoryJson = measuredMemoryBreakdown(memory, static_cast<double>(snow.sites.size()), "site", options.verbose, log);
+  manifest.memoryJson = measuredMemoryBreakdown(terrain.memory, static_cast<double>(snow.sites.size()), "site", options.verbose, log);
   writeTextAtomically(manifestPath(options.outDir), meshSnowManifestToJson(manifest));
   result.files.push_back(manifestPath(options.outDir));
   reportFilesWritten(result.files);
