@@ -430,16 +430,7 @@ void AvalancheRun::growBeforeBox(int x0, int y0, int x1, int y1) {
   before_ = std::move(grown);
 }
 
-bool AvalancheRun::step() {
-  if (!active_ || atRest_) return true;
-  const auto t0 = WallClock::now();
-  const double stepS = p_.avalancheStepS;
-  const double minCell = std::min(terrain_.spec.cellSizeXM, terrain_.spec.cellSizeYM);
-  const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
-  const int substeps = static_cast<int>(std::clamp(std::ceil(stepS / maxSubstep), 1.0, 10000.0));
-  // Snow moves at most a cell a substep: the step stays within its box grown by `substeps`.
-  growBeforeBox(std::max(0, args_.x0 - substeps), std::max(0, args_.y0 - substeps), std::min(terrain_.spec.width, args_.x1 + substeps),
-                std::min(terrain_.spec.height, args_.y1 + substeps));
+AvalancheArgs AvalancheRun::stepArgs(double stepS, int substeps) {
   AvalancheArgs a = args_;
   a.dtS = static_cast<float>(stepS / substeps);
   // After the first step, the last step's row statistics give the spans the passes run over.
@@ -456,35 +447,74 @@ bool AvalancheRun::step() {
   a.live = spans && substeps == 1 && record_.steps >= liveFrom_ && liveSpans_;
   liveSteps_ += a.live;
   for (int set = 0; set < 2; ++set) a.liveY0[set] = statsY0_[set], a.liveY1[set] = statsY1_[set];
-  const std::vector<float> stats = backend_.avalancheSteps(a, substeps);
-  // The grown box this step covered, then the rows' statistics.
+  return a;
+}
+
+// The grown box the step covered (the last 4 floats of `stats`) and its rows' statistics (4 a row
+// before them, written to set `statsOut`): the box and cost records, and the next step's box
+// around the snow that can still flow.
+AvalancheRun::StepTotals AvalancheRun::takeStepStats(const std::vector<float>& stats, int statsOut) {
   const size_t n = stats.size() - 4;
   const int bx0 = static_cast<int>(stats[n]), by0 = static_cast<int>(stats[n + 1]);
   const int bx1 = static_cast<int>(stats[n + 2]), by1 = static_cast<int>(stats[n + 3]);
-  statsY0_[1 - a.statsIn] = by0, statsY1_[1 - a.statsIn] = by1;
+  statsY0_[statsOut] = by0, statsY1_[statsOut] = by1;
   unionBox_.x0 = std::min(unionBox_.x0, bx0), unionBox_.y0 = std::min(unionBox_.y0, by0);
   unionBox_.x1 = std::max(unionBox_.x1, bx1), unionBox_.y1 = std::max(unionBox_.y1, by1);
   record_.boxCellsMax = std::max(record_.boxCellsMax, (bx1 - bx0) * (by1 - by0));
   record_.boxCellSteps += static_cast<double>(bx1 - bx0) * (by1 - by0);
-  float speed = 0.f;
-  double energy = 0.0;
+  StepTotals t;
   int x0 = terrain_.spec.width, y0 = terrain_.spec.height, x1 = 0, y1 = 0;
   for (int r = 0; r < by1 - by0; ++r) {
     const float* s = &stats[4 * static_cast<size_t>(r)];
-    speed = std::max(speed, s[0]);
-    energy += s[1];
+    t.speed = std::max(t.speed, s[0]);
+    t.energy += s[1];
     if (s[3] >= 0.f) {
       x0 = std::min(x0, static_cast<int>(s[2])), x1 = std::max(x1, static_cast<int>(s[3]) + 1);
       y0 = std::min(y0, by0 + r), y1 = std::max(y1, by0 + r + 1);
     }
   }
   args_.x0 = x0, args_.y0 = y0, args_.x1 = x1, args_.y1 = y1;
+  return t;
+}
+
+void AvalancheRun::checkRest(const StepTotals& t) {
+  if (args_.x1 <= args_.x0) {
+    record_.why = "all moving snow deposited";
+    atRest_ = true;
+  } else if (t.speed < p_.avalancheStopSpeedMps && (record_.maxSpeedMps >= p_.avalancheStopSpeedMps || record_.simulatedS >= 2.0)) {
+    // (Not before the snow has once moved faster than the stop speed, or 2 s have passed: with
+    // short steps, snow that has only begun to accelerate is not yet at rest.)
+    record_.why = "at rest (fastest pipe " + std::to_string(t.speed) + " m/s)";
+    atRest_ = true;
+  } else if (t.energy < p_.avalancheStopEnergyFraction * peakEnergy_) {
+    // com1DFA's stopping criterion (stopCrit 0.01 of the peak kinetic energy): what still moves
+    // is the creep of a thin tail, which would otherwise hold the run open for minutes.
+    record_.why = "at rest (kinetic energy " + std::to_string(t.energy / peakEnergy_) + " of its peak)";
+    atRest_ = true;
+  } else if (record_.simulatedS >= p_.avalancheMaxDurationS) {
+    record_.why = "stopped at the duration cap (fastest pipe still " + std::to_string(t.speed) + " m/s)";
+    atRest_ = true;
+  }
+}
+
+bool AvalancheRun::step() {
+  if (!active_ || atRest_) return true;
+  const auto t0 = WallClock::now();
+  const double stepS = p_.avalancheStepS;
+  const double minCell = std::min(terrain_.spec.cellSizeXM, terrain_.spec.cellSizeYM);
+  const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
+  const int substeps = static_cast<int>(std::clamp(std::ceil(stepS / maxSubstep), 1.0, 10000.0));
+  // Snow moves at most a cell a substep: the step stays within its box grown by `substeps`.
+  growBeforeBox(std::max(0, args_.x0 - substeps), std::max(0, args_.y0 - substeps), std::min(terrain_.spec.width, args_.x1 + substeps),
+                std::min(terrain_.spec.height, args_.y1 + substeps));
+  const AvalancheArgs a = stepArgs(stepS, substeps);
+  const StepTotals totals = takeStepStats(backend_.avalancheSteps(a, substeps), 1 - a.statsIn);
   ++record_.steps;
   record_.substeps += substeps;
   record_.simulatedS += stepS;
-  lastSpeed_ = speed;
-  peakEnergy_ = std::max(peakEnergy_, energy);
-  record_.maxSpeedMps = std::max(record_.maxSpeedMps, speed);
+  lastSpeed_ = totals.speed;
+  peakEnergy_ = std::max(peakEnergy_, totals.energy);
+  record_.maxSpeedMps = std::max(record_.maxSpeedMps, totals.speed);
   const double seconds = elapsedSeconds(t0);
   wallSeconds_ += seconds;
   record_.stepSeconds += seconds;
@@ -492,23 +522,7 @@ bool AvalancheRun::step() {
     captureFrame();
     while (nextFrameS_ <= record_.simulatedS + 1e-9) nextFrameS_ += frameIntervalS_;
   }
-  if (x1 <= x0) {
-    record_.why = "all moving snow deposited";
-    atRest_ = true;
-  } else if (speed < p_.avalancheStopSpeedMps && (record_.maxSpeedMps >= p_.avalancheStopSpeedMps || record_.simulatedS >= 2.0)) {
-    // (Not before the snow has once moved faster than the stop speed, or 2 s have passed: with
-    // short steps, snow that has only begun to accelerate is not yet at rest.)
-    record_.why = "at rest (fastest pipe " + std::to_string(speed) + " m/s)";
-    atRest_ = true;
-  } else if (energy < p_.avalancheStopEnergyFraction * peakEnergy_) {
-    // com1DFA's stopping criterion (stopCrit 0.01 of the peak kinetic energy): what still moves
-    // is the creep of a thin tail, which would otherwise hold the run open for minutes.
-    record_.why = "at rest (kinetic energy " + std::to_string(energy / peakEnergy_) + " of its peak)";
-    atRest_ = true;
-  } else if (record_.simulatedS >= p_.avalancheMaxDurationS) {
-    record_.why = "stopped at the duration cap (fastest pipe still " + std::to_string(speed) + " m/s)";
-    atRest_ = true;
-  }
+  checkRest(totals);
   return atRest_;
 }
 

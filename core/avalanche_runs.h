@@ -196,6 +196,16 @@ class AvalancheRun {
   int liveFrom_ = 2, liveSteps_ = 0;
   uint64_t staticFieldsSeen_ = 0;  // the backend's staticFieldsVersion at release or the last change
   void onOutsideWrite();
+  // A step's parts: its arguments (the substep and the spans the passes keep to), the box and
+  // row statistics it returns taken in (the next box; the fastest pipe and kinetic energy), and
+  // whether the avalanche is now at rest, and why.
+  struct StepTotals {
+    float speed = 0.f;
+    double energy = 0.0;
+  };
+  AvalancheArgs stepArgs(double stepS, int substeps);
+  StepTotals takeStepStats(const std::vector<float>& stats, int statsOut);
+  void checkRest(const StepTotals& totals);
   AvalancheRecord record_;
   bool active_ = false, atRest_ = false;
   float lastSpeed_ = 0.f;
