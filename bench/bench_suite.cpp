@@ -326,6 +326,71 @@ std::string scalingChild(const BenchOptions& o, int size) {
   return line.str();
 }
 
+namespace {
+
+// One size of the scaling stage in a child process (`bench --stage scaling-child`), so each size's
+// peak memory is its own: the CSV line it prints last, as numbers (size, the five stages' seconds,
+// the total, the peak in KiB) and as printed.
+std::vector<double> runScalingChild(int size, int threads, double days, std::string& line) {
+  int pipefd[2];
+  if (::pipe(pipefd) != 0) throw std::runtime_error("pipe failed");
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, pipefd[1], 1);
+  posix_spawn_file_actions_addclose(&actions, pipefd[0]);
+  const std::string sizeArg = std::to_string(size), threadArg = std::to_string(threads), daysArg = fmt("%g", days);
+  std::vector<std::string> args = {"snowbake", "bench", "--stage", "scaling-child", "--sizes", sizeArg, "--threads", threadArg, "--days", daysArg};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(pipefd[1]);
+  if (rc != 0) {
+    ::close(pipefd[0]);
+    throw std::runtime_error(std::string("cannot start the scaling child: ") + std::strerror(rc));
+  }
+  std::string out;
+  char buf[4096];
+  for (ssize_t n; (n = ::read(pipefd[0], buf, sizeof buf)) > 0;) out.append(buf, static_cast<size_t>(n));
+  ::close(pipefd[0]);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) throw std::runtime_error("the scaling child for " + sizeArg + "² failed");
+  std::istringstream in(out);
+  std::string l;
+  line.clear();
+  while (std::getline(in, l))
+    if (!l.empty()) line = l;
+  std::vector<double> v;
+  std::stringstream ls(line);
+  for (std::string f; std::getline(ls, f, ',');) v.push_back(std::stod(f));
+  if (v.size() != 8) throw std::runtime_error("the scaling child for " + sizeArg + "² printed '" + line + "'");
+  return v;
+}
+
+// The scaling table's growth line: least squares of log time against log cells, from the sizes
+// above 256² where there are two or more (small grids are dominated by fixed costs).
+std::string scalingGrowth(const std::vector<double>& cells, const std::vector<double>& total, const std::vector<double>& peak,
+                          const std::vector<std::vector<double>>& stages) {
+  std::vector<double> c2, t2, p2;
+  std::vector<std::vector<double>> s2(5);
+  size_t large = 0;
+  for (double c : cells) large += c > 256.0 * 256.0;
+  for (size_t k = 0; k < cells.size(); ++k)
+    if (cells[k] > 256.0 * 256.0 || large < 2) {
+      c2.push_back(cells[k]), t2.push_back(total[k]), p2.push_back(peak[k]);
+      for (int j = 0; j < 5; ++j) s2[static_cast<size_t>(j)].push_back(stages[static_cast<size_t>(j)][k]);
+    }
+  return "\nFitted growth (least squares of log time against log cells" + std::string(c2.size() < cells.size() ? ", sizes above 256²" : "") +
+         "): total ~ n^" + fmt("%.2f", logSlope(c2, t2)) + " (n cells); terrain n^" + fmt("%.2f", logSlope(c2, s2[0])) + ", sun n^" +
+         fmt("%.2f", logSlope(c2, s2[1])) + ", wind n^" + fmt("%.2f", logSlope(c2, s2[2])) + ", season n^" + fmt("%.2f", logSlope(c2, s2[3])) +
+         ", outputs n^" + fmt("%.2f", logSlope(c2, s2[4])) + "; peak memory n^" + fmt("%.2f", logSlope(c2, p2)) + ".\n";
+}
+
+}  // namespace
+
 std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads) {
   std::ostringstream table, csv;
   table << "Scaling: the builtin range over 10.24 km at each grid size, every stage in its own process: terrain, sun exposure (draft, "
@@ -351,41 +416,8 @@ std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads) 
         continue;
       }
     }
-    int pipefd[2];
-    if (::pipe(pipefd) != 0) throw std::runtime_error("pipe failed");
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, pipefd[1], 1);
-    posix_spawn_file_actions_addclose(&actions, pipefd[0]);
-    const std::string sizeArg = std::to_string(size), threadArg = std::to_string(threads), daysArg = fmt("%g", o.days);
-    std::vector<std::string> args = {"snowbake", "bench", "--stage", "scaling-child", "--sizes", sizeArg, "--threads", threadArg, "--days", daysArg};
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_t pid = 0;
-    const int rc = posix_spawn(&pid, "/proc/self/exe", &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(pipefd[1]);
-    if (rc != 0) {
-      ::close(pipefd[0]);
-      throw std::runtime_error(std::string("cannot start the scaling child: ") + std::strerror(rc));
-    }
-    std::string out;
-    char buf[4096];
-    for (ssize_t n; (n = ::read(pipefd[0], buf, sizeof buf)) > 0;) out.append(buf, static_cast<size_t>(n));
-    ::close(pipefd[0]);
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) throw std::runtime_error("the scaling child for " + sizeArg + "² failed");
-    // The last line of its output is the CSV line.
-    std::istringstream in(out);
-    std::string line, last;
-    while (std::getline(in, line))
-      if (!line.empty()) last = line;
-    std::vector<double> v;
-    std::stringstream ls(last);
-    for (std::string f; std::getline(ls, f, ',');) v.push_back(std::stod(f));
-    if (v.size() != 8) throw std::runtime_error("the scaling child for " + sizeArg + "² printed '" + last + "'");
+    std::string last;
+    const std::vector<double> v = runScalingChild(size, threads, o.days, last);
     const double mib = v[7] / 1024.0;
     table << "| " << size << "² | " << fmt("%.2f", v[1]) << " | " << fmt("%.2f", v[2]) << " | " << fmt("%.2f", v[3]) << " | " << fmt("%.2f", v[4])
           << " | " << fmt("%.2f", v[5]) << " | " << fmt("%.2f", v[6]) << " | " << fmt("%.0f", mib) << " |\n";
@@ -397,22 +429,7 @@ std::string scalingBench(const BenchOptions& o, std::ostream& log, int threads) 
     log << "  scaling " << size << "²: " << fmt("%.1f", v[6]) << " s, " << fmt("%.0f", mib) << " MiB\n";
   }
   table << skipped;
-  if (cells.size() >= 2) {
-    // Growth from the sizes above 256² where there are enough (small grids are dominated by fixed costs).
-    std::vector<double> c2, t2, p2;
-    std::vector<std::vector<double>> s2(5);
-    size_t large = 0;
-    for (double c : cells) large += c > 256.0 * 256.0;
-    for (size_t k = 0; k < cells.size(); ++k)
-      if (cells[k] > 256.0 * 256.0 || large < 2) {
-        c2.push_back(cells[k]), t2.push_back(total[k]), p2.push_back(peak[k]);
-        for (int j = 0; j < 5; ++j) s2[static_cast<size_t>(j)].push_back(stages[static_cast<size_t>(j)][k]);
-      }
-    table << "\nFitted growth (least squares of log time against log cells" << (c2.size() < cells.size() ? ", sizes above 256²" : "")
-          << "): total ~ n^" << fmt("%.2f", logSlope(c2, t2)) << " (n cells); terrain n^" << fmt("%.2f", logSlope(c2, s2[0])) << ", sun n^"
-          << fmt("%.2f", logSlope(c2, s2[1])) << ", wind n^" << fmt("%.2f", logSlope(c2, s2[2])) << ", season n^" << fmt("%.2f", logSlope(c2, s2[3]))
-          << ", outputs n^" << fmt("%.2f", logSlope(c2, s2[4])) << "; peak memory n^" << fmt("%.2f", logSlope(c2, p2)) << ".\n";
-  }
+  if (cells.size() >= 2) table << scalingGrowth(cells, total, peak, stages);
   writeCsvFile(o, "scaling.csv", csv.str(), table);
   return table.str();
 }
