@@ -49,7 +49,7 @@ void OutputWriter::writeAvalancheMaps(const std::vector<AvalancheRecord>& avalan
     write(stem.str() + "_scour", "", {a.maps->scour, nullptr}, which + ": snow taken away, net (m)", "m", a.day);
     write(stem.str() + "_deposit", "", {a.maps->deposit, nullptr}, which + ": snow left, net (m)", "m", a.day);
     write(stem.str() + "_peak_thickness", "", {a.maps->peakThickness, nullptr}, which + ": peak flowing thickness (m)", "m", a.day);
-    write(stem.str() + "_peak_speed", "", {a.maps->peakSpeed, nullptr}, which + ": peak speed, the fastest pipe (m/s)", "m/s", a.day);
+    write(stem.str() + "_peak_speed", "", {a.maps->peakSpeed, nullptr}, which + ": peak speed, the fastest flow (m/s)", "m/s", a.day);
     for (size_t k = 0; k < a.maps->frames.size(); ++k) {
       std::ostringstream rel;
       rel << "." << std::setw(4) << std::setfill('0') << k;

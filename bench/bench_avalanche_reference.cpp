@@ -72,8 +72,8 @@ std::string fitTable(const std::vector<AvalancheReferenceCase>& cases, std::ostr
 }
 
 // The cases on grids coarser and finer than their DEMs' (loadAvalancheReferenceCase's cellScale),
-// default parameters: how the scores depend on the cell size.
-std::string resolutionTable(const fs::path& root, std::ostringstream& csv, std::ostream& log) {
+// parameters `p`: how the scores depend on the cell size.
+std::string resolutionTable(const fs::path& root, const ModelParameters& p, std::ostringstream& csv, std::ostream& log) {
   std::ostringstream t;
   t << "| case | cell (m) | runout error | IoU | α − reference α | peak speed (m/s) | / reference | simulated (s) | wall (s) | "
        "mass error |\n|---|---|---|---|---|---|---|---|---|---|\n";
@@ -81,7 +81,7 @@ std::string resolutionTable(const fs::path& root, std::ostringstream& csv, std::
     if (!fs::exists(root / name)) continue;
     for (int scale : {2, 1, -2, -4}) {
       const AvalancheReferenceCase c = loadAvalancheReferenceCase((root / name).string(), scale);
-      const AvalancheReferenceScores r = runAvalancheReferenceCase(c, ModelParameters());
+      const AvalancheReferenceScores r = runAvalancheReferenceCase(c, p);
       const double speed = r.peakSpeedMps / r.referencePeakSpeedMps;
       t << "| " << name << " | " << fmt("%.2f", c.spec.cellSizeXM) << " | " << fmt("%+.1f %%", 100.0 * r.runoutError) << " | "
         << fmt("%.2f", r.iou) << " | " << fmt("%+.1f°", r.alphaDeg - r.referenceAlphaDeg) << " | " << fmt("%.1f", r.peakSpeedMps) << " | "
@@ -131,9 +131,15 @@ std::string avalancheReferenceBench(const BenchOptions& o, std::ostream& log, in
   std::ostringstream resolutionCsv;
   table << "\nThe cell size: each case on grids twice coarser (2 x 2 blocks averaged), as its DEM, twice and four times finer "
            "(the DEM bilinear), default parameters.\n\n"
-        << resolutionTable(root, resolutionCsv, log);
-  writeCsvFile(o, "avalanche_reference_resolution.csv",
-               "case,cell_m,runout_error,iou,alpha_diff_deg,peak_speed_mps,speed_ratio,simulated_s,wall_s,mass_error\n" + resolutionCsv.str(), table);
+        << resolutionTable(root, p, resolutionCsv, log);
+  const std::string resolutionHeader = "case,cell_m,runout_error,iou,alpha_diff_deg,peak_speed_mps,speed_ratio,simulated_s,wall_s,mass_error\n";
+  writeCsvFile(o, "avalanche_reference_resolution.csv", resolutionHeader + resolutionCsv.str(), table);
+  ModelParameters water = p;
+  water.avalancheFlow = AvalancheFlow::ShallowWater;
+  std::ostringstream waterCsv;
+  table << "\nThe shallow-water flow (season.avalanche_flow = \"shallow_water\", experimental), the same parameters, the same cell sizes.\n\n"
+        << resolutionTable(root, water, waterCsv, log);
+  writeCsvFile(o, "avalanche_reference_shallow_water.csv", resolutionHeader + waterCsv.str(), table);
   if (o.avalancheFit) {
     std::vector<AvalancheReferenceCase> cases;
     for (const std::string& name : avalancheReferenceCaseNames())

@@ -354,12 +354,17 @@ void AvalancheRun::start(const CellBox& released, double seaLevelTemperatureC, W
   std::vector<uint8_t>& moving = moving_;
   auto index = [w](int x, int y) { return static_cast<size_t>(y) * w + x; };
   const int x0 = released.x0, y0 = released.y0, x1 = released.x1, y1 = released.y1;  // the released cells' bounds
+  double deepest = 0.0;
   for (int y = y0; y < y1; ++y)  // row by row, as over the whole grid: the same sums
     for (int x = x0; x < x1; ++x)
       if (moving[index(x, y)]) {
+        const double depth = static_cast<double>(layers_[2][index(x, y)]) + layers_[3][index(x, y)];
         ++record_.releaseCells;
-        record_.releasedM3 += (static_cast<double>(layers_[2][index(x, y)]) + layers_[3][index(x, y)]) * s.spec.cellAreaM2();
+        record_.releasedM3 += depth * s.spec.cellAreaM2();
+        deepest = std::max(deepest, depth);
       }
+  // The first step's substeps (substepsOfStep): the released snow at rest, its gravity waves.
+  lastSignal_ = static_cast<float>(std::sqrt(p_.gravityMps2 * deepest) * (1.0 / s.spec.cellSizeXM + 1.0 / s.spec.cellSizeYM));
   // What the release reads of the layers, before it changes them: the released box's layers, the maps.
   before_ = SnowBox{};
   growBeforeBox(x0, y0, x1, y1);
@@ -444,13 +449,13 @@ AvalancheArgs AvalancheRun::stepArgs(double stepS, int substeps) {
     staticFieldsSeen_ = backend_.staticFieldsVersion();
     liveFrom_ = std::max(liveFrom_, record_.steps + 2);
   }
-  a.live = spans && substeps == 1 && record_.steps >= liveFrom_ && liveSpans_;
+  a.live = spans && substeps == 1 && record_.steps >= liveFrom_ && liveSpans_ && !a.shallowWater;
   liveSteps_ += a.live;
   for (int set = 0; set < 2; ++set) a.liveY0[set] = statsY0_[set], a.liveY1[set] = statsY1_[set];
   return a;
 }
 
-// The grown box the step covered (the last 4 floats of `stats`) and its rows' statistics (4 a row
+// The grown box the step covered (the last 4 floats of `stats`) and its rows' statistics (5 a row
 // before them, written to set `statsOut`): the box and cost records, and the next step's box
 // around the snow that can still flow.
 AvalancheRun::StepTotals AvalancheRun::takeStepStats(const std::vector<float>& stats, int statsOut) {
@@ -465,9 +470,10 @@ AvalancheRun::StepTotals AvalancheRun::takeStepStats(const std::vector<float>& s
   StepTotals t;
   int x0 = terrain_.spec.width, y0 = terrain_.spec.height, x1 = 0, y1 = 0;
   for (int r = 0; r < by1 - by0; ++r) {
-    const float* s = &stats[4 * static_cast<size_t>(r)];
+    const float* s = &stats[5 * static_cast<size_t>(r)];
     t.speed = std::max(t.speed, s[0]);
     t.energy += s[1];
+    t.signal = std::max(t.signal, s[4]);
     if (s[3] >= 0.f) {
       x0 = std::min(x0, static_cast<int>(s[2])), x1 = std::max(x1, static_cast<int>(s[3]) + 1);
       y0 = std::min(y0, by0 + r), y1 = std::max(y1, by0 + r + 1);
@@ -484,7 +490,7 @@ void AvalancheRun::checkRest(const StepTotals& t) {
   } else if (t.speed < p_.avalancheStopSpeedMps && (record_.maxSpeedMps >= p_.avalancheStopSpeedMps || record_.simulatedS >= 2.0)) {
     // (Not before the snow has once moved faster than the stop speed, or 2 s have passed: with
     // short steps, snow that has only begun to accelerate is not yet at rest.)
-    record_.why = "at rest (fastest pipe " + std::to_string(t.speed) + " m/s)";
+    record_.why = "at rest (fastest flow " + std::to_string(t.speed) + " m/s)";
     atRest_ = true;
   } else if (t.energy < p_.avalancheStopEnergyFraction * peakEnergy_) {
     // com1DFA's stopping criterion (stopCrit 0.01 of the peak kinetic energy): what still moves
@@ -492,18 +498,30 @@ void AvalancheRun::checkRest(const StepTotals& t) {
     record_.why = "at rest (kinetic energy " + std::to_string(t.energy / peakEnergy_) + " of its peak)";
     atRest_ = true;
   } else if (record_.simulatedS >= p_.avalancheMaxDurationS) {
-    record_.why = "stopped at the duration cap (fastest pipe still " + std::to_string(t.speed) + " m/s)";
+    record_.why = "stopped at the duration cap (fastest flow still " + std::to_string(t.speed) + " m/s)";
     atRest_ = true;
   }
+}
+
+// The pipes: at most 0.2 sqrt(L_min / g) a substep (their pressure waves). The shallow water: as
+// many more as keep the last step's fastest signal (AvalancheWaterRowStatsKernel; at the first
+// step, the gravity waves of the deepest released snow) to the Courant number
+// kAvalancheWaterCourant; at most kMaxSubsteps (the velocity limit keeps every depth
+// non-negative whatever the count).
+int AvalancheRun::substepsOfStep(double stepS) const {
+  constexpr double kMaxSubsteps = 10000.0;
+  const double minCell = std::min(terrain_.spec.cellSizeXM, terrain_.spec.cellSizeYM);
+  const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
+  double n = std::ceil(stepS / maxSubstep);
+  if (args_.shallowWater) n = std::max(n, std::ceil(stepS * lastSignal_ / kAvalancheWaterCourant));
+  return static_cast<int>(std::clamp(n, 1.0, kMaxSubsteps));
 }
 
 bool AvalancheRun::step() {
   if (!active_ || atRest_) return true;
   const auto t0 = WallClock::now();
   const double stepS = p_.avalancheStepS;
-  const double minCell = std::min(terrain_.spec.cellSizeXM, terrain_.spec.cellSizeYM);
-  const double maxSubstep = 0.2 * std::sqrt(minCell / p_.gravityMps2);
-  const int substeps = static_cast<int>(std::clamp(std::ceil(stepS / maxSubstep), 1.0, 10000.0));
+  const int substeps = substepsOfStep(stepS);
   // Snow moves at most a cell a substep: the step stays within its box grown by `substeps`.
   growBeforeBox(std::max(0, args_.x0 - substeps), std::max(0, args_.y0 - substeps), std::min(terrain_.spec.width, args_.x1 + substeps),
                 std::min(terrain_.spec.height, args_.y1 + substeps));
@@ -513,6 +531,7 @@ bool AvalancheRun::step() {
   record_.substeps += substeps;
   record_.simulatedS += stepS;
   lastSpeed_ = totals.speed;
+  lastSignal_ = totals.signal;
   peakEnergy_ = std::max(peakEnergy_, totals.energy);
   record_.maxSpeedMps = std::max(record_.maxSpeedMps, totals.speed);
   const double seconds = elapsedSeconds(t0);

@@ -15,7 +15,8 @@
 // frequency up to about sqrt(16 g / L), so this keeps the explicit update well inside its
 // stability limit for any terrain and snow depth; the outflow rescaling keeps every cell
 // non-negative whatever the flows. Snow crosses at most one cell a substep, which is what lets
-// the box grow by one cell a substep and no more.
+// the box grow by one cell a substep and no more. The shallow-water flow (season.avalanche_flow)
+// takes more where the last step's fastest signal needs them (substepsOfStep).
 //
 // At rest: when no pipe carries more than avalanche_stop_speed_mps (flow / pipe cross-section)
 // once the snow has moved faster than that or 2 s have passed (short steps would otherwise stop
@@ -70,7 +71,7 @@ struct AvalancheRecord {
   double seconds = 0;        // wall-clock time, release and deposit included
   double stepSeconds = 0;    // wall-clock time of the steps alone
   double secondsPerStep() const { return steps > 0 ? stepSeconds / steps : 0.0; }
-  float maxSpeedMps = 0;     // fastest pipe seen (flow / cross-section)
+  float maxSpeedMps = 0;     // fastest flow seen (the snow's speed; the pipes': flow / cross-section)
   int boxCellsMax = 0;       // the largest active box, in cells
   double boxCellSteps = 0;   // the active box's cells summed over the steps: the work the steps covered
   std::shared_ptr<AvalancheMaps> maps;  // when asked for (AvalancheRun::keepMaps)
@@ -202,7 +203,10 @@ class AvalancheRun {
   struct StepTotals {
     float speed = 0.f;
     double energy = 0.0;
+    float signal = 0.f;  // the shallow water's fastest signal, 1/s
   };
+  int substepsOfStep(double stepS) const;
+  float lastSignal_ = 0.f;
   AvalancheArgs stepArgs(double stepS, int substeps);
   StepTotals takeStepStats(const std::vector<float>& stats, int statsOut);
   void checkRest(const StepTotals& totals);

@@ -36,6 +36,7 @@ long long avalancheBoxCells(const InBox<K>&, int width, int height) { return sta
 template <class K>
 long long avalancheBoxCells(const InRowSpans<K>& k, int, int) { return boxCells(k.a); }
 inline long long avalancheBoxCells(const AvalancheRowStatsKernel& k, int, int) { return boxCells(k.a); }
+inline long long avalancheBoxCells(const AvalancheWaterRowStatsKernel& k, int, int) { return boxCells(k.a); }
 
 class TbbExec : public HostStorage {
  public:

@@ -8,6 +8,10 @@
 
 namespace snow {
 
+// How moving snow flows (season.avalanche_flow): a depth-averaged shallow-water layer whose
+// momentum moves with it, or the paper's pipes (core/phenomena/avalanches.h).
+enum class AvalancheFlow { ShallowWater, Pipes };
+
 struct ModelParameters {
   // --- §4.1 temperature and sun exposure
   double lapseRateCPerM = -0.01;             // k_t (k_r in the text): temperature change with altitude
@@ -91,6 +95,8 @@ struct ModelParameters {
   // A powder film thinner than this does not slide (a dusting sticks to rock; it also keeps the
   // diffusion's work to where there is snow to move).
   double diffusionMinDepthM = 0.001;
+  // Not a number, so not in parameterTable(): the scene's season.avalanche_flow.
+  AvalancheFlow avalancheFlow = AvalancheFlow::Pipes;
 };
 
 // One row per parameter: the scene-file key, its member, its unit and its valid range.

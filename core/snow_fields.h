@@ -102,7 +102,7 @@ enum class ScratchExtent {
                    // made with the state unless the executor keeps them in row buffers
   AvalancheCell,   // one a cell, made at the first avalanche
   AvalanchePipes,  // four a cell (signed pipe flows), made at the first avalanche
-  AvalancheRows,   // two sets of six a row (statistics for the host and the spans), made at the first avalanche
+  AvalancheRows,   // two sets of seven a row (statistics for the host and the spans), made at the first avalanche
 };
 
 // SNOW_SCRATCH_FIELDS(X) calls X(view, Element, extent) for each of the backend's working
@@ -136,7 +136,7 @@ constexpr unsigned long long scratchCount(ScratchExtent e, unsigned long long ce
     case ScratchExtent::PowderShares: return powderSharesInRows ? 0 : 5 * cells;
     case ScratchExtent::AvalancheCell: return cells;
     case ScratchExtent::AvalanchePipes: return 4 * cells;
-    case ScratchExtent::AvalancheRows: return 12 * rows;  // 2 * kAvalancheRowStats (avalanche_kernels.h)
+    case ScratchExtent::AvalancheRows: return 14 * rows;  // 2 * kAvalancheRowStats (avalanche_kernels.h)
   }
   return 0;
 }

@@ -141,7 +141,7 @@ const LayerInfo kLayers[] = {
      LayerKind::Float, SNOW_STATE_LAYER(s.avalancheDepositM(x, y)), R(avalancheDepositM)},
     {"avalanche_peak_thickness", "m", "the deepest moving snow of any avalanche since the season start (peak flowing thickness, m)", S,
      kNeedsState, LayerKind::Float, SNOW_STATE_LAYER(s.avalancheSeasonPeakThicknessM(x, y)), R(avalancheSeasonPeakThicknessM)},
-    {"avalanche_peak_speed", "m/s", "the fastest pipe speed of any avalanche since the season start (peak speed, m/s)", S, kNeedsState,
+    {"avalanche_peak_speed", "m/s", "the fastest flow of any avalanche since the season start (peak speed: the snow's speed, or with season.avalanche_flow = \"pipes\" the fastest pipe's, m/s)", S, kNeedsState,
      LayerKind::Float, SNOW_STATE_LAYER(s.avalancheSeasonPeakSpeedMps(x, y)), R(avalancheSeasonPeakSpeedMps)},
     {"avalanche_preview", "sRGB", "preview: shaded snow surface, avalanche scour red (full at 1 m), deposit blue (full at 2 m)", S,
      kNeedsState, LayerKind::Preview, nullptr, R(avalancheScourM) | R(avalancheDepositM)},

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/parameters.h"
 #include "core/phenomena/timeline_edits.h"
 
 namespace snow {
@@ -25,6 +26,7 @@ enum class ByteOrder { Little, Big };                         // terrain.byte_or
 enum class EventType { Snowfall, Avalanche, Skier };          // events.type
 enum class UpAxis { Z, Y };                                   // terrain.up_axis, occluders.up_axis: a mesh's up
 enum class FrameWriting { Paused, Beside, AfterSeason };     // run.frame_writing (bake/frame_timing.h)
+// season.avalanche_flow: AvalancheFlow (core/parameters.h)
 
 // EnumNames<E>::table: every value of E with its name, in the order the reference lists them.
 template <class E>
@@ -73,6 +75,11 @@ struct EnumNames<ByteOrder> {
 template <>
 struct EnumNames<UpAxis> {
   static constexpr std::array<std::pair<UpAxis, std::string_view>, 2> table{{{UpAxis::Z, "z"}, {UpAxis::Y, "y"}}};
+};
+template <>
+struct EnumNames<AvalancheFlow> {
+  static constexpr std::array<std::pair<AvalancheFlow, std::string_view>, 2> table{
+      {{AvalancheFlow::Pipes, "pipes"}, {AvalancheFlow::ShallowWater, "shallow_water"}}};
 };
 template <>
 struct EnumNames<FrameWriting> {

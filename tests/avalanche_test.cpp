@@ -25,6 +25,14 @@ using namespace snow;
 namespace {
 
 constexpr double kTan30 = 0.57735026918962584;
+constexpr AvalancheFlow kFlows[] = {AvalancheFlow::ShallowWater, AvalancheFlow::Pipes};
+
+const char* flowName(AvalancheFlow f) { return f == AvalancheFlow::Pipes ? "pipes" : "shallow water"; }
+
+ModelParameters withFlow(AvalancheFlow f, ModelParameters p = ModelParameters{}) {
+  p.avalancheFlow = f;
+  return p;
+}
 
 double totalSnow(const SnowState& s) {
   double t = 0;
@@ -83,17 +91,19 @@ TEST(Avalanche, DryConeSettlesToTheRestAngle) {
   for (int y = 0; y < 61; ++y)
     for (int x = 0; x < 61; ++x) s.unstableM(x, y) = static_cast<float>(std::max(0.0, 12.0 - 1.5 * std::hypot(x - 30.0, y - 30.0)));
   const double before = totalSnow(s);
-  ModelParameters p;
-  p.avalancheReachMPerM = 100.0;
-  const AvalancheOutcome o = runAvalanche(s, 30, 30, p);
-  ASSERT_TRUE(o.record.released) << o.record.why;
-  std::printf("[ measure ] cone: %d steps, %.1f s simulated, %s; max slope %.3f (tan 30 = %.3f), mass %.3e relative\n",
-              o.record.steps, o.record.simulatedS, o.record.why.c_str(), maxSnowSlope(o.state), kTan30,
-              std::abs(totalSnow(o.state) - before) / before);
-  expectFiniteNonNegative(o.state);
-  EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before);
-  EXPECT_LE(maxSnowSlope(o.state), kTan30 * 1.15);
-  EXPECT_LT(o.state.depthM(30, 30), 12.f);  // it did flow
+  for (AvalancheFlow flow : kFlows) {
+    ModelParameters p = withFlow(flow);
+    p.avalancheReachMPerM = 100.0;
+    const AvalancheOutcome o = runAvalanche(s, 30, 30, p);
+    ASSERT_TRUE(o.record.released) << o.record.why;
+    std::printf("[ measure ] cone, %s: %d steps, %.1f s simulated, %s; max slope %.3f (tan 30 = %.3f), mass %.3e relative\n",
+                flowName(flow), o.record.steps, o.record.simulatedS, o.record.why.c_str(), maxSnowSlope(o.state), kTan30,
+                std::abs(totalSnow(o.state) - before) / before);
+    expectFiniteNonNegative(o.state);
+    EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before) << flowName(flow);
+    EXPECT_LE(maxSnowSlope(o.state), kTan30 * 1.15) << flowName(flow);
+    EXPECT_LT(o.state.depthM(30, 30), 12.f) << flowName(flow);  // it did flow
+  }
 }
 
 // Unstable snow 1 m deep on an inclined plane: below the rest angle nothing moves at all (the
@@ -105,21 +115,23 @@ TEST(Avalanche, InclinedPlaneFlowsOnlyAboveTheRestAngle) {
     for (int y = slope < kTan30 ? 0 : 10; y < (slope < kTan30 ? 120 : 40); ++y)
       for (int x = slope < kTan30 ? 0 : 10; x < (slope < kTan30 ? 40 : 30); ++x) s.unstableM(x, y) = 1.f;
     const SnowState start = s;
-    const AvalancheOutcome o = runAvalanche(s, 20, 25);
-    ASSERT_TRUE(o.record.released);
-    double moved = 0, left = 0;
-    for (int y = 0; y < 120; ++y)
-      for (int x = 0; x < 40; ++x) {
-        moved += std::abs(o.state.depthM(x, y) - start.depthM(x, y));
-        if (y >= 10 && y < 40 && x >= 10 && x < 30) left += o.state.depthM(x, y);
+    for (AvalancheFlow flow : kFlows) {
+      const AvalancheOutcome o = runAvalanche(s, 20, 25, withFlow(flow));
+      ASSERT_TRUE(o.record.released);
+      double moved = 0, left = 0;
+      for (int y = 0; y < 120; ++y)
+        for (int x = 0; x < 40; ++x) {
+          moved += std::abs(o.state.depthM(x, y) - start.depthM(x, y));
+          if (y >= 10 && y < 40 && x >= 10 && x < 30) left += o.state.depthM(x, y);
+        }
+      std::printf("[ measure ] slope %.1f, %s: %d steps, moved %.3f m summed, %.1f m left in the zone (of 600)\n", slope,
+                  flowName(flow), o.record.steps, moved, left);
+      if (slope < kTan30) {
+        EXPECT_EQ(moved, 0.0) << flowName(flow);
+      } else {
+        EXPECT_LT(left, 0.1 * 600.0) << flowName(flow);
+        EXPECT_GT(o.record.runoutM, 100.0) << flowName(flow);
       }
-    std::printf("[ measure ] slope %.1f: %d steps, moved %.3f m summed, %.1f m left in the zone (of 600)\n", slope,
-                o.record.steps, moved, left);
-    if (slope < kTan30) {
-      EXPECT_EQ(moved, 0.0);
-    } else {
-      EXPECT_LT(left, 0.1 * 600.0);
-      EXPECT_GT(o.record.runoutM, 100.0);
     }
   }
 }
@@ -178,24 +190,33 @@ TEST(Avalanche, WetSnowRunsOutFartherAndThinnerThanDry) {
 
 // Static and dynamic friction (docs/models/avalanches.md): snow released on a steep slope keeps
 // flowing down a run-out of slope 0.4 (21.8 degrees: steeper than delta = 14, gentler than the
-// rest angle, where snow at rest never starts); with delta = theta_c (one angle for all) it stops.
+// Flowing snow crosses slopes between the dynamic and the rest angle: released on a slope of 1.2
+// above a run-out of 0.4 (a break at 60 m), it runs far down the run-out with delta = 14 degrees.
+// With delta = theta_c the pipes, which carry no momentum, stop short of 100 m; the shallow water
+// carries the snow's momentum past the break, but no farther than a block sliding from the top of
+// the release (y = 10 m) with friction tan(theta_c): 60 + 50 (1.2 - mu) / (mu - 0.4) metres.
 TEST(Avalanche, FlowingSnowCrossesSlopesBetweenTheDynamicAndTheRestAngle) {
   auto slope = [](double, double y) { return y < 60.0 ? 2000.0 - 1.2 * y : 2000.0 - 72.0 - 0.4 * (y - 60.0); };
-  double reach[2] = {0, 0};
-  for (int oneAngle = 0; oneAngle < 2; ++oneAngle) {
-    SnowState s = test::terrainFrom(40, 200, 2.0, -20.f, slope);
-    for (int y = 5; y < 25; ++y)
-      for (int x = 12; x < 28; ++x) s.unstableM(x, y) = 1.f;
-    ModelParameters p;
-    if (oneAngle) p.avalancheDynamicFrictionDeg = p.avalancheRestAngleDeg;
-    const AvalancheOutcome o = runAvalanche(s, 20, 15, p);
-    for (int y = 0; y < 200; ++y)
-      for (int x = 0; x < 40; ++x)
-        if (o.state.stableM(x, y) > 0.01f) reach[oneAngle] = std::max(reach[oneAngle], 2.0 * y);
+  const double blockReach = 60.0 + 50.0 * (1.2 - kTan30) / (kTan30 - 0.4);
+  for (AvalancheFlow flow : kFlows) {
+    double reach[2] = {0, 0};
+    for (int oneAngle = 0; oneAngle < 2; ++oneAngle) {
+      SnowState s = test::terrainFrom(40, 200, 2.0, -20.f, slope);
+      for (int y = 5; y < 25; ++y)
+        for (int x = 12; x < 28; ++x) s.unstableM(x, y) = 1.f;
+      ModelParameters p = withFlow(flow);
+      if (oneAngle) p.avalancheDynamicFrictionDeg = p.avalancheRestAngleDeg;
+      const AvalancheOutcome o = runAvalanche(s, 20, 15, p);
+      for (int y = 0; y < 200; ++y)
+        for (int x = 0; x < 40; ++x)
+          if (o.state.stableM(x, y) > 0.01f) reach[oneAngle] = std::max(reach[oneAngle], 2.0 * y);
+    }
+    std::printf("[ measure ] %s: farthest deposit %.0f m with delta 14, %.0f m with delta = theta_c (slope break at 60 m, a block's reach %.0f m)\n",
+                flowName(flow), reach[0], reach[1], blockReach);
+    EXPECT_GT(reach[0], 200.0) << flowName(flow);  // 140 m or more down the 0.4 run-out
+    EXPECT_LT(reach[1], flow == AvalancheFlow::Pipes ? 100.0 : blockReach) << flowName(flow);
+    EXPECT_GT(reach[1], 60.0) << flowName(flow);  // past the break
   }
-  std::printf("[ measure ] farthest deposit: %.0f m with delta 14, %.0f m with delta = theta_c (slope break at 60 m)\n", reach[0], reach[1]);
-  EXPECT_GT(reach[0], 200.0);  // 140 m or more down the 0.4 run-out
-  EXPECT_LT(reach[1], 100.0);
 }
 
 // The peak records: each avalanche's deepest moving snow and fastest pipe, reset at its release,
@@ -346,6 +367,7 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
     p.avalancheReachMPerM = draw(4, 0.0, 10000.0);
     p.avalancheStopSpeedMps = draw(5, 1e-4, 1.0);
     if (k % 2) p.avalancheDryTemperatureC = 50.0, p.avalancheWetTemperatureC = 60.0;  // all wet
+    p.avalancheFlow = kFlows[(k / 2) % 2];  // each flow dry and wet
     const AvalancheOutcome o = runAvalanche(s, rx, ry, p);
     EXPECT_TRUE(o.record.released) << k << ": " << o.record.why;  // 1-3 m of unstable snow at every valid cell
     EXPECT_GT(o.record.releasedM3, 0.0) << k;
@@ -364,13 +386,15 @@ TEST(Avalanche, RandomTerrainsAndCliffsStayStableAndKeepMass) {
   for (int y = 0; y < 20; ++y)
     for (int x = 5; x < 25; ++x) cliff.unstableM(x, y) = 1.f;
   const double before = totalSnow(cliff);
-  const AvalancheOutcome o = runAvalanche(cliff, 15, 18);
-  ASSERT_TRUE(o.record.released) << o.record.why;
-  expectFiniteNonNegative(o.state);
-  EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before);
-  EXPECT_LT(o.record.maxSpeedMps, std::sqrt(2.0 * 9.8 * 400.0));
-  std::printf("[ measure ] random terrains: worst mass error %.2e; cliff: %d steps, %s, runout %.0f m\n", worst,
-              o.record.steps, o.record.why.c_str(), o.record.runoutM);
+  for (AvalancheFlow flow : kFlows) {
+    const AvalancheOutcome o = runAvalanche(cliff, 15, 18, withFlow(flow));
+    ASSERT_TRUE(o.record.released) << o.record.why;
+    expectFiniteNonNegative(o.state);
+    EXPECT_NEAR(totalSnow(o.state), before, 1e-5 * before) << flowName(flow);
+    EXPECT_LT(o.record.maxSpeedMps, std::sqrt(2.0 * 9.8 * 400.0)) << flowName(flow);
+    std::printf("[ measure ] random terrains: worst mass error %.2e; cliff, %s: %d steps, %s, runout %.0f m\n", worst, flowName(flow),
+                o.record.steps, o.record.why.c_str(), o.record.runoutM);
+  }
 }
 
 // The serial executor and TBB limited to 1 and to 2 threads give the same bytes.
@@ -381,13 +405,16 @@ TEST(Avalanche, SameBytesSerialAndOnOneAndTwoThreads) {
       if (s.validCell(x, y)) s.unstableM(x, y) = 1.5f;
   int rx = 30, ry = 25;
   while (!s.validCell(rx, ry)) ++rx;
-  const AvalancheOutcome a = runAvalanche(s, rx, ry, ModelParameters{}, createSerialBackend());
-  ASSERT_GT(a.record.steps, 1);
-  for (int threads : {1, 2}) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-    const AvalancheOutcome b = runAvalanche(s, rx, ry, ModelParameters{}, createCpuBackend());
-    test::expectSameBytes(a.state, b.state);
-    EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float))) << threads;
+  for (AvalancheFlow flow : kFlows) {
+    const AvalancheOutcome a = runAvalanche(s, rx, ry, withFlow(flow), createSerialBackend());
+    ASSERT_GT(a.record.steps, 1);
+    for (int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+      const AvalancheOutcome b = runAvalanche(s, rx, ry, withFlow(flow), createCpuBackend());
+      test::expectSameBytes(a.state, b.state);
+      EXPECT_EQ(0, std::memcmp(a.state.avalancheDepositM.data(), b.state.avalancheDepositM.data(), 64 * 50 * sizeof(float)))
+          << flowName(flow) << ", " << threads;
+    }
   }
 }
 
@@ -437,12 +464,14 @@ TEST(Avalanche, RowPathsGiveThePerCellBodiesBytesDryWetAndWithDrag) {
     }
   int rx = 30, ry = 23;
   while (!s.validCell(rx, ry)) ++rx;
-  ModelParameters wetIsDry, noDrag, noStop;
+  // The row paths are the pipes' (the shallow water runs its per-cell bodies on every executor).
+  const ModelParameters pipes = withFlow(AvalancheFlow::Pipes);
+  ModelParameters wetIsDry = pipes, noDrag = pipes, noStop = pipes;
   wetIsDry.avalancheWetTemperatureC = wetIsDry.avalancheDryTemperatureC = -5.0;
   noDrag.avalancheTurbulenceMps2 = 0.0;
   noStop.avalancheStopThicknessM = 0.0;
   const std::pair<const char*, ModelParameters> cases[] = {
-      {"defaults", ModelParameters{}}, {"T_dry = T_wet", wetIsDry}, {"no drag", noDrag}, {"no stop thickness", noStop}};
+      {"defaults", pipes}, {"T_dry = T_wet", wetIsDry}, {"no drag", noDrag}, {"no stop thickness", noStop}};
   for (const auto& [name, p] : cases) {
     const AvalancheOutcome serial = runAvalanche(s, rx, ry, p, createSerialBackend());
     ASSERT_GT(serial.record.steps, 5) << name;
@@ -501,19 +530,21 @@ TEST(Avalanche, RowSpansGiveTheSameBytesAsTheWholeBox) {
   for (int y = 0; y < 96; ++y)
     for (int x = 0; x < 96; ++x)
       if (std::abs(x - y) < 4) s.unstableM(x, y) = 1.2f, ++band;
-  const AvalancheOutcome spans = runAvalanche(s, 6, 6);
-  const AvalancheOutcome box = runAvalanche(s, 6, 6, ModelParameters{}, createCpuBackend(), false);
-  ASSERT_TRUE(spans.record.released);
-  ASSERT_GT(spans.record.steps, 5);
-  // The spans leave out most of the box: the snow's band is a small share of it.
-  EXPECT_LT(2 * band, spans.record.boxCellsMax);
-  test::expectSameBytes(box.state, spans.state);
-  EXPECT_EQ(box.state.avalancheScourM.values(), spans.state.avalancheScourM.values());
-  EXPECT_EQ(box.state.avalancheDepositM.values(), spans.state.avalancheDepositM.values());
-  EXPECT_EQ(box.record.steps, spans.record.steps);
-  EXPECT_EQ(box.record.runoutM, spans.record.runoutM);
-  std::printf("[ measure ] row spans against the box: %d steps, box up to %d cells, band %d cells, runout %.0f m\n",
-              spans.record.steps, spans.record.boxCellsMax, band, spans.record.runoutM);
+  for (AvalancheFlow flow : kFlows) {
+    const AvalancheOutcome spans = runAvalanche(s, 6, 6, withFlow(flow));
+    const AvalancheOutcome box = runAvalanche(s, 6, 6, withFlow(flow), createCpuBackend(), false);
+    ASSERT_TRUE(spans.record.released);
+    ASSERT_GT(spans.record.steps, 5);
+    // The spans leave out most of the box: the snow's band is a small share of it.
+    EXPECT_LT(2 * band, spans.record.boxCellsMax) << flowName(flow);
+    test::expectSameBytes(box.state, spans.state);
+    EXPECT_EQ(box.state.avalancheScourM.values(), spans.state.avalancheScourM.values()) << flowName(flow);
+    EXPECT_EQ(box.state.avalancheDepositM.values(), spans.state.avalancheDepositM.values()) << flowName(flow);
+    EXPECT_EQ(box.record.steps, spans.record.steps) << flowName(flow);
+    EXPECT_EQ(box.record.runoutM, spans.record.runoutM) << flowName(flow);
+    std::printf("[ measure ] row spans against the box, %s: %d steps, box up to %d cells, band %d cells, runout %.0f m\n", flowName(flow),
+                spans.record.steps, spans.record.boxCellsMax, band, spans.record.runoutM);
+  }
 }
 
 // The live spans (AvalancheArgs::live: the passes also kept to the cells a pipe touched in the
@@ -550,7 +581,7 @@ TEST(Avalanche, LiveSpansGiveTheSourceSpansBytesAlsoWhenTheStateIsEditedOrWarmed
         auto run = [&](bool live, int& liveSteps) {
           auto backend = createCpuBackend();
           backend->upload(*s);
-          const ModelParameters p;
+          const ModelParameters p = withFlow(AvalancheFlow::Pipes);  // the live spans are the pipes'
           AvalancheRun r(*backend, p, *s);
           r.useLiveSpans(live);
           const int rx = s == &band ? 6 : (s == &valley ? 8 : 20), ry = s == &band ? 6 : (s == &bowl ? 20 : (s == &valley ? 15 : 10));

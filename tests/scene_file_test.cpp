@@ -218,3 +218,15 @@ TEST(SceneFile, PresetFileOnDiskMatchesTheEmbeddedOne) {
   const Scene embedded = loadScene("preset:default");
   EXPECT_EQ(fromDisk.canonicalToml, embedded.canonicalToml);
 }
+
+// season.avalanche_flow: the pipes unless the scene asks for the shallow water; any other name is
+// refused with the key and the choices.
+TEST(SceneFile, AvalancheFlowIsThePipesUnlessTheSceneAsksForTheShallowWater) {
+  SceneTempDir dir;
+  EXPECT_EQ(loadSceneFile(dir.write("scene.toml", kValid)).params.avalancheFlow, AvalancheFlow::Pipes);
+  const Scene water = loadSceneFile(dir.write("water.toml", replaced(kValid, "days = 90", "days = 90\navalanche_flow = \"shallow_water\"")));
+  EXPECT_EQ(water.params.avalancheFlow, AvalancheFlow::ShallowWater);
+  const std::string msg = errorOf(dir, replaced(kValid, "days = 90", "days = 90\navalanche_flow = \"particles\""));
+  EXPECT_NE(msg.find("season.avalanche_flow"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("pipes, shallow_water"), std::string::npos) << msg;
+}

@@ -19,6 +19,7 @@ struct AvalancheArgs {
   float seaLevelTemperatureC = 0.f;  // T0 of the day
   float stopThicknessM = 0.f;        // h_stop: moving snow this thin or thinner does not flow
   float pipeLengthM[4] = {};         // L of pipes east, south-east, south, south-west (avalanchePipeLengths)
+  int shallowWater = 0;              // the flow: 1 shallow water (avalanche_shallow_water.h), 0 the paper's pipes
   // The box the pass runs over: [x0, x1) x [y0, y1).
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   // The step's start: rows [spanY0, spanY1) whose statistics (set statsIn of rowStats) hold the
@@ -34,8 +35,9 @@ struct AvalancheArgs {
 
 // Floats a row of one set of the avalanche's row statistics: the fastest pipe, the kinetic
 // energy, the first and last column of snow that can flow, the first and last column a pipe
-// touched in the last substep (each -1 when none).
-constexpr int kAvalancheRowStats = 6;
+// touched in the last substep (each -1 when none), and the shallow-water flow's fastest signal
+// (AvalancheWaterRowStatsKernel; 0 for the pipes).
+constexpr int kAvalancheRowStats = 7;
 static_assert(scratchCount(ScratchExtent::AvalancheRows, 0, 1, false) == 2 * kAvalancheRowStats, "rowStats holds two sets a row");
 
 // Row y's statistics of set `set` (AvalancheRowStatsKernel).
@@ -340,6 +342,7 @@ struct AvalancheRowStatsKernel {
     s[3] = static_cast<float>(hi);
     s[4] = static_cast<float>(touchedLo);
     s[5] = static_cast<float>(touchedHi);
+    s[6] = 0.f;
   }
 };
 

@@ -46,6 +46,7 @@
 #include "../parameters.h"
 #include "../util.h"
 #include "avalanche_kernels.h"
+#include "avalanche_shallow_water.h"
 
 namespace snow {
 
@@ -62,6 +63,7 @@ inline AvalancheArgs makeAvalancheArgs(const ModelParameters& p, double seaLevel
   a.tanDynamicAngle = static_cast<float>(std::tan(p.avalancheDynamicFrictionDeg * kPi / 180.0));
   a.stopThicknessM = static_cast<float>(p.avalancheStopThicknessM);
   a.inverseDragMps2 = p.avalancheTurbulenceMps2 > 0.0 ? static_cast<float>(1.0 / p.avalancheTurbulenceMps2) : 0.f;
+  a.shallowWater = p.avalancheFlow == AvalancheFlow::ShallowWater;
   return a;
 }
 
@@ -133,17 +135,25 @@ void runAvalancheSubsteps(Exec& exec, const SnowFieldsView& v, AvalancheTouched&
     // Every cell with moving snow is at least one cell inside the row spans, so all of its pipes
     // and neighbours are processed; cells outside hold no flows (AvalancheClearIdleKernel).
     const int k = s + 1;
+    if (a.shallowWater) {
+      exec.forEachCell(1, h, InRowSpans<AvalancheWaterMomentumKernel>{AvalancheWaterMomentumKernel{v, a}, v, a, k});
+      exec.forEachCell(1, h, InRowSpans<AvalancheWaterTransportKernel>{AvalancheWaterTransportKernel{v, a}, v, a, k});
+      exec.forEachCell(1, h, InRowSpans<AvalancheWaterCommitKernel>{AvalancheWaterCommitKernel{v, a}, v, a, k});
+      continue;
+    }
     exec.forEachCell(1, h, InRowSpans<AvalancheFlowKernel>{AvalancheFlowKernel{v, a}, v, a, k});
     exec.forEachCell(1, h, InRowSpans<AvalancheScaleKernel>{AvalancheScaleKernel{v, a}, v, a, k});
     exec.forEachCell(1, h, InRowSpans<AvalancheHeightKernel>{AvalancheHeightKernel{v, a}, v, a, k});
   }
   if (a.x1 > a.x0 && a.y1 > a.y0) {
-    exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a, substeps});
+    if (a.shallowWater) exec.forEachCell(1, a.y1 - a.y0, AvalancheWaterRowStatsKernel{v, a, substeps});
+    else exec.forEachCell(1, a.y1 - a.y0, AvalancheRowStatsKernel{v, a, substeps});
   }
 }
 
-// `substeps` substeps from `args`' box, then what the host reads back: the step's 4 floats per
-// row of the grown box (from `rowStats`, the buffer behind v.rowStats), then the box x0, y0, x1, y1.
+// `substeps` substeps from `args`' box, then what the host reads back: the step's 5 floats per
+// row of the grown box (from `rowStats`, the buffer behind v.rowStats: the fastest snow, the
+// energy, the columns of snow that can flow, the fastest signal), then the box x0, y0, x1, y1.
 template <class Exec, class RowStatsBuffer>
 std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowStatsBuffer& rowStats, AvalancheTouched& touched,
                                      const AvalancheArgs& args, int substeps) {
@@ -154,10 +164,11 @@ std::vector<float> runAvalancheSteps(Exec& exec, const SnowFieldsView& v, RowSta
   std::vector<float> stats(row * rows);
   exec.downloadRange(rowStats, row * static_cast<size_t>(a.y0 > 0 ? a.y0 : 0), stats.size(), stats.data());
   std::vector<float> box;
-  box.reserve(4 * rows + 4);
+  box.reserve(5 * rows + 4);
   for (size_t r = 0; r < rows; ++r) {
     const size_t at = row * r + kAvalancheRowStats * static_cast<size_t>(1 - a.statsIn);
     box.insert(box.end(), stats.begin() + at, stats.begin() + at + 4);
+    box.push_back(stats[at + 6]);
   }
   box.push_back(static_cast<float>(a.x0));
   box.push_back(static_cast<float>(a.y0));
