@@ -413,7 +413,7 @@ void seasonRules(std::vector<Rule>& r) {  // [site], [season] and [weather]
   r.push_back({"season.start_date", Kind::Date, -kInf, kInf, {}, "", "first day (a TOML date or \"YYYY-MM-DD\", a day of the calendar)", startDate()});
   r.push_back({"season.days", Kind::Number, 0.01, 3650, {}, "day", "season length", at<S>(&S::days)});
   r.push_back({"season.avalanche_flow", Kind::String, -kInf, kInf, enumNames<AvalancheFlow>(), "",
-       "how avalanches flow: pipes, the paper's pipe model (calibrated against AvaFrame com1DFA); shallow_water, a depth-averaged layer whose momentum moves with the snow (experimental: its speed converges with the cell size, but it costs several substeps a step; docs/models/avalanches.md)",
+       "how avalanches flow: pipes, the paper's pipe model (calibrated against AvaFrame com1DFA); shallow_water, a depth-averaged layer whose momentum moves with the snow (experimental: its speed depends far less on the cell size than the pipes', but it is not fitted and costs several substeps a step; docs/models/avalanches.md)",
        at<S>(&S::params, &ModelParameters::avalancheFlow)});
   r.push_back({"weather", Kind::Table, -kInf, kInf, {}, "", "the weather timeline: keyframes and fixed snowfall periods"});
   r.push_back({"weather.keyframe", Kind::TableArray, -kInf, kInf, {}, "",
