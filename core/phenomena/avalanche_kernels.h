@@ -45,6 +45,20 @@ SNOW_HD SNOW_INLINE float* avalancheRowStats(const SnowFieldsView& v, int y, int
   return v.rowStats + 2 * kAvalancheRowStats * static_cast<size_t>(y) + kAvalancheRowStats * set;
 }
 
+// Row y's statistics of a step, into the set the next step reads (kAvalancheRowStats's order);
+// `signal` is the shallow water's fastest signal, 0 for the pipes.
+SNOW_HD SNOW_INLINE void storeAvalancheRowStats(const SnowFieldsView& v, const AvalancheArgs& a, int y, float speed, float energy, int lo, int hi,
+                                                int touchedLo, int touchedHi, float signal) {
+  float* s = avalancheRowStats(v, y, 1 - a.statsIn);
+  s[0] = speed;
+  s[1] = energy;
+  s[2] = static_cast<float>(lo);
+  s[3] = static_cast<float>(hi);
+  s[4] = static_cast<float>(touchedLo);
+  s[5] = static_cast<float>(touchedHi);
+  s[6] = signal;
+}
+
 // Why the live spans give the box's bytes: a pipe's flow in a substep is a function of its own
 // moved flow and its two end cells' state (surface, moving snow, flowing flag, temperature),
 // nothing else. If no pipe touched either end in the last two substeps (and no static field
@@ -335,14 +349,7 @@ struct AvalancheRowStatsKernel {
     }
   }
   SNOW_HD void store(int y, float speed, float energy, int lo, int hi, int touchedLo, int touchedHi) const {
-    float* s = avalancheRowStats(v, y, 1 - a.statsIn);
-    s[0] = speed;
-    s[1] = energy;
-    s[2] = static_cast<float>(lo);
-    s[3] = static_cast<float>(hi);
-    s[4] = static_cast<float>(touchedLo);
-    s[5] = static_cast<float>(touchedHi);
-    s[6] = 0.f;
+    storeAvalancheRowStats(v, a, y, speed, energy, lo, hi, touchedLo, touchedHi, 0.f);
   }
 };
 

@@ -220,14 +220,7 @@ struct AvalancheWaterRowStatsKernel {
       if (x < lo) lo = x;
       hi = x;
     }
-    float* s = avalancheRowStats(v, y, 1 - a.statsIn);
-    s[0] = speed;
-    s[1] = energy;
-    s[2] = static_cast<float>(lo);
-    s[3] = static_cast<float>(hi);
-    s[4] = static_cast<float>(touchedLo);
-    s[5] = static_cast<float>(touchedHi);
-    s[6] = signal;
+    storeAvalancheRowStats(v, a, y, speed, energy, lo, hi, touchedLo, touchedHi, signal);
   }
 };
 
